@@ -1,0 +1,65 @@
+//! Ray–scene intersection behind one interface, so that the brute-force loop and the BVH
+//! are interchangeable for every caller (camera rays, shading, ray files).
+
+mod brute;
+pub mod sphere;
+pub mod triangle;
+
+pub use brute::BruteForce;
+
+use crate::ray::{Hit, Ray};
+
+/// Work counters for one thread, merged into the render statistics.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct TraceCounters {
+    /// Rays traced (closest-hit and any-hit).
+    pub rays: u64,
+    /// Ray–primitive intersection tests.
+    pub prim_tests: u64,
+    /// Acceleration-structure nodes visited.
+    pub nodes: u64,
+}
+
+impl TraceCounters {
+    pub fn add(&mut self, o: &TraceCounters) {
+        self.rays += o.rays;
+        self.prim_tests += o.prim_tests;
+        self.nodes += o.nodes;
+    }
+}
+
+/// Closest-hit and any-hit queries over a fixed scene.
+pub trait Intersector: Sync + Send {
+    /// The nearest hit with `t` in `[ray.tmin, ray.tmax]`, if any.
+    fn closest_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit>;
+    /// Whether anything is hit with `t` in `[ray.tmin, ray.tmax]` (shadow rays; may stop early).
+    fn any_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> bool;
+    /// Short name for logs ("brute force", "bvh8 avx2", ...).
+    fn name(&self) -> String;
+
+    /// Closest hits for a whole queue of rays; accelerators override this to exploit the
+    /// batch (ordering, SIMD over rays).
+    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], counters: &mut TraceCounters) {
+        for (r, h) in rays.iter().zip(hits.iter_mut()) {
+            *h = self.closest_hit(r, counters);
+        }
+    }
+}
+
+/// How the acceleration structure turned out (zeros for brute force).
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
+pub struct BuildInfo {
+    pub build_s: f64,
+    pub nodes: usize,
+    pub depth: usize,
+    pub sah_cost: f64,
+}
+
+/// Builds the intersector the settings ask for: the BVH, or brute force for `--no-bvh`.
+pub fn build(scene: &crate::scene::Scene, use_bvh: bool) -> (Box<dyn Intersector>, BuildInfo) {
+    let start = std::time::Instant::now();
+    let _ = use_bvh; // The BVH lands with its own issue; until then every query is brute force.
+    let accel = BruteForce::new(scene);
+    let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), ..BuildInfo::default() };
+    (Box::new(accel), info)
+}

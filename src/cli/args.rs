@@ -1,0 +1,126 @@
+//! Command-line syntax: the CS184 flags plus wavepath's own.
+
+use crate::film::Tonemap;
+use crate::load::CameraMode;
+use crate::settings::{IntegratorKind, Shading};
+use clap::{Args, Parser, Subcommand};
+use std::path::PathBuf;
+
+#[derive(Parser, Debug)]
+#[command(
+    name = "wavepath",
+    version,
+    about = "A physically based wavefront path tracer for the CPU (CS184-compatible flags).",
+    long_about = "Renders SCENE (.dae, .obj, .ply, .gltf, .glb) or, with no SCENE, the embedded \
+                  Cornell box with two spheres. The flags follow the CS184 pathtracer.",
+    args_conflicts_with_subcommands = true,
+    subcommand_negates_reqs = true,
+    allow_negative_numbers = true
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Option<Command>,
+    #[command(flatten)]
+    pub render: RenderArgs,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Show what was loaded: counts, camera, lights, materials, effects, load time.
+    Info(InfoArgs),
+    /// Write or trace ray files (the format of ../shared/peers).
+    #[command(subcommand)]
+    Rays(RaysCommand),
+}
+
+#[derive(Args, Debug)]
+pub struct InfoArgs {
+    /// Scene file.
+    pub scene: PathBuf,
+    /// Print one JSON object instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// COLLADA camera framing.
+    #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
+    pub camera: CameraMode,
+}
+
+#[derive(Subcommand, Debug)]
+pub enum RaysCommand {
+    /// Write the renderer's camera rays or first diffuse bounces as a ray file.
+    Dump(crate::rays::DumpArgs),
+    /// Build the BVH for MESH and trace RAYS, printing one JSON line (peer harness interface).
+    Trace(crate::rays::TraceArgs),
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct RenderArgs {
+    /// Scene file (.dae, .obj, .ply, .gltf, .glb); omitted: the embedded Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Camera rays per pixel.
+    #[arg(short = 's', value_name = "N", default_value_t = 1)]
+    pub spp: i64,
+    /// Samples per area light.
+    #[arg(short = 'l', value_name = "N", default_value_t = 1)]
+    pub light_samples: i64,
+    /// Maximum ray depth (0: emission only, 1: direct light, >1: global illumination).
+    #[arg(short = 'm', value_name = "N", default_value_t = 1)]
+    pub max_depth: i64,
+    /// 1: accumulate all bounces; 0: show only light that took exactly -m bounces.
+    #[arg(short = 'o', value_name = "0|1", default_value_t = 1)]
+    pub accumulate: i64,
+    /// Adaptive sampling: every B samples stop a pixel once 1.96 sigma/sqrt(n) <= T mu.
+    #[arg(short = 'a', num_args = 2, value_names = ["B", "T"])]
+    pub adaptive: Option<Vec<f64>>,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', value_name = "N")]
+    pub threads: Option<i64>,
+    /// Output resolution in pixels.
+    #[arg(short = 'r', num_args = 2, value_names = ["W", "H"])]
+    pub resolution: Option<Vec<i64>>,
+    /// Output image: .png (tone-mapped), .exr, .hdr, .pfm (linear). Default: wavepath.png.
+    #[arg(short = 'f', value_name = "FILE")]
+    pub output: Option<PathBuf>,
+    /// Render only the cell with bottom-left pixel (X, Y) and size DX x DY.
+    #[arg(short = 'p', num_args = 4, value_names = ["X", "Y", "DX", "DY"])]
+    pub cell: Option<Vec<i64>>,
+    /// Camera settings file (the CS184 camera dump format).
+    #[arg(short = 'c', value_name = "FILE")]
+    pub camera_file: Option<PathBuf>,
+    /// Environment map (equirectangular .exr/.hdr). Not yet supported.
+    #[arg(short = 'e', value_name = "FILE")]
+    pub envmap: Option<PathBuf>,
+    /// Thin-lens aperture radius (0: pinhole).
+    #[arg(short = 'b', value_name = "R")]
+    pub lens_radius: Option<f64>,
+    /// Focal distance of the thin lens.
+    #[arg(short = 'd', value_name = "D")]
+    pub focal_distance: Option<f64>,
+    /// Uniform hemisphere sampling for direct light (default: light importance sampling).
+    #[arg(short = 'H')]
+    pub hemisphere: bool,
+    /// What pixels show; default: global when -m > 1, else direct.
+    #[arg(long, value_enum)]
+    pub shading: Option<Shading>,
+    /// Russian roulette continue probability, in (0, 1].
+    #[arg(long = "rr", value_name = "P", default_value_t = 0.65)]
+    pub rr: f64,
+    /// Brute-force intersection (every ray against every primitive).
+    #[arg(long)]
+    pub no_bvh: bool,
+    /// Base seed of all random numbers.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// PNG transfer curve.
+    #[arg(long, value_enum, default_value_t = Tonemap::Cs184)]
+    pub tonemap: Tonemap,
+    /// Light-transport implementation.
+    #[arg(long, value_enum, default_value_t = IntegratorKind::Wavefront)]
+    pub integrator: IntegratorKind,
+    /// COLLADA camera framing: cs184 (the reference renderer's placement) or the file's camera.
+    #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
+    pub camera: CameraMode,
+    /// Write machine-readable statistics (JSON) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub stats: Option<PathBuf>,
+}

@@ -1,0 +1,87 @@
+//! `wavepath info SCENE [--json]`.
+
+use super::args::InfoArgs;
+use crate::effects::Effects;
+use crate::load::{LoadOptions, load};
+use crate::scene::Scene;
+use crate::settings::Settings;
+use anyhow::Result;
+use serde_json::json;
+use std::time::Instant;
+
+pub fn run(a: &InfoArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let scene = load(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
+    let load_s = t0.elapsed().as_secs_f64();
+    let effects = Effects::of(&scene, &Settings::default());
+    if a.json {
+        println!("{}", summary_json(&scene, &effects, load_s));
+    } else {
+        print_text(&scene, &effects, load_s);
+    }
+    Ok(())
+}
+
+fn v3(v: glam::Vec3) -> [f32; 3] {
+    v.to_array()
+}
+
+pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json::Value {
+    let c = &scene.camera;
+    let lights: Vec<_> = scene.lights.iter().map(|l| json!({ "kind": l.kind(), "detail": format!("{l:?}") })).collect();
+    let materials: Vec<_> = scene
+        .materials
+        .iter()
+        .map(|m| json!({ "name": m.name, "bsdf": m.bsdf.kind(), "emission": v3(m.emission), "detail": format!("{:?}", m.bsdf) }))
+        .collect();
+    json!({
+        "scene": scene.name,
+        "triangles": scene.mesh.triangle_count(),
+        "vertices": scene.mesh.positions.len(),
+        "has_normals": scene.mesh.normals.is_some(),
+        "has_uvs": scene.mesh.uvs.is_some(),
+        "spheres": scene.spheres.len(),
+        "lights": lights,
+        "materials": materials,
+        "camera": {
+            "position": v3(c.position),
+            "view_direction": v3(-c.c2w.z_axis),
+            "up": v3(c.c2w.y_axis),
+            "hfov_deg": c.hfov_deg,
+            "vfov_deg": c.vfov_deg,
+            "nclip": c.nclip,
+            "fclip": c.fclip,
+        },
+        "bounds": scene.bounds().map(|(lo, hi)| json!({ "min": v3(lo), "max": v3(hi) })),
+        "effects": effects.names(),
+        "load_s": load_s,
+    })
+}
+
+fn print_text(scene: &Scene, effects: &Effects, load_s: f64) {
+    let c = &scene.camera;
+    println!("scene:      {}", scene.name);
+    println!("load time:  {load_s:.4} s");
+    println!("triangles:  {}", scene.mesh.triangle_count());
+    println!("vertices:   {}", scene.mesh.positions.len());
+    println!("spheres:    {}", scene.spheres.len());
+    if let Some((lo, hi)) = scene.bounds() {
+        println!("bounds:     {lo:?} .. {hi:?}");
+    }
+    println!(
+        "camera:     at {:?} looking {:?}, fov {:.3} x {:.3} deg, clip [{}, {}]",
+        c.position, -c.c2w.z_axis, c.hfov_deg, c.vfov_deg, c.nclip, c.fclip
+    );
+    println!("lights:     {}", scene.lights.len());
+    for l in &scene.lights {
+        println!("  {l:?}");
+    }
+    println!("materials:  {}", scene.materials.len());
+    for m in &scene.materials {
+        println!("  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
+    }
+    println!("effects (at the default settings):");
+    for e in &effects.on {
+        println!("  {} ({})", e.name, e.reason);
+    }
+}

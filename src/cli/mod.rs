@@ -1,0 +1,45 @@
+//! The `wavepath` command: parses arguments, runs the requested command, and turns every
+//! error into one line on stderr and a non-zero exit.
+
+mod args;
+mod info;
+mod render_cmd;
+mod settings_from_args;
+
+pub use args::{Cli, Command, RaysCommand, RenderArgs};
+
+use clap::Parser;
+
+/// Runs the command line; returns the process exit code.
+pub fn main() -> i32 {
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                let _ = e.print();
+                return 0;
+            }
+            // clap's message has usage lines after the first; keep the one that says what is wrong.
+            let text = e.render().to_string();
+            let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+            eprintln!("{} (see wavepath --help)", first.trim());
+            return 2;
+        }
+    };
+    let result = match &cli.command {
+        Some(Command::Info(a)) => info::run(a),
+        Some(Command::Rays(RaysCommand::Dump(a))) => crate::rays::dump(a),
+        Some(Command::Rays(RaysCommand::Trace(a))) => crate::rays::trace(a),
+        None => render_cmd::run(&cli.render),
+    };
+    match result {
+        Ok(()) => 0,
+        Err(e) => {
+            // `{:#}` joins the context chain on one line: "file: what: why".
+            let msg = format!("{e:#}").replace('\n', " ");
+            eprintln!("error: {msg}");
+            1
+        }
+    }
+}

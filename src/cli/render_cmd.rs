@@ -1,0 +1,95 @@
+//! `wavepath [FLAGS] [SCENE]`: load, build, render, write.
+
+use super::RenderArgs;
+use super::settings_from_args::settings;
+use crate::effects::Effects;
+use crate::load::{LoadOptions, default_scene, load};
+use crate::scene::{Scene, read_camera_file};
+use crate::settings::Settings;
+use crate::stats::RenderStats;
+use anyhow::{Result, bail};
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Loads the scene the arguments name (or the default) with the camera adjustments applied.
+pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
+    let mut scene = match &a.scene {
+        Some(p) => load(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
+        None => default_scene(),
+    };
+    if let Some(c) = &a.camera_file {
+        scene.camera = read_camera_file(c)?;
+    }
+    scene.camera.fit_aspect(s.width as f32 / s.height as f32);
+    if let Some(b) = a.lens_radius {
+        scene.camera.lens_radius = b as f32;
+    }
+    if let Some(d) = a.focal_distance {
+        scene.camera.focal_distance = d as f32;
+    }
+    if let Some(e) = &a.envmap {
+        bail!("{}: environment maps (-e) are not yet supported", e.display());
+    }
+    Ok(scene)
+}
+
+pub fn run(a: &RenderArgs) -> Result<()> {
+    let s = settings(a)?;
+    let out: PathBuf = a.output.clone().unwrap_or_else(|| PathBuf::from("wavepath.png"));
+    check_output_extension(&out)?;
+    let t0 = Instant::now();
+    let scene = prepare_scene(a, &s)?;
+    let load_s = t0.elapsed().as_secs_f64();
+    eprintln!(
+        "[wavepath] Loaded {} in {:.3} s: {} triangles, {} spheres, {} lights",
+        scene.name,
+        load_s,
+        scene.mesh.triangle_count(),
+        scene.spheres.len(),
+        scene.lights.len()
+    );
+    let effects = Effects::of(&scene, &s);
+    for e in &effects.on {
+        eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
+    }
+    let (film, stats, build) = crate::render::with_threads(s.threads, || -> Result<_> {
+        eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
+        let (accel, build) = crate::accel::build(&scene, s.use_bvh);
+        eprintln!(
+            "[wavepath] Built {} in {:.4} s ({} nodes, depth {})",
+            accel.name(),
+            build.build_s,
+            build.nodes,
+            build.depth
+        );
+        let (film, stats) = crate::render::render(&scene, accel.as_ref(), &s)?;
+        Ok((film, stats, build))
+    })??;
+    crate::film::write_image(&film, &out, a.tonemap)?;
+    for line in stats.log_lines() {
+        eprintln!("[wavepath] {line}");
+    }
+    eprintln!("[wavepath] Wrote {}", out.display());
+    if let Some(p) = &a.stats {
+        let json = crate::stats::to_json(&scene, &s, &effects, &build, &stats);
+        write_atomic(p, serde_json::to_string_pretty(&json)?.as_bytes())?;
+    }
+    let _: &RenderStats = &stats;
+    Ok(())
+}
+
+fn check_output_extension(out: &Path) -> Result<()> {
+    let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
+    if !matches!(ext.as_str(), "png" | "exr" | "hdr" | "pfm") {
+        bail!("{}: unknown image format; use .png, .exr, .hdr or .pfm", out.display());
+    }
+    Ok(())
+}
+
+/// Writes via a temporary file and a rename, so readers never see half a file.
+pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
+    let tmp = path.with_extension("tmp");
+    std::fs::write(&tmp, bytes).map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+    std::fs::rename(&tmp, path).map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", path.display()))?;
+    Ok(())
+}

@@ -1,0 +1,88 @@
+use super::Film;
+use anyhow::{Context, Result, bail};
+use std::io::Write;
+use std::path::Path;
+
+/// How linear radiance becomes 8-bit PNG values.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Tonemap {
+    /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1).
+    #[default]
+    Cs184,
+    /// Plain sRGB encoding of clamp(L, 0, 1).
+    Srgb,
+}
+
+impl Tonemap {
+    #[inline]
+    pub fn apply(self, l: f32) -> f32 {
+        let l = if l.is_finite() { l.max(0.0) } else { 0.0 };
+        match self {
+            Tonemap::Cs184 => (std::f32::consts::SQRT_2 * l).powf(1.0 / 2.2).clamp(0.0, 1.0),
+            Tonemap::Srgb => {
+                let l = l.min(1.0);
+                if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 }
+            }
+        }
+    }
+}
+
+/// Writes the film; the format follows the extension: .png (tone-mapped), .exr, .hdr, .pfm
+/// (linear, never tone-mapped). Writes to a temporary name and renames, so a killed render
+/// never leaves a half-written image under the final name.
+pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
+    let tmp = path.with_extension(format!("tmp.{ext}"));
+    let (w, h) = (film.width as u32, film.height as u32);
+    let top_down = |f: &dyn Fn(glam::Vec3) -> [f32; 3]| -> Vec<f32> {
+        let mut out = Vec::with_capacity(film.pixels.len() * 3);
+        for y in (0..film.height).rev() {
+            for x in 0..film.width {
+                out.extend(f(film.get(x, y)));
+            }
+        }
+        out
+    };
+    let linear = |p: glam::Vec3| {
+        let q = if p.is_finite() { p } else { glam::Vec3::ZERO };
+        [q.x, q.y, q.z]
+    };
+    let result = match ext.as_str() {
+        "png" => {
+            let data: Vec<u8> = top_down(&|p| [tonemap.apply(p.x), tonemap.apply(p.y), tonemap.apply(p.z)])
+                .into_iter()
+                .map(|v| (v * 255.0 + 0.5) as u8)
+                .collect();
+            let img = image::RgbImage::from_raw(w, h, data).context("image size mismatch")?;
+            img.save_with_format(&tmp, image::ImageFormat::Png).map_err(anyhow::Error::from)
+        }
+        "exr" | "hdr" => {
+            let img = image::Rgb32FImage::from_raw(w, h, top_down(&linear)).context("image size mismatch")?;
+            let fmt = if ext == "exr" { image::ImageFormat::OpenExr } else { image::ImageFormat::Hdr };
+            image::DynamicImage::ImageRgb32F(img).save_with_format(&tmp, fmt).map_err(anyhow::Error::from)
+        }
+        "pfm" => write_pfm(film, &tmp),
+        "" => bail!("{}: output has no extension; use .png, .exr, .hdr or .pfm", path.display()),
+        other => bail!("{}: unknown image format '.{other}'; use .png, .exr, .hdr or .pfm", path.display()),
+    };
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(e.context(format!("{}: cannot write image", path.display())));
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write image", path.display()))
+}
+
+/// Portable float map: little-endian (negative scale), rows bottom to top, which is the
+/// film's own row order.
+fn write_pfm(film: &Film, path: &Path) -> Result<()> {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    write!(f, "PF\n{} {}\n-1.0\n", film.width, film.height)?;
+    for p in &film.pixels {
+        let q = if p.is_finite() { *p } else { glam::Vec3::ZERO };
+        for c in [q.x, q.y, q.z] {
+            f.write_all(&c.to_le_bytes())?;
+        }
+    }
+    f.flush()?;
+    Ok(())
+}

@@ -1,0 +1,17 @@
+//! wavepath: a physically based, data-oriented wavefront path tracer for the CPU.
+//!
+//! Data flows file -> [`load`] -> [`scene::Scene`] -> [`accel`] -> [`render`] ->
+//! [`film`] + [`stats`]; see DESIGN.md in the shared folder for the full picture.
+
+pub mod accel;
+pub mod cli;
+pub mod effects;
+pub mod film;
+pub mod load;
+pub mod ray;
+pub mod rays;
+pub mod render;
+pub mod sampling;
+pub mod scene;
+pub mod settings;
+pub mod stats;

@@ -1,0 +1,8 @@
+//! Loader for obj files (in progress).
+use crate::scene::Scene;
+use anyhow::{Result, bail};
+use std::path::Path;
+
+pub fn load(path: &Path) -> Result<Scene> {
+    bail!("{}: obj files are not supported yet", path.display())
+}

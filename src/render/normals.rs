@@ -1,0 +1,58 @@
+use crate::accel::{Intersector, TraceCounters};
+use crate::film::Film;
+use crate::sampling::Sampler;
+use crate::scene::Scene;
+use crate::settings::Settings;
+use crate::stats::RenderStats;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// The seed's debug view: each pixel shows the average over its samples of the shading
+/// normal mapped to colour as n * 0.5 + 0.5; misses are black.
+///
+/// Samples are jittered inside the pixel (one uniform offset per sample; the pixel centre
+/// when `spp` is 1, as the reference does), with random numbers from (seed, pixel, sample).
+pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Settings) -> (Film, RenderStats) {
+    let (w, h) = (settings.width, settings.height);
+    let region = settings.region();
+    let spp = settings.spp.max(1);
+    let start = Instant::now();
+    let mut film = Film::new(w, h);
+    let counters: Vec<TraceCounters> = film
+        .pixels
+        .par_chunks_mut(w)
+        .enumerate()
+        .filter(|(y, _)| *y >= region.y && *y < region.y + region.h)
+        .map(|(y, row)| {
+            let mut c = TraceCounters::default();
+            for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
+                let pixel = (y * w + x) as u64;
+                let mut sum = Vec3::ZERO;
+                for s in 0..spp {
+                    let (jx, jy) = if spp == 1 {
+                        (0.5, 0.5)
+                    } else {
+                        Sampler::for_sample(settings.seed, pixel, s as u64).next_2d()
+                    };
+                    let ray = scene.camera.generate_ray((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
+                    if let Some(hit) = accel.closest_hit(&ray, &mut c) {
+                        let n = scene.surface_point(&ray, &hit).shading_normal;
+                        sum += n * 0.5 + Vec3::splat(0.5);
+                    }
+                }
+                *out = sum / spp as f32;
+            }
+            c
+        })
+        .collect();
+    let mut stats = RenderStats::default();
+    for c in &counters {
+        stats.counters.add(c);
+    }
+    stats.camera_rays = stats.counters.rays;
+    stats.render_s = start.elapsed().as_secs_f64();
+    stats.stages.traverse = stats.render_s;
+    stats.samples_per_pixel = vec![spp; region.w * region.h];
+    (film, stats)
+}

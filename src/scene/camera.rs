@@ -1,0 +1,147 @@
+use crate::ray::Ray;
+use glam::{Mat3, Vec3};
+
+/// A pinhole (or thin-lens) camera with the CS184 conventions: the image plane sits at
+/// z = -1 in camera space, spans 2 tan(hfov/2) by 2 tan(vfov/2), rays are clipped to
+/// [nclip, fclip], and image coordinates (0,0) are the bottom-left corner.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    /// Camera-to-world rotation; columns are the camera's right, up and backward (+Z) axes.
+    pub c2w: Mat3,
+    pub hfov_deg: f32,
+    pub vfov_deg: f32,
+    pub nclip: f32,
+    pub fclip: f32,
+    /// Thin-lens aperture radius; 0 is a pinhole.
+    pub lens_radius: f32,
+    pub focal_distance: f32,
+}
+
+impl Default for Camera {
+    fn default() -> Self {
+        Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0, 4.0 / 3.0)
+    }
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target` with vertical field of view `vfov_deg`.
+    pub fn look_at(eye: Vec3, target: Vec3, up: Vec3, vfov_deg: f32, aspect: f32) -> Self {
+        let back = (eye - target).try_normalize().unwrap_or(Vec3::Z);
+        let up_hint = if up.cross(back).length_squared() < 1e-12 { any_perpendicular(back) } else { up };
+        let right = up_hint.cross(back).normalize();
+        let true_up = back.cross(right).normalize();
+        let mut cam = Camera {
+            position: eye,
+            c2w: Mat3::from_cols(right, true_up, back),
+            hfov_deg: vfov_deg,
+            vfov_deg,
+            nclip: 0.01,
+            fclip: 1e30,
+            lens_radius: 0.0,
+            focal_distance: 1.0,
+        };
+        cam.fit_aspect(aspect);
+        cam
+    }
+
+    /// Keeps the vertical field of view and sets the horizontal one for an image of this
+    /// aspect (width / height), as the reference renderer does when the window is sized.
+    pub fn fit_aspect(&mut self, aspect: f32) {
+        let half_v = (self.vfov_deg.to_radians() * 0.5).tan();
+        self.hfov_deg = 2.0 * (half_v * aspect).atan().to_degrees();
+    }
+
+    /// A camera that frames the axis-aligned box `lo..hi` from the +Z side and a little
+    /// above, for files that carry no camera (OBJ, PLY).
+    pub fn framing(lo: Vec3, hi: Vec3, aspect: f32) -> Self {
+        let center = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(1e-6);
+        let vfov: f32 = 40.0;
+        let dist = radius / (vfov.to_radians() * 0.5).sin() * 1.05;
+        let dir = Vec3::new(0.0, 0.25, 1.0).normalize();
+        let mut cam = Camera::look_at(center + dir * dist, center, Vec3::Y, vfov, aspect);
+        cam.nclip = (dist - radius).max(dist * 1e-4) * 0.5;
+        cam.fclip = (dist + radius) * 2.0;
+        cam
+    }
+
+    /// The reference renderer's placement of a COLLADA camera: keep only the direction
+    /// `view_hint` (from the target toward the camera), put the camera at
+    /// `c + 1.5 |diag| view_hint` looking at the bounding-box centre `c`, with +Y up.
+    pub fn cs184_place(&mut self, view_hint: Vec3, lo: Vec3, hi: Vec3) {
+        let target = 0.5 * (lo + hi);
+        let distance = 1.5 * (hi - lo).length();
+        let dir = view_hint.try_normalize().unwrap_or(Vec3::Z);
+        // Spherical angles as the reference computes them (phi from +Y, theta about Y).
+        let mut phi = dir.y.clamp(-1.0, 1.0).acos();
+        let theta = dir.x.atan2(dir.z);
+        if phi.sin() == 0.0 {
+            phi += 1e-6;
+        }
+        let sin_phi = phi.sin();
+        let to_camera = distance * Vec3::new(sin_phi * theta.sin(), phi.cos(), sin_phi * theta.cos());
+        let up = Vec3::new(0.0, if sin_phi > 0.0 { 1.0 } else { -1.0 }, 0.0);
+        let right = up.cross(to_camera).normalize();
+        let screen_up = to_camera.cross(right).normalize();
+        self.position = target + to_camera;
+        self.c2w = Mat3::from_cols(right, screen_up, to_camera.normalize());
+    }
+
+    /// Direction (not normalised) through the image point `(x, y)` in [0,1]^2, bottom-left origin.
+    #[inline]
+    pub fn direction_camera_space(&self, x: f32, y: f32) -> Vec3 {
+        let w = (self.hfov_deg.to_radians() * 0.5).tan();
+        let h = (self.vfov_deg.to_radians() * 0.5).tan();
+        Vec3::new((x - 0.5) * 2.0 * w, (y - 0.5) * 2.0 * h, -1.0)
+    }
+
+    /// The pinhole ray through `(x, y)` in [0,1]^2: unit direction, clipped to [nclip, fclip].
+    #[inline]
+    pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
+        let d = (self.c2w * self.direction_camera_space(x, y)).normalize();
+        Ray { origin: self.position, dir: d, tmin: self.nclip, tmax: self.fclip }
+    }
+
+    /// Thin-lens ray: `lens` is a point on the unit disk (already mapped), scaled by the
+    /// lens radius; the ray passes through the point where the pinhole ray meets the plane
+    /// of focus.
+    pub fn generate_lens_ray(&self, x: f32, y: f32, lens: glam::Vec2) -> Ray {
+        if self.lens_radius <= 0.0 {
+            return self.generate_ray(x, y);
+        }
+        let d_cam = self.direction_camera_space(x, y);
+        let focus = d_cam * (self.focal_distance / -d_cam.z);
+        let p_lens = Vec3::new(lens.x * self.lens_radius, lens.y * self.lens_radius, 0.0);
+        let dir_cam = (focus - p_lens).normalize();
+        // Clip distances are along the camera axis, so scale them by 1/|cos| like the pinhole ray.
+        let dir = self.c2w * dir_cam;
+        Ray { origin: self.position + self.c2w * p_lens, dir, tmin: self.nclip, tmax: self.fclip }
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        let ok = self.position.is_finite()
+            && self.c2w.is_finite()
+            && self.hfov_deg.is_finite()
+            && self.vfov_deg.is_finite()
+            && self.nclip.is_finite()
+            && !self.fclip.is_nan();
+        if !ok {
+            return Err("camera has non-finite parameters".into());
+        }
+        if !(self.vfov_deg > 0.0 && self.vfov_deg < 180.0 && self.hfov_deg > 0.0 && self.hfov_deg < 180.0) {
+            return Err(format!(
+                "camera field of view {}x{} degrees is outside (0, 180)",
+                self.hfov_deg, self.vfov_deg
+            ));
+        }
+        if self.nclip < 0.0 || self.fclip <= self.nclip {
+            return Err(format!("camera clip range [{}, {}] is empty", self.nclip, self.fclip));
+        }
+        Ok(())
+    }
+}
+
+fn any_perpendicular(v: Vec3) -> Vec3 {
+    if v.x.abs() < 0.9 { Vec3::X.cross(v).normalize() } else { Vec3::Y.cross(v).normalize() }
+}

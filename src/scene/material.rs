@@ -1,0 +1,106 @@
+use glam::Vec3;
+use std::path::PathBuf;
+
+/// The scattering model of a surface, as the scene file states it.
+///
+/// Every model the CS184 files describe is kept, so that later stages can render it; the
+/// variants carry exactly the file's parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Bsdf {
+    Diffuse { albedo: Vec3 },
+    Mirror { reflectance: Vec3 },
+    Glass { reflectance: Vec3, transmittance: Vec3, roughness: f32, ior: f32 },
+    Refraction { transmittance: Vec3, roughness: f32, ior: f32 },
+    Microfacet { alpha: f32, eta: Vec3, k: Vec3 },
+    Phong { diffuse: Vec3, specular: Vec3, shininess: f32 },
+}
+
+impl Bsdf {
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Bsdf::Diffuse { .. } => "diffuse",
+            Bsdf::Mirror { .. } => "mirror",
+            Bsdf::Glass { .. } => "glass",
+            Bsdf::Refraction { .. } => "refraction",
+            Bsdf::Microfacet { .. } => "microfacet",
+            Bsdf::Phong { .. } => "phong",
+        }
+    }
+
+    /// The albedo used while only diffuse transport is rendered.
+    pub fn diffuse_albedo(&self) -> Vec3 {
+        match *self {
+            Bsdf::Diffuse { albedo } => albedo,
+            Bsdf::Mirror { reflectance } => reflectance,
+            Bsdf::Glass { transmittance, .. } | Bsdf::Refraction { transmittance, .. } => transmittance,
+            Bsdf::Microfacet { .. } => Vec3::splat(0.5),
+            Bsdf::Phong { diffuse, .. } => diffuse,
+        }
+    }
+}
+
+/// An albedo image looked up through the mesh's uv coordinates.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    pub path: PathBuf,
+}
+
+/// A surface's appearance: how it scatters and what it emits.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    pub bsdf: Bsdf,
+    /// Emitted radiance (zero for non-emitters).
+    pub emission: Vec3,
+    pub albedo_texture: Option<Texture>,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Material::diffuse("default", Vec3::splat(0.5))
+    }
+}
+
+impl Material {
+    pub fn diffuse(name: &str, albedo: Vec3) -> Self {
+        Material { name: name.into(), bsdf: Bsdf::Diffuse { albedo }, emission: Vec3::ZERO, albedo_texture: None }
+    }
+
+    /// A pure emitter that reflects nothing (the CS184 `<emission>` BSDF).
+    pub fn emitter(name: &str, radiance: Vec3) -> Self {
+        Material {
+            name: name.into(),
+            bsdf: Bsdf::Diffuse { albedo: Vec3::ZERO },
+            emission: radiance,
+            albedo_texture: None,
+        }
+    }
+
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = match self.bsdf {
+            Bsdf::Diffuse { albedo } => albedo.is_finite(),
+            Bsdf::Mirror { reflectance } => reflectance.is_finite(),
+            Bsdf::Glass { reflectance, transmittance, roughness, ior } => {
+                reflectance.is_finite() && transmittance.is_finite() && roughness.is_finite() && ior.is_finite()
+            }
+            Bsdf::Refraction { transmittance, roughness, ior } => {
+                transmittance.is_finite() && roughness.is_finite() && ior.is_finite()
+            }
+            Bsdf::Microfacet { alpha, eta, k } => alpha.is_finite() && eta.is_finite() && k.is_finite(),
+            Bsdf::Phong { diffuse, specular, shininess } => {
+                diffuse.is_finite() && specular.is_finite() && shininess.is_finite()
+            }
+        };
+        if !finite || !self.emission.is_finite() {
+            return Err("a parameter is not finite".into());
+        }
+        if self.emission.min_element() < 0.0 {
+            return Err("negative emission".into());
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,99 @@
+use glam::{Vec2, Vec3};
+
+/// All triangles of a scene in world space, as parallel arrays (structure of arrays).
+///
+/// Vertex attributes are indexed by the `[u32; 3]` triples; `normals` and `uvs`, when
+/// present, have exactly one entry per position. Triangle `i` keeps its file order
+/// (polygons fan-triangulated (v0,v1,v2), (v0,v2,v3), ...), which is the numbering that
+/// ray files and the peers use.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Mesh {
+    pub positions: Vec<Vec3>,
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub triangles: Vec<[u32; 3]>,
+    pub material_ids: Vec<u32>,
+}
+
+/// An analytic sphere (CS184 spheres stay exact, never tessellated).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sphere {
+    pub center: Vec3,
+    pub radius: f32,
+    pub material: u32,
+}
+
+impl Mesh {
+    /// Appends another mesh (already in world space), shifting its indices; attributes that
+    /// only one side has are filled with zeros so the arrays stay parallel.
+    pub fn append(&mut self, other: Mesh) {
+        let base = self.positions.len() as u32;
+        let had = self.positions.len();
+        let add = other.positions.len();
+        merge_attr(&mut self.normals, other.normals, had, add, Vec3::ZERO);
+        merge_attr(&mut self.uvs, other.uvs, had, add, Vec2::ZERO);
+        self.positions.extend(other.positions);
+        self.triangles.extend(other.triangles.into_iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
+        self.material_ids.extend(other.material_ids);
+    }
+
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len()
+    }
+
+    /// The three corner positions of triangle `i`.
+    #[inline]
+    pub fn corners(&self, i: usize) -> [Vec3; 3] {
+        let [a, b, c] = self.triangles[i];
+        [self.positions[a as usize], self.positions[b as usize], self.positions[c as usize]]
+    }
+
+    /// Checks index ranges, array lengths and finiteness.
+    pub fn validate(&self, material_count: usize) -> Result<(), String> {
+        let n = self.positions.len();
+        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+            return Err(format!("vertex {i} has a non-finite coordinate"));
+        }
+        if let Some(normals) = &self.normals {
+            if normals.len() != n {
+                return Err(format!("{} normals for {n} vertices", normals.len()));
+            }
+            if normals.iter().any(|v| !v.is_finite()) {
+                return Err("a vertex normal is not finite".into());
+            }
+        }
+        if let Some(uvs) = &self.uvs {
+            if uvs.len() != n {
+                return Err(format!("{} uvs for {n} vertices", uvs.len()));
+            }
+            if uvs.iter().any(|v| !v.is_finite()) {
+                return Err("a texture coordinate is not finite".into());
+            }
+        }
+        if self.material_ids.len() != self.triangles.len() {
+            return Err(format!("{} material ids for {} triangles", self.material_ids.len(), self.triangles.len()));
+        }
+        for (i, t) in self.triangles.iter().enumerate() {
+            if let Some(&bad) = t.iter().find(|&&v| v as usize >= n) {
+                return Err(format!("triangle {i} uses vertex {bad}, but there are only {n}"));
+            }
+        }
+        if let Some(&m) = self.material_ids.iter().find(|&&m| m as usize >= material_count) {
+            return Err(format!("a triangle uses material {m}, but there are only {material_count}"));
+        }
+        Ok(())
+    }
+}
+
+fn merge_attr<T: Copy>(mine: &mut Option<Vec<T>>, theirs: Option<Vec<T>>, had: usize, add: usize, zero: T) {
+    match (mine.as_mut(), theirs) {
+        (Some(m), Some(t)) => m.extend(t),
+        (Some(m), None) => m.extend(std::iter::repeat_n(zero, add)),
+        (None, Some(t)) => {
+            let mut v = vec![zero; had];
+            v.extend(t);
+            *mine = Some(v);
+        }
+        (None, None) => {}
+    }
+}

@@ -1,0 +1,96 @@
+//! Render settings: everything the command line can change about a render.
+
+/// What a pixel shows.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Shading {
+    /// The shading normal as n * 0.5 + 0.5 (the seed's debug mode).
+    Normals,
+    /// Emission plus direct light (depth 1).
+    Direct,
+    /// Full global illumination up to the maximum depth.
+    #[default]
+    Global,
+}
+
+/// Which light-transport implementation runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum IntegratorKind {
+    /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
+    #[default]
+    Wavefront,
+    /// The simple recursive single-ray reference.
+    Recursive,
+}
+
+/// An image-space rectangle to render (`-p X Y DX DY`), in pixels, bottom-left origin.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Cell {
+    pub x: usize,
+    pub y: usize,
+    pub w: usize,
+    pub h: usize,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Settings {
+    pub width: usize,
+    pub height: usize,
+    /// Camera rays per pixel (`-s`).
+    pub spp: u32,
+    /// Samples per area light (`-l`).
+    pub light_samples: u32,
+    /// Maximum ray depth (`-m`).
+    pub max_depth: u32,
+    /// Accumulate all bounces (`-o 1`) or show only bounce `max_depth` (`-o 0`).
+    pub accumulate: bool,
+    /// Adaptive sampling: batch size and tolerance (`-a B T`).
+    pub adaptive: Option<(u32, f32)>,
+    /// Worker threads; 0 = all cores.
+    pub threads: usize,
+    /// Uniform hemisphere sampling for direct light instead of light sampling (`-H`).
+    pub hemisphere: bool,
+    pub shading: Shading,
+    /// Russian roulette continue probability.
+    pub rr_continue: f32,
+    /// Use the BVH (false: brute force, `--no-bvh`).
+    pub use_bvh: bool,
+    pub seed: u64,
+    pub cell: Option<Cell>,
+    pub integrator: IntegratorKind,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings {
+            width: 800,
+            height: 600,
+            spp: 1,
+            light_samples: 1,
+            max_depth: 1,
+            accumulate: true,
+            adaptive: None,
+            threads: 0,
+            hemisphere: false,
+            shading: Shading::Global,
+            rr_continue: 0.65,
+            use_bvh: true,
+            seed: 0,
+            cell: None,
+            integrator: IntegratorKind::Wavefront,
+        }
+    }
+}
+
+impl Settings {
+    /// The pixel rectangle to render: the `-p` cell clipped to the image, or the whole image.
+    pub fn region(&self) -> Cell {
+        match self.cell {
+            Some(c) => {
+                let x = c.x.min(self.width);
+                let y = c.y.min(self.height);
+                Cell { x, y, w: c.w.min(self.width - x), h: c.h.min(self.height - y) }
+            }
+            None => Cell { x: 0, y: 0, w: self.width, h: self.height },
+        }
+    }
+}

@@ -1,0 +1,37 @@
+use super::RenderStats;
+use crate::accel::BuildInfo;
+use crate::effects::Effects;
+use crate::scene::Scene;
+use crate::settings::Settings;
+use serde_json::{Value, json};
+
+/// The `--stats` JSON object (schema in DESIGN.md).
+pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo, st: &RenderStats) -> Value {
+    let (mean, min, max) = st.spp_summary();
+    json!({
+        "scene": scene.name,
+        "triangles": scene.mesh.triangle_count(),
+        "spheres": scene.spheres.len(),
+        "lights": scene.lights.len(),
+        "width": s.width,
+        "height": s.height,
+        "spp": s.spp,
+        "threads": rayon::current_num_threads(),
+        "effects": effects.names(),
+        "effect_reasons": effects.on,
+        "bvh": build,
+        "rays": {
+            "camera": st.camera_rays,
+            "extension": st.extension_rays,
+            "shadow": st.shadow_rays,
+            "total": st.total_rays(),
+        },
+        "render_s": st.render_s,
+        "mrays_per_s": st.mrays_per_s(),
+        "intersection_tests_per_ray": st.tests_per_ray(),
+        "nodes_visited_per_ray": st.nodes_per_ray(),
+        "stages": st.stages,
+        "samples_per_pixel": { "mean": mean, "min": min, "max": max },
+        "invalid_samples": st.invalid_samples,
+    })
+}

@@ -1,0 +1,91 @@
+//! Render statistics: what was traced, how fast, and where the time went.
+
+use crate::accel::TraceCounters;
+use serde::Serialize;
+
+/// Seconds spent in each wavefront stage.
+#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+pub struct StageTimes {
+    pub generate: f64,
+    pub traverse: f64,
+    pub shade: f64,
+    pub shadow: f64,
+    pub compact: f64,
+}
+
+impl StageTimes {
+    pub fn total(&self) -> f64 {
+        self.generate + self.traverse + self.shade + self.shadow + self.compact
+    }
+}
+
+/// Everything a render reports besides its image.
+#[derive(Clone, Debug, Default)]
+pub struct RenderStats {
+    pub camera_rays: u64,
+    pub extension_rays: u64,
+    pub shadow_rays: u64,
+    pub counters: TraceCounters,
+    pub stages: StageTimes,
+    pub render_s: f64,
+    /// Samples dropped because they were NaN or Inf.
+    pub invalid_samples: u64,
+    /// Camera samples taken per rendered pixel.
+    pub samples_per_pixel: Vec<u32>,
+}
+
+impl RenderStats {
+    pub fn total_rays(&self) -> u64 {
+        self.camera_rays + self.extension_rays + self.shadow_rays
+    }
+
+    pub fn mrays_per_s(&self) -> f64 {
+        if self.render_s > 0.0 { self.total_rays() as f64 / self.render_s / 1e6 } else { 0.0 }
+    }
+
+    pub fn tests_per_ray(&self) -> f64 {
+        self.counters.prim_tests as f64 / self.counters.rays.max(1) as f64
+    }
+
+    pub fn nodes_per_ray(&self) -> f64 {
+        self.counters.nodes as f64 / self.counters.rays.max(1) as f64
+    }
+
+    /// (mean, min, max) camera samples per pixel.
+    pub fn spp_summary(&self) -> (f64, u32, u32) {
+        let n = self.samples_per_pixel.len().max(1) as f64;
+        let sum: u64 = self.samples_per_pixel.iter().map(|&s| s as u64).sum();
+        let min = self.samples_per_pixel.iter().copied().min().unwrap_or(0);
+        let max = self.samples_per_pixel.iter().copied().max().unwrap_or(0);
+        (sum as f64 / n, min, max)
+    }
+
+    /// The seed-style summary printed at the end of a render.
+    pub fn log_lines(&self) -> Vec<String> {
+        let s = &self.stages;
+        vec![
+            format!(
+                "Rays traced: {} (camera {}, extension {}, shadow {})",
+                self.total_rays(),
+                self.camera_rays,
+                self.extension_rays,
+                self.shadow_rays
+            ),
+            format!("Render time: {:.4} s", self.render_s),
+            format!("Average speed: {:.3} million rays per second", self.mrays_per_s()),
+            format!(
+                "Averaged {:.3} intersection tests per ray, {:.3} nodes visited per ray",
+                self.tests_per_ray(),
+                self.nodes_per_ray()
+            ),
+            format!(
+                "Stages (s): generate {:.4}, traverse {:.4}, shade {:.4}, shadow {:.4}, compact {:.4}",
+                s.generate, s.traverse, s.shade, s.shadow, s.compact
+            ),
+            format!("Invalid (NaN/Inf) samples dropped: {}", self.invalid_samples),
+        ]
+    }
+}
+
+mod json;
+pub use json::to_json;
