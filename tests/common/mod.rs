@@ -1,0 +1,57 @@
+//! Shared helpers for integration tests.
+#![allow(dead_code)]
+
+use std::path::PathBuf;
+
+/// The shared scenes folder: `WAVEPATH_SCENES`, else `../shared/scenes` beside the repo.
+///
+/// When `WAVEPATH_SCENES` is set (CI sets it), a missing folder fails the test; when it is
+/// unset and the default folder is absent, returns `None` and the caller skips.
+pub fn scenes_dir() -> Option<PathBuf> {
+    match std::env::var_os("WAVEPATH_SCENES") {
+        Some(p) => {
+            let p = PathBuf::from(p);
+            assert!(p.is_dir(), "WAVEPATH_SCENES={} is not a folder", p.display());
+            Some(p)
+        }
+        None => {
+            let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes");
+            if p.is_dir() {
+                Some(p)
+            } else {
+                eprintln!("skipped: no ../shared/scenes and WAVEPATH_SCENES is unset");
+                None
+            }
+        }
+    }
+}
+
+/// A file in the shared scenes folder (None: skip, see [`scenes_dir`]).
+pub fn scene(rel: &str) -> Option<PathBuf> {
+    scenes_dir().map(|d| d.join(rel))
+}
+
+/// Every file under `dir` with one of the extensions, sorted.
+pub fn files_with_ext(dir: &std::path::Path, exts: &[&str]) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else if let Some(x) = p.extension().and_then(|x| x.to_str())
+                && exts.contains(&x.to_ascii_lowercase().as_str())
+            {
+                out.push(p);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+/// Path of the built `wavepath` binary (integration tests only).
+pub fn wavepath_bin() -> PathBuf {
+    PathBuf::from(env!("CARGO_BIN_EXE_wavepath"))
+}
