@@ -52,7 +52,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
     }
-    let (film, stats, build) = crate::render::with_threads(s.threads, || -> Result<_> {
+    let (film, build) = crate::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
         let (accel, build) = crate::accel::build(&scene, s.use_bvh);
         eprintln!(
@@ -62,10 +62,26 @@ pub fn run(a: &RenderArgs) -> Result<()> {
             build.nodes,
             build.depth
         );
-        let (film, stats) = crate::render::render(&scene, accel.as_ref(), &s)?;
-        Ok((film, stats, build))
+        let bar = progress_bar(&s);
+        let tick = |n: u64| {
+            if let Some(b) = &bar {
+                b.inc(n);
+            }
+        };
+        let result = crate::render::render_with_progress(&scene, accel.as_ref(), &s, &tick)?;
+        if let Some(b) = &bar {
+            b.finish_and_clear();
+        }
+        Ok((result, build))
     })??;
+    let crate::render::RenderOutput { film, stats, samples } = film;
     crate::film::write_image(&film, &out, a.tonemap)?;
+    if s.shading != crate::settings::Shading::Normals {
+        let rate_path = rate_image_path(&out);
+        let rate = crate::film::rate_film(film.width, film.height, &samples, s.spp);
+        crate::film::write_rate_image(&rate, &rate_path)?;
+        eprintln!("[wavepath] Wrote sample-rate image {}", rate_path.display());
+    }
     for line in stats.log_lines() {
         eprintln!("[wavepath] {line}");
     }
@@ -76,6 +92,28 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     let _: &RenderStats = &stats;
     Ok(())
+}
+
+/// `<out>_rate.png` beside the output image.
+fn rate_image_path(out: &Path) -> PathBuf {
+    let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("wavepath");
+    out.with_file_name(format!("{stem}_rate.png"))
+}
+
+/// A progress bar over camera samples, only when stderr is a terminal.
+fn progress_bar(s: &Settings) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !std::io::stderr().is_terminal() || s.shading == crate::settings::Shading::Normals {
+        return None;
+    }
+    let r = s.region();
+    let total = (r.w * r.h) as u64 * s.spp.max(1) as u64;
+    let bar = indicatif::ProgressBar::new(total);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("[wavepath] {bar:40} {percent:>3}% {elapsed_precise} eta {eta}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    Some(bar)
 }
 
 fn check_output_extension(out: &Path) -> Result<()> {

@@ -1,7 +1,11 @@
 //! The image being rendered and how it is written to disk.
 
+mod accum;
+mod rate;
 mod write;
 
+pub use accum::{Accumulator, PixelSums};
+pub use rate::{rate_color, rate_film, write_rate_image};
 pub use write::{Tonemap, write_image};
 
 use glam::Vec3;

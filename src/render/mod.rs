@@ -6,22 +6,47 @@ pub use normals::render_normals;
 
 use crate::accel::Intersector;
 use crate::film::Film;
+use crate::integrator::recursive::render_recursive;
 use crate::scene::Scene;
-use crate::settings::{Settings, Shading};
+use crate::settings::{IntegratorKind, Settings, Shading};
 use crate::stats::RenderStats;
-use anyhow::{Result, bail};
+use crate::wavefront::render_wavefront;
+use anyhow::Result;
+
+/// A finished render: the image, its statistics, and the camera samples taken per pixel
+/// of the whole image (for the sample-rate image).
+pub struct RenderOutput {
+    pub film: Film,
+    pub stats: RenderStats,
+    pub samples: Vec<u32>,
+}
 
 /// Renders `scene` with `settings`; the film covers the whole image, pixels outside a
 /// `-p` cell stay black.
 pub fn render(scene: &Scene, accel: &dyn Intersector, settings: &Settings) -> Result<(Film, RenderStats)> {
-    match settings.shading {
-        Shading::Normals => Ok(render_normals(scene, accel, settings)),
-        Shading::Direct | Shading::Global => {
-            bail!(
-                "--shading direct/global is not yet supported (the wavefront integrator is in progress); use --shading normals"
-            )
+    let out = render_with_progress(scene, accel, settings, &|_| {})?;
+    Ok((out.film, out.stats))
+}
+
+/// As [`render`]; `progress` is told how many camera samples have finished.
+pub fn render_with_progress(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    settings: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<RenderOutput> {
+    let (acc, stats) = match settings.shading {
+        Shading::Normals => {
+            let (film, stats) = render_normals(scene, accel, settings);
+            let samples = vec![settings.spp; film.pixels.len()];
+            return Ok(RenderOutput { film, stats, samples });
         }
-    }
+        Shading::Direct | Shading::Global => match settings.integrator {
+            IntegratorKind::Wavefront => render_wavefront(scene, accel, settings, progress),
+            IntegratorKind::Recursive => render_recursive(scene, accel, settings, progress),
+        },
+    };
+    Ok(RenderOutput { film: acc.to_film(), samples: acc.samples_taken(), stats })
 }
 
 /// Runs `f` on a rayon pool with `threads` workers (0 = all cores).

@@ -1,8 +1,12 @@
 //! Random numbers and the warps that turn them into directions and points.
 //!
-//! Every path draws its numbers from a generator seeded by (seed, pixel, sample), so an
-//! image does not depend on the thread count, the chunk size or the order of work.
+//! Every path draws its numbers from a generator keyed by (seed, pixel, sample, bounce), so
+//! an image does not depend on the thread count, the chunk size or the order of work.
 
 mod rng;
+mod splitmix;
+pub mod warp;
 
-pub use rng::{Sampler, splitmix64};
+pub use rng::Sampler;
+pub use splitmix::splitmix64;
+pub use warp::Frame;

@@ -1,46 +1,58 @@
-use rand_core::Rng;
-use rand_pcg::Pcg32;
+use super::splitmix::splitmix64;
 
-/// SplitMix64 finaliser: a cheap, well-mixed 64-bit hash used to derive seeds.
-#[inline]
-pub fn splitmix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// The random-number stream of one camera sample of one pixel.
-#[derive(Clone, Debug)]
+/// The random-number stream of one camera sample of one pixel, one stream per bounce.
+///
+/// Counter based: the n-th number of a stream is a hash of (key, n), so a stream is fully
+/// described by two integers (`key`, `dim`) that fit in a ray queue, and the numbers a path
+/// draws do not depend on which thread, chunk or wave runs it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Sampler {
-    rng: Pcg32,
+    key: u64,
+    dim: u32,
 }
 
 impl Sampler {
     /// The stream for sample `sample` of pixel `pixel` (row-major index) under `seed`.
-    /// The pixel chooses the PCG stream, the seed and sample the starting state, so
-    /// streams of different pixels never overlap.
     pub fn for_sample(seed: u64, pixel: u64, sample: u64) -> Self {
-        let state = splitmix64(seed ^ splitmix64(sample.wrapping_add(0x5851_F42D_4C95_7F2D)));
-        let stream = splitmix64(pixel ^ seed.rotate_left(32));
-        Sampler { rng: Pcg32::new(state, stream) }
+        Self::for_bounce(seed, pixel, sample, 0)
+    }
+
+    /// Stream `bounce` of the path of (`seed`, `pixel`, `sample`): stream 0 is the camera
+    /// ray, stream d + 1 the vertex at depth d. Each vertex starts at dimension 0 so the
+    /// numbers it uses do not depend on how many earlier vertices consumed.
+    #[inline]
+    pub fn for_bounce(seed: u64, pixel: u64, sample: u64, bounce: u32) -> Self {
+        let k = splitmix64(seed ^ 0xA076_1D64_78BD_642F);
+        let k = splitmix64(k ^ pixel);
+        let k = splitmix64(k ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB));
+        let key = splitmix64(k ^ (bounce as u64).wrapping_mul(0x8EBC_6AF0_9C88_C6E3));
+        Sampler { key, dim: 0 }
+    }
+
+    /// Jumps to dimension `dim` of this stream.
+    #[inline]
+    pub fn at(mut self, dim: u32) -> Self {
+        self.dim = dim;
+        self
+    }
+
+    #[inline]
+    pub fn next_u32(&mut self) -> u32 {
+        let h = splitmix64(self.key.wrapping_add((self.dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+        self.dim = self.dim.wrapping_add(1);
+        (h >> 32) as u32
     }
 
     /// A uniform number in [0, 1) with 24 bits of precision (never exactly 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        (self.rng.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u32 << 24) as f32)
     }
 
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
         let a = self.next_f32();
         (a, self.next_f32())
-    }
-
-    #[inline]
-    pub fn next_u32(&mut self) -> u32 {
-        self.rng.next_u32()
     }
 }
 
@@ -53,22 +65,32 @@ mod tests {
         let mut s = Sampler::for_sample(1, 2, 3);
         let n = 100_000;
         let mut sum = 0.0f64;
+        let mut sum_xy = 0.0f64;
+        let mut prev = 0.5f64;
         for _ in 0..n {
             let x = s.next_f32();
             assert!((0.0..1.0).contains(&x));
             sum += x as f64;
+            sum_xy += (x as f64 - 0.5) * (prev - 0.5);
+            prev = x as f64;
         }
         // Mean of U(0,1) is 1/2 with standard error 1/sqrt(12 n) ~ 0.0009.
         assert!((sum / n as f64 - 0.5).abs() < 0.005);
+        // Successive numbers are uncorrelated: E[(x-1/2)(y-1/2)] = 0, s.e. 1/(12 sqrt n).
+        assert!((sum_xy / n as f64).abs() < 0.002);
     }
 
     #[test]
-    fn streams_differ_between_pixels_and_samples() {
+    fn streams_differ_between_pixels_samples_and_bounces() {
         let a = Sampler::for_sample(0, 0, 0).next_u32();
         let b = Sampler::for_sample(0, 1, 0).next_u32();
         let c = Sampler::for_sample(0, 0, 1).next_u32();
         let d = Sampler::for_sample(1, 0, 0).next_u32();
-        assert!(a != b && a != c && a != d && b != c);
+        let e = Sampler::for_bounce(0, 0, 0, 1).next_u32();
+        assert!(a != b && a != c && a != d && b != c && a != e);
         assert_eq!(a, Sampler::for_sample(0, 0, 0).next_u32());
+        let mut s = Sampler::for_sample(3, 4, 5);
+        s.next_u32();
+        assert_eq!(s.next_u32(), Sampler::for_sample(3, 4, 5).at(1).next_u32());
     }
 }

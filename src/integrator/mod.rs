@@ -1,0 +1,242 @@
+//! What happens at one path vertex, shared by both integrators: emission, direct light
+//! (light or hemisphere sampling) and the continuation ray, with the seed's semantics.
+//!
+//! The wavefront integrator spreads this work over queues and stages; the recursive
+//! reference calls it one ray at a time. Each vertex draws its random numbers from its own
+//! stream (pixel, sample, depth), at fixed dimensions: 0-1 continuation direction, 2 Russian
+//! roulette, 3.. light or hemisphere samples.
+
+mod offset;
+pub mod recursive;
+
+pub use offset::{offset_origin, shadow_tmax};
+
+use crate::lights::LightSet;
+use crate::ray::{Hit, Ray};
+use crate::sampling::{Frame, Sampler, warp};
+use crate::scene::Scene;
+use crate::settings::{Settings, Shading};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// First dimension of a vertex stream used by light or hemisphere samples.
+const DIM_DIRECT: u32 = 3;
+
+/// Everything shading needs, precomputed once per render.
+pub struct Transport<'a> {
+    pub scene: &'a Scene,
+    pub lights: LightSet,
+    /// Per material: diffuse albedo and emitted radiance.
+    pub albedo: Vec<Vec3>,
+    pub emission: Vec<Vec3>,
+    pub max_depth: u32,
+    pub accumulate: bool,
+    pub hemisphere: bool,
+    pub light_samples: u32,
+    pub rr_continue: f32,
+    pub seed: u64,
+    /// Shadow (or hemisphere probe) rays one vertex casts at most.
+    pub direct_per_vertex: u32,
+}
+
+/// A hit point ready for shading, normals turned toward the incoming ray's side.
+#[derive(Clone, Copy, Debug)]
+pub struct Vertex {
+    pub p: Vec3,
+    pub ng: Vec3,
+    pub ns: Vec3,
+    pub albedo: Vec3,
+    pub emission: Vec3,
+}
+
+/// A ray toward a light (`probe` false: any-hit, adds `weight` when unoccluded) or a
+/// hemisphere sample (`probe` true: closest hit, adds `weight` times the emission it sees).
+#[derive(Clone, Copy, Debug)]
+pub struct DirectRay {
+    pub ray: Ray,
+    pub weight: Vec3,
+}
+
+impl<'a> Transport<'a> {
+    pub fn new(scene: &'a Scene, s: &Settings) -> Self {
+        let lights = LightSet::new(scene);
+        let max_depth = if s.shading == Shading::Direct { s.max_depth.min(1) } else { s.max_depth };
+        let light_samples = s.light_samples.max(1);
+        let direct_per_vertex = if s.hemisphere {
+            // As the seed: as many hemisphere samples as light sampling would take for
+            // area lights, lights x -l.
+            (lights.lights.len() as u32 * light_samples).max(light_samples)
+        } else {
+            lights.samples_per_point(light_samples)
+        };
+        Transport {
+            scene,
+            albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
+            emission: scene.materials.iter().map(|m| m.emission).collect(),
+            lights,
+            max_depth,
+            accumulate: s.accumulate,
+            hemisphere: s.hemisphere,
+            light_samples,
+            rr_continue: s.rr_continue.clamp(1e-3, 1.0),
+            seed: s.seed,
+            direct_per_vertex,
+        }
+    }
+
+    /// Whether emission seen directly by the camera is part of the image.
+    #[inline]
+    pub fn counts_emission(&self) -> bool {
+        self.accumulate || self.max_depth == 0
+    }
+
+    /// Whether direct light at a vertex of `depth` (0 = the camera's hit) is part of the image:
+    /// it took `depth + 1` bounces.
+    #[inline]
+    pub fn counts_direct(&self, depth: u32) -> bool {
+        depth < self.max_depth && (self.accumulate || depth + 1 == self.max_depth)
+    }
+
+    /// Whether a vertex of `depth` spawns a continuation ray.
+    #[inline]
+    pub fn continues(&self, depth: u32) -> bool {
+        depth + 1 < self.max_depth
+    }
+
+    #[inline]
+    pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
+        let sp = self.scene.surface_point(ray, hit);
+        let flip = if sp.geometric_normal.dot(ray.dir) > 0.0 { -1.0 } else { 1.0 };
+        let ng = sp.geometric_normal * flip;
+        // The shading normal goes to the same side as the geometric one.
+        let ns = if sp.shading_normal.dot(ng) < 0.0 { -sp.shading_normal } else { sp.shading_normal };
+        let m = sp.material as usize;
+        Vertex { p: sp.position, ng, ns, albedo: self.albedo[m], emission: self.emission[m] }
+    }
+
+    /// The stream of the vertex at `depth` of path (pixel, sample).
+    #[inline]
+    pub fn sampler(&self, pixel: u32, sample: u32, depth: u32) -> Sampler {
+        Sampler::for_bounce(self.seed, pixel as u64, sample as u64, depth + 1)
+    }
+
+    /// Direct-light rays of vertex `v` (throughput not applied), handed to `out`.
+    #[inline]
+    pub fn direct_rays(&self, v: &Vertex, mut rng: Sampler, mut out: impl FnMut(DirectRay)) {
+        let f = v.albedo * FRAC_1_PI;
+        if f == Vec3::ZERO {
+            return;
+        }
+        rng = rng.at(DIM_DIRECT);
+        if self.hemisphere {
+            let n = self.direct_per_vertex;
+            let frame = Frame::new(v.ns);
+            let scale = f / (warp::UNIFORM_HEMISPHERE_PDF * n as f32);
+            for _ in 0..n {
+                let (a, b) = rng.next_2d();
+                let local = warp::uniform_hemisphere(a, b);
+                let wi = frame.to_world(local);
+                let origin = offset_origin(v.p, v.ng, wi);
+                let ray = Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY };
+                out(DirectRay { ray, weight: scale * local.z });
+            }
+            return;
+        }
+        for (i, light) in self.lights.lights.iter().enumerate() {
+            let ns = self.lights.samples_for(i, self.light_samples);
+            let inv = f / ns as f32;
+            for _ in 0..ns {
+                let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+                let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
+                let cos = ls.wi.dot(v.ns);
+                if cos <= 0.0 {
+                    continue;
+                }
+                let origin = offset_origin(v.p, v.ng, ls.wi);
+                let tmax = match ls.target {
+                    Some(q) => shadow_tmax(origin, q),
+                    None => f32::INFINITY,
+                };
+                if tmax <= 0.0 {
+                    continue;
+                }
+                let ray = Ray { origin, dir: ls.wi, tmin: 0.0, tmax };
+                out(DirectRay { ray, weight: inv * ls.weight * cos });
+            }
+        }
+    }
+
+    /// What a hemisphere probe ray sees: the emission it hits, or light from infinity.
+    #[inline]
+    pub fn probe_radiance(&self, ray: &Ray, hit: Option<&Hit>) -> Vec3 {
+        match hit {
+            Some(h) => self.emission[self.material_of(h.prim)],
+            None => self.lights.infinite.radiance(ray.dir),
+        }
+    }
+
+    #[inline]
+    pub fn material_of(&self, prim: u32) -> usize {
+        let ntri = self.scene.mesh.triangles.len();
+        let p = prim as usize;
+        if p < ntri { self.scene.mesh.material_ids[p] as usize } else { self.scene.spheres[p - ntri].material as usize }
+    }
+
+    /// The continuation ray of a vertex at `depth` and the factor its throughput is multiplied
+    /// by (cosine-weighted sampling of the diffuse BSDF: f cos / pdf = albedo), Russian
+    /// roulette not yet applied. `None`: the path ends here.
+    #[inline]
+    pub fn scatter(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3)> {
+        if !self.continues(depth) || v.albedo == Vec3::ZERO {
+            return None;
+        }
+        let (a, b) = rng.at(0).next_2d();
+        let wi = Frame::new(v.ns).to_world(warp::cosine_hemisphere(a, b));
+        let origin = offset_origin(v.p, v.ng, wi);
+        Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, v.albedo))
+    }
+
+    /// Russian roulette for the continuation of a vertex at `depth`: `None` stops the path,
+    /// otherwise the factor (1 / continue probability) its throughput is multiplied by. It
+    /// never stops the first indirect bounce (the continuation of the camera's hit).
+    #[inline]
+    pub fn roulette(&self, depth: u32, rng: Sampler) -> Option<f32> {
+        if depth == 0 || self.rr_continue >= 1.0 {
+            return Some(1.0);
+        }
+        (rng.at(2).next_f32() < self.rr_continue).then_some(1.0 / self.rr_continue)
+    }
+
+    /// [`scatter`](Self::scatter) followed by [`roulette`](Self::roulette).
+    #[inline]
+    pub fn continuation(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3)> {
+        let (ray, w) = self.scatter(v, depth, rng)?;
+        let k = self.roulette(depth, rng)?;
+        Some((ray, w * k))
+    }
+
+    /// The camera ray of sample `sample` of pixel (x, y): jittered inside the pixel (its
+    /// centre when there is one sample per pixel, as the reference does), through the thin
+    /// lens when the camera has an aperture.
+    #[inline]
+    pub fn camera_ray(&self, x: u32, y: u32, width: usize, height: usize, sample: u32, spp: u32) -> Ray {
+        let pixel = y * width as u32 + x;
+        let mut rng = Sampler::for_bounce(self.seed, pixel as u64, sample as u64, 0);
+        let (jx, jy) = if spp <= 1 { (0.5, 0.5) } else { rng.next_2d() };
+        let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
+        let cam = &self.scene.camera;
+        if cam.lens_radius > 0.0 {
+            let mut lr = rng.at(2);
+            let (a, b) = lr.next_2d();
+            cam.generate_lens_ray(px, py, warp::concentric_disk(a, b))
+        } else {
+            cam.generate_ray(px, py)
+        }
+    }
+}
+
+/// Luminance weights the reference uses for adaptive sampling (`illum()`).
+#[inline]
+pub fn illuminance(c: Vec3) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}

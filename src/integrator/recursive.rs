@@ -1,0 +1,143 @@
+//! The reference: a small recursive path tracer, one ray at a time, one pixel after another
+//! (rows in parallel). It follows the seed's structure (`est_radiance_global_illumination`
+//! = zero-bounce + at-least-one-bounce radiance) so the wavefront integrator can be checked
+//! against something obviously right.
+
+use super::{Transport, Vertex};
+use crate::accel::{Intersector, TraceCounters};
+use crate::film::{Accumulator, PixelSums};
+use crate::ray::Ray;
+use crate::scene::Scene;
+use crate::settings::Settings;
+use crate::stats::RenderStats;
+use glam::Vec3;
+use rayon::prelude::*;
+use std::time::Instant;
+
+#[derive(Default, Clone, Copy)]
+struct RowStats {
+    trace: TraceCounters,
+    camera: u64,
+    extension: u64,
+    shadow: u64,
+}
+
+struct PathCtx<'t, 'a> {
+    t: &'t Transport<'a>,
+    accel: &'t dyn Intersector,
+    pixel: u32,
+    sample: u32,
+    st: RowStats,
+}
+
+impl PathCtx<'_, '_> {
+    fn radiance(&mut self, ray: &Ray) -> Vec3 {
+        self.st.camera += 1;
+        let Some(hit) = self.accel.closest_hit(ray, &mut self.st.trace) else {
+            return if self.t.counts_emission() { self.t.lights.background } else { Vec3::ZERO };
+        };
+        let v = self.t.vertex(ray, &hit);
+        let mut l = if self.t.counts_emission() { v.emission } else { Vec3::ZERO };
+        if self.t.max_depth >= 1 {
+            l += self.at_least_one_bounce(&v, 0);
+        }
+        l
+    }
+
+    fn at_least_one_bounce(&mut self, v: &Vertex, depth: u32) -> Vec3 {
+        let rng = self.t.sampler(self.pixel, self.sample, depth);
+        let mut l = Vec3::ZERO;
+        if self.t.counts_direct(depth) {
+            let (t, accel) = (self.t, self.accel);
+            let mut shadow = 0;
+            let mut trace = self.st.trace;
+            t.direct_rays(v, rng, |d| {
+                shadow += 1;
+                if t.hemisphere {
+                    let hit = accel.closest_hit(&d.ray, &mut trace);
+                    l += d.weight * t.probe_radiance(&d.ray, hit.as_ref());
+                } else if !accel.any_hit(&d.ray, &mut trace) {
+                    l += d.weight;
+                }
+            });
+            self.st.trace = trace;
+            self.st.shadow += shadow;
+        }
+        if let Some((ray, w)) = self.t.continuation(v, depth, rng) {
+            self.st.extension += 1;
+            if let Some(hit) = self.accel.closest_hit(&ray, &mut self.st.trace) {
+                let next = self.t.vertex(&ray, &hit);
+                l += w * self.at_least_one_bounce(&next, depth + 1);
+            }
+        }
+        l
+    }
+}
+
+/// Renders with the recursive reference; `progress` is told how many samples finished.
+pub fn render_recursive(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    s: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Accumulator, RenderStats) {
+    let start = Instant::now();
+    let t = Transport::new(scene, s);
+    let (w, h) = (s.width, s.height);
+    let region = s.region();
+    let spp = s.spp.max(1);
+    let mut acc = Accumulator::new(w, h);
+    let rows: Vec<RowStats> = acc
+        .pixels
+        .par_chunks_mut(w)
+        .enumerate()
+        .filter(|(y, _)| *y >= region.y && *y < region.y + region.h)
+        .map(|(y, row)| {
+            let mut st = RowStats::default();
+            for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
+                let pixel = (y * w + x) as u32;
+                let mut sums = PixelSums::default();
+                for i in 0..spp {
+                    if let Some((b, tol)) = s.adaptive
+                        && i > 0
+                        && i.is_multiple_of(b)
+                        && sums.converged(tol)
+                    {
+                        break;
+                    }
+                    let ray = t.camera_ray(x as u32, y as u32, w, h, i, spp);
+                    let mut ctx = PathCtx { t: &t, accel, pixel, sample: i, st };
+                    let l = ctx.radiance(&ray);
+                    st = ctx.st;
+                    sums.add(l);
+                }
+                progress(sums.taken as u64);
+                *out = sums;
+            }
+            st
+        })
+        .collect();
+    let mut stats = RenderStats::default();
+    for r in &rows {
+        stats.counters.add(&r.trace);
+        stats.camera_rays += r.camera;
+        stats.extension_rays += r.extension;
+        stats.shadow_rays += r.shadow;
+    }
+    stats.render_s = start.elapsed().as_secs_f64();
+    stats.invalid_samples = acc.invalid_samples();
+    stats.samples_per_pixel = region_samples(&acc, s);
+    (acc, stats)
+}
+
+/// Samples taken per pixel of the rendered region (row-major, bottom row first).
+pub fn region_samples(acc: &Accumulator, s: &Settings) -> Vec<u32> {
+    let r = s.region();
+    let mut out = Vec::with_capacity(r.w * r.h);
+    for y in r.y..r.y + r.h {
+        for x in r.x..r.x + r.w {
+            out.push(acc.pixels[y * acc.width + x].taken);
+        }
+    }
+    out
+}

@@ -1,0 +1,76 @@
+use super::LightSample;
+use crate::sampling::warp;
+use crate::scene::Scene;
+use glam::Vec3;
+
+/// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
+/// area. Emission is two-sided, as the reference's emission BSDF is.
+#[derive(Clone, Debug)]
+pub struct EmissiveTriangles {
+    /// Corner 0 and the two edges from it.
+    corners: Vec<[Vec3; 3]>,
+    emission: Vec<Vec3>,
+    /// Running sum of areas (the last entry is the total).
+    cdf: Vec<f32>,
+}
+
+impl EmissiveTriangles {
+    pub fn new(scene: &Scene) -> Option<Self> {
+        let mut corners = Vec::new();
+        let mut emission = Vec::new();
+        let mut cdf = Vec::new();
+        let mut total = 0.0f32;
+        for (i, &m) in scene.mesh.material_ids.iter().enumerate() {
+            let mat = &scene.materials[m as usize];
+            if !mat.is_emissive() {
+                continue;
+            }
+            let [a, b, c] = scene.mesh.corners(i);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            if area > 0.0 && area.is_finite() {
+                total += area;
+                corners.push([a, b - a, c - a]);
+                emission.push(mat.emission);
+                cdf.push(total);
+            }
+        }
+        (total > 0.0).then_some(EmissiveTriangles { corners, emission, cdf })
+    }
+
+    pub fn total_area(&self) -> f32 {
+        *self.cdf.last().unwrap_or(&0.0)
+    }
+
+    pub fn len(&self) -> usize {
+        self.corners.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.corners.is_empty()
+    }
+
+    #[inline]
+    pub fn sample(&self, p: Vec3, u: [f32; 3]) -> Option<LightSample> {
+        let total = self.total_area();
+        let x = u[2] * total;
+        let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1);
+        let [a, e1, e2] = self.corners[i];
+        let (bu, bv) = warp::uniform_triangle(u[0], u[1]);
+        let q = a + bu * e1 + bv * e2;
+        let cr = e1.cross(e2);
+        let n = cr.try_normalize()?;
+        let d = q - p;
+        let dist2 = d.length_squared();
+        let dist = dist2.sqrt();
+        if dist <= 0.0 || !dist.is_finite() {
+            return None;
+        }
+        let wi = d / dist;
+        let cos_l = wi.dot(n).abs();
+        if cos_l <= 0.0 {
+            return None;
+        }
+        // Area density 1/total, solid-angle density dist^2 / (total cos_l).
+        Some(LightSample { wi, target: Some(q), weight: self.emission[i] * (total * cos_l / dist2) })
+    }
+}

@@ -1,0 +1,244 @@
+//! Light sampling: every light of a scene as something a shading point can draw a
+//! direction toward, with the radiance that arrives and its density.
+//!
+//! Semantics follow the CS184 reference (see DESIGN.md):
+//! - point and spot lights have no distance falloff (the reference ignores COLLADA
+//!   attenuation and divides by nothing); a directional light is a radiance along a direction;
+//! - an area light is one-sided, emitting toward `direction`;
+//! - the hemisphere (ambient) light gives constant radiance from directions with y > 0;
+//!   it is sampled cosine-weighted about the shading normal;
+//! - emissive triangles become one light sampled by area, unless the scene has an area light
+//!   (the CS184 Cornell boxes pair an area light with an emissive quad that only the camera
+//!   and hemisphere-sampling rays see; sampling both would count that light twice).
+
+mod emissive;
+mod infinite;
+
+pub use emissive::EmissiveTriangles;
+pub use infinite::Infinite;
+
+use crate::sampling::warp;
+use crate::scene::{Environment, Light, Scene};
+use glam::Vec3;
+
+/// One light as the integrators sample it.
+#[derive(Clone, Debug)]
+pub enum SampledLight {
+    Point {
+        position: Vec3,
+        intensity: Vec3,
+    },
+    Directional {
+        to_light: Vec3,
+        radiance: Vec3,
+    },
+    /// `cos_cutoff`: cosine of the cone's half-angle.
+    Spot {
+        position: Vec3,
+        axis: Vec3,
+        cos_cutoff: f32,
+        exponent: f32,
+        intensity: Vec3,
+    },
+    Area {
+        position: Vec3,
+        normal: Vec3,
+        dim_x: Vec3,
+        dim_y: Vec3,
+        area: f32,
+        radiance: Vec3,
+    },
+    /// Light from infinity (hemisphere light and constant environment), cosine-sampled.
+    Infinite(Infinite),
+    Emissive(EmissiveTriangles),
+}
+
+/// A direction toward a light and what arrives along it.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Unit direction from the shading point toward the light.
+    pub wi: Vec3,
+    /// The point on the light (for finite lights); the shadow ray stops short of it.
+    pub target: Option<Vec3>,
+    /// Arriving radiance divided by the density of `wi` (solid angle), or the delta light's
+    /// radiance for delta lights.
+    pub weight: Vec3,
+}
+
+impl SampledLight {
+    pub fn is_delta(&self) -> bool {
+        matches!(self, SampledLight::Point { .. } | SampledLight::Directional { .. } | SampledLight::Spot { .. })
+    }
+
+    /// Draws one sample toward the light from `p` with shading normal `n` (which the
+    /// cosine-sampled infinite lights use); `u` are three uniform numbers.
+    #[inline]
+    pub fn sample(&self, p: Vec3, n: Vec3, u: [f32; 3]) -> Option<LightSample> {
+        match *self {
+            SampledLight::Point { position, intensity } => {
+                let wi = (position - p).try_normalize()?;
+                Some(LightSample { wi, target: Some(position), weight: intensity })
+            }
+            SampledLight::Directional { to_light, radiance } => {
+                Some(LightSample { wi: to_light, target: None, weight: radiance })
+            }
+            SampledLight::Spot { position, axis, cos_cutoff, exponent, intensity } => {
+                let wi = (position - p).try_normalize()?;
+                let c = (-wi).dot(axis);
+                if c < cos_cutoff {
+                    return None;
+                }
+                let falloff = if exponent > 0.0 { c.max(0.0).powf(exponent) } else { 1.0 };
+                Some(LightSample { wi, target: Some(position), weight: intensity * falloff })
+            }
+            SampledLight::Area { position, normal, dim_x, dim_y, area, radiance } => {
+                let q = position + (u[0] - 0.5) * dim_x + (u[1] - 0.5) * dim_y;
+                let d = q - p;
+                let dist2 = d.length_squared();
+                let dist = dist2.sqrt();
+                if dist <= 0.0 || !dist.is_finite() {
+                    return None;
+                }
+                let wi = d / dist;
+                // One-sided: the light emits toward `normal`, so it must face the point.
+                let cos_l = -wi.dot(normal);
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                // pdf (solid angle) = dist^2 / (area cos_l).
+                Some(LightSample { wi, target: Some(q), weight: radiance * (area * cos_l / dist2) })
+            }
+            SampledLight::Infinite(ref inf) => {
+                let local = warp::cosine_hemisphere(u[0], u[1]);
+                let wi = crate::sampling::Frame::new(n).to_world(local);
+                let pdf = warp::cosine_hemisphere_pdf(local.z);
+                if pdf <= 0.0 {
+                    return None;
+                }
+                let l = inf.radiance(wi);
+                if l == Vec3::ZERO {
+                    return None;
+                }
+                Some(LightSample { wi, target: None, weight: l / pdf })
+            }
+            SampledLight::Emissive(ref e) => e.sample(p, u),
+        }
+    }
+}
+
+/// All lights of a scene plus what rays that leave the scene see.
+#[derive(Clone, Debug, Default)]
+pub struct LightSet {
+    pub lights: Vec<SampledLight>,
+    /// Radiance arriving from infinity (hemisphere light and constant environment): what a
+    /// hemisphere-sampling ray that escapes the scene counts.
+    pub infinite: Infinite,
+    /// What a camera ray that misses everything sees: the constant environment only (the
+    /// reference shows the ambient light's sky as black).
+    pub background: Vec3,
+}
+
+impl LightSet {
+    pub fn new(scene: &Scene) -> LightSet {
+        let mut lights = Vec::new();
+        let mut infinite = Infinite::default();
+        for l in &scene.lights {
+            match *l {
+                Light::Point { position, intensity, .. } => lights.push(SampledLight::Point { position, intensity }),
+                Light::Directional { direction, radiance } => {
+                    if let Some(d) = direction.try_normalize() {
+                        lights.push(SampledLight::Directional { to_light: -d, radiance });
+                    }
+                }
+                Light::Spot { position, direction, intensity, cone_angle, falloff_exponent } => {
+                    if let Some(axis) = direction.try_normalize() {
+                        let cos_cutoff = cone_angle.to_radians().clamp(0.0, std::f32::consts::PI).cos();
+                        lights.push(SampledLight::Spot {
+                            position,
+                            axis,
+                            cos_cutoff,
+                            exponent: falloff_exponent.max(0.0),
+                            intensity,
+                        });
+                    }
+                }
+                Light::Hemisphere { radiance } => infinite.upper += radiance,
+                Light::Area { position, direction, dim_x, dim_y, radiance } => {
+                    let area = dim_x.length() * dim_y.length();
+                    if let Some(normal) = direction.try_normalize()
+                        && area > 0.0
+                    {
+                        lights.push(SampledLight::Area { position, normal, dim_x, dim_y, area, radiance });
+                    }
+                }
+            }
+        }
+        let mut background = Vec3::ZERO;
+        if let Environment::Constant(c) = scene.env {
+            infinite.all += c;
+            background = c;
+        }
+        if infinite.upper != Vec3::ZERO || infinite.all != Vec3::ZERO {
+            lights.push(SampledLight::Infinite(infinite));
+        }
+        let has_area = scene.lights.iter().any(|l| matches!(l, Light::Area { .. }));
+        if !has_area && let Some(e) = EmissiveTriangles::new(scene) {
+            lights.push(SampledLight::Emissive(e));
+        }
+        LightSet { lights, infinite, background }
+    }
+
+    /// Samples taken for light `i` at one shading point: one for delta lights, `-l` otherwise.
+    #[inline]
+    pub fn samples_for(&self, i: usize, light_samples: u32) -> u32 {
+        if self.lights[i].is_delta() { 1 } else { light_samples.max(1) }
+    }
+
+    /// Shadow rays one shading point casts at most (light sampling).
+    pub fn samples_per_point(&self, light_samples: u32) -> u32 {
+        (0..self.lights.len()).map(|i| self.samples_for(i, light_samples)).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampling::Sampler;
+
+    /// Irradiance from a small square area light directly above a point: E ~ L A / d^2.
+    #[test]
+    fn area_light_estimates_irradiance() {
+        let light = SampledLight::Area {
+            position: Vec3::new(0.0, 2.0, 0.0),
+            normal: -Vec3::Y,
+            dim_x: Vec3::X * 0.02,
+            dim_y: Vec3::Z * 0.02,
+            area: 0.0004,
+            radiance: Vec3::splat(5.0),
+        };
+        let mut s = Sampler::for_sample(1, 0, 0);
+        let mut e = 0.0f64;
+        let n = 1000;
+        for _ in 0..n {
+            let ls = light.sample(Vec3::ZERO, Vec3::Y, [s.next_f32(), s.next_f32(), s.next_f32()]).unwrap();
+            e += (ls.weight.x * ls.wi.y) as f64;
+        }
+        let expect = 5.0 * 0.0004 / 4.0;
+        assert!((e / n as f64 - expect).abs() < expect * 1e-3, "{} vs {expect}", e / n as f64);
+        // From above the light (its back side) nothing arrives.
+        assert!(light.sample(Vec3::new(0.0, 3.0, 0.0), -Vec3::Y, [0.5; 3]).is_none());
+    }
+
+    /// A constant environment sampled cosine-weighted gives E = pi L with zero variance.
+    #[test]
+    fn constant_environment_irradiance() {
+        let light = SampledLight::Infinite(Infinite { upper: Vec3::ZERO, all: Vec3::splat(2.0) });
+        let n = Vec3::new(0.3, 0.4, -0.5).normalize();
+        let mut s = Sampler::for_sample(2, 0, 0);
+        for _ in 0..100 {
+            let ls = light.sample(Vec3::ZERO, n, [s.next_f32(), s.next_f32(), 0.0]).unwrap();
+            let e = ls.weight.x * ls.wi.dot(n);
+            assert!((e - 2.0 * std::f32::consts::PI).abs() < 1e-3);
+        }
+    }
+}
