@@ -1,0 +1,199 @@
+//! The wavefront integrator against the recursive reference: the two are independent
+//! estimators (different seeds) of the same image, so per-region means must agree within
+//! confidence bounds computed from the per-pixel sample variances.
+
+use glam::Vec3;
+use wavepath::accel::BruteForce;
+use wavepath::film::Accumulator;
+use wavepath::integrator::recursive::render_recursive;
+use wavepath::load::default_scene;
+use wavepath::scene::Scene;
+use wavepath::settings::{Settings, Shading};
+use wavepath::stats::RenderStats;
+use wavepath::wavefront::render_wavefront;
+
+fn settings(max_depth: u32, spp: u32) -> Settings {
+    Settings {
+        width: 32,
+        height: 24,
+        spp,
+        light_samples: 2,
+        max_depth,
+        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
+        ..Settings::default()
+    }
+}
+
+fn wavefront(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
+    render_wavefront(scene, &BruteForce::new(scene), s, &|_| {})
+}
+
+fn recursive(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
+    render_recursive(scene, &BruteForce::new(scene), s, &|_| {})
+}
+
+/// Compares 8x8-pixel region means channel by channel: |a - b| <= 5 sigma of the
+/// difference, sigma from the per-pixel variances of the means. Returns the largest |z|.
+fn assert_agree(a: &Accumulator, b: &Accumulator, what: &str) -> f64 {
+    const R: usize = 8;
+    let mut worst: f64 = 0.0;
+    let mut nonzero = 0;
+    for ry in 0..a.height / R {
+        for rx in 0..a.width / R {
+            let (mut ma, mut mb, mut va, mut vb) =
+                (glam::DVec3::ZERO, glam::DVec3::ZERO, glam::DVec3::ZERO, glam::DVec3::ZERO);
+            for y in ry * R..(ry + 1) * R {
+                for x in rx * R..(rx + 1) * R {
+                    let (pa, pb) = (&a.pixels[y * a.width + x], &b.pixels[y * b.width + x]);
+                    ma += pa.mean().as_dvec3();
+                    mb += pb.mean().as_dvec3();
+                    va += pa.variance_of_mean();
+                    vb += pb.variance_of_mean();
+                }
+            }
+            for c in 0..3 {
+                let d = (ma[c] - mb[c]).abs();
+                let sd = (va[c] + vb[c]).sqrt();
+                if sd == 0.0 {
+                    assert!(
+                        d <= 1e-6 * ma[c].abs().max(1.0),
+                        "{what}: region ({rx},{ry}) channel {c}: {} vs {} with zero variance",
+                        ma[c],
+                        mb[c]
+                    );
+                    continue;
+                }
+                nonzero += 1;
+                let z = d / sd;
+                worst = worst.max(z);
+                assert!(
+                    z < 5.0,
+                    "{what}: region ({rx},{ry}) channel {c}: {} vs {} (z = {z:.2})",
+                    ma[c] / 64.0,
+                    mb[c] / 64.0
+                );
+            }
+        }
+    }
+    assert!(nonzero > 0, "{what}: nothing to compare");
+    worst
+}
+
+fn compare(scene: &Scene, s: &Settings, what: &str) {
+    let (a, sa) = wavefront(scene, s);
+    let other = Settings { seed: s.seed + 1000, ..s.clone() };
+    let (b, sb) = recursive(scene, &other);
+    assert_eq!(sa.invalid_samples, 0, "{what}");
+    assert_eq!(sb.invalid_samples, 0, "{what}");
+    assert!(a.to_film().all_finite());
+    let z = assert_agree(&a, &b, what);
+    eprintln!("{what}: worst |z| = {z:.2}");
+}
+
+#[test]
+fn direct_light_importance_sampling_agrees() {
+    compare(&default_scene(), &settings(1, 32), "direct, light sampling");
+}
+
+#[test]
+fn direct_light_hemisphere_sampling_agrees() {
+    let s = Settings { hemisphere: true, ..settings(1, 32) };
+    compare(&default_scene(), &s, "direct, hemisphere sampling");
+}
+
+#[test]
+fn global_illumination_agrees_at_depths_2_3_5() {
+    let scene = default_scene();
+    for depth in [2, 3, 5] {
+        for accumulate in [true, false] {
+            let s = Settings { accumulate, ..settings(depth, 32) };
+            compare(&scene, &s, &format!("-m {depth} -o {}", accumulate as u8));
+        }
+    }
+}
+
+#[test]
+fn russian_roulette_on_and_off_agree() {
+    let scene = default_scene();
+    for rr in [0.65, 1.0] {
+        let s = Settings { rr_continue: rr, ..settings(5, 32) };
+        compare(&scene, &s, &format!("-m 5 --rr {rr}"));
+    }
+    // Roulette changes the estimator, not the expectation: with and without must agree too.
+    let (a, _) = wavefront(&scene, &Settings { rr_continue: 0.5, ..settings(6, 32) });
+    let (b, _) = recursive(&scene, &Settings { rr_continue: 1.0, seed: 77, ..settings(6, 32) });
+    assert_agree(&a, &b, "--rr 0.5 vs --rr 1");
+}
+
+#[test]
+fn hemisphere_indirect_agrees() {
+    let s = Settings { hemisphere: true, ..settings(3, 32) };
+    compare(&default_scene(), &s, "-H -m 3");
+}
+
+#[test]
+fn adaptive_sampling_agrees_and_stops_pixels_early() {
+    let scene = default_scene();
+    let s = Settings { adaptive: Some((8, 0.1)), ..settings(3, 128) };
+    let (a, sa) = wavefront(&scene, &s);
+    let (b, sb) = recursive(&scene, &Settings { seed: 5, ..s.clone() });
+    assert_agree(&a, &b, "adaptive");
+    for st in [&sa, &sb] {
+        let (mean, min, max) = st.spp_summary();
+        assert!(min >= 8 && max <= 128 && mean < 128.0, "({mean}, {min}, {max})");
+        assert!(st.samples_per_pixel.iter().all(|&n| n % 8 == 0), "pixels stop only at batch ends");
+    }
+    // The same seed gives the same stopping decisions in both integrators' rule.
+    let (c, _) = recursive(&scene, &s);
+    let differ = a.pixels.iter().zip(&c.pixels).filter(|(p, q)| p.taken != q.taken).count();
+    assert!(differ * 20 < a.pixels.len(), "{differ} pixels stopped at different counts");
+}
+
+#[test]
+fn thin_lens_agrees() {
+    let mut scene = default_scene();
+    scene.camera.lens_radius = 0.05;
+    scene.camera.focal_distance = 3.0;
+    compare(&scene, &settings(2, 32), "thin lens -m 2");
+}
+
+#[test]
+fn image_is_identical_for_any_thread_count() {
+    let scene = default_scene();
+    let s = Settings { adaptive: Some((4, 0.05)), ..settings(4, 16) };
+    let run = |threads| {
+        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| wavefront(&scene, &s).0)
+    };
+    let one = run(1);
+    let two = run(2);
+    assert_eq!(one.to_film(), two.to_film());
+    assert_eq!(one.samples_taken(), two.samples_taken());
+    assert!(one.to_film().pixels.iter().any(|p| *p != Vec3::ZERO));
+}
+
+#[test]
+fn ray_counts_add_up() {
+    let scene = default_scene();
+    let s = settings(1, 4);
+    let (_, st) = wavefront(&scene, &s);
+    assert_eq!(st.camera_rays, 32 * 24 * 4);
+    assert_eq!(st.extension_rays, 0, "-m 1 traces no continuation rays");
+    // One area light sampled -l 2 times per hit, minus samples facing away from the light.
+    assert!(st.shadow_rays > 0 && st.shadow_rays <= st.camera_rays * 2);
+    assert_eq!(st.counters.rays, st.total_rays());
+    assert!(st.stages.traverse > 0.0 && st.stages.shade > 0.0);
+}
+
+#[test]
+fn cell_renders_only_its_pixels() {
+    let scene = default_scene();
+    let s = Settings { cell: Some(wavepath::settings::Cell { x: 4, y: 2, w: 5, h: 3 }), ..settings(2, 4) };
+    let (a, st) = wavefront(&scene, &s);
+    assert_eq!(st.samples_per_pixel.len(), 15);
+    for y in 0..24 {
+        for x in 0..32 {
+            let inside = (4..9).contains(&x) && (2..5).contains(&y);
+            assert_eq!(a.pixels[y * 32 + x].taken, if inside { 4 } else { 0 });
+        }
+    }
+}
