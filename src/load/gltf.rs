@@ -27,6 +27,14 @@ fn read(path: &Path) -> Result<Scene, String> {
     }
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| e.to_string())?;
     let base = path.parent().unwrap_or(Path::new("."));
+    for b in gltf.document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = b.source()
+            && !uri.starts_with("data:")
+            && !base.join(uri).is_file()
+        {
+            return Err(format!("buffer {}: cannot read {}", b.index(), base.join(uri).display()));
+        }
+    }
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone()).map_err(|e| e.to_string())?;
     let doc = &gltf.document;
 

@@ -41,9 +41,9 @@ pub fn load(path: &Path) -> Result<Scene> {
     };
     let state = state.into_inner();
     if let Some(e) = state.error {
-        bail!("{e}");
+        bail!("{shown}: {e}");
     }
-    build_scene(models, state.materials).map_err(|e| anyhow!("{shown}: {e}"))
+    build_scene(path, models, state.materials).map_err(|e| anyhow!("{shown}: {e}"))
 }
 
 /// tobj's errors carry no position; parse errors stop right after the offending line.
@@ -94,7 +94,7 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
     }
 }
 
-fn build_scene(models: Vec<tobj::Model>, mut materials: Vec<Material>) -> Result<Scene, String> {
+fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Material>) -> Result<Scene, String> {
     // Normals are kept only when every model has one per vertex: a model without them would
     // otherwise get zero normals when appended.
     let all_normals = models.iter().all(|m| has_per_vertex(&m.mesh.normals, &m.mesh.positions, 3));
@@ -103,8 +103,8 @@ fn build_scene(models: Vec<tobj::Model>, mut materials: Vec<Material>) -> Result
     let mut mesh = Mesh::default();
     for model in models {
         let m = model.mesh;
-        if let Some(bad) = m.positions.iter().position(|c| !c.is_finite()) {
-            return Err(format!("object '{}': vertex {} has a NaN or infinite coordinate", model.name, bad / 3));
+        if m.positions.iter().any(|c| !c.is_finite()) {
+            return Err(non_finite_vertex_line(path));
         }
         let nverts = m.positions.len() / 3;
         let positions: Vec<Vec3> = m.positions.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect();
@@ -135,6 +135,19 @@ fn build_scene(models: Vec<tobj::Model>, mut materials: Vec<Material>) -> Result
     let mut scene = Scene { mesh, materials, ..Scene::default() };
     super::finish_mesh_only(&mut scene, false);
     Ok(scene)
+}
+
+/// Finds the first `v` line with a NaN or infinite coordinate (only on the error path, so the
+/// normal load does not pay for a second pass).
+fn non_finite_vertex_line(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    for (i, line) in text.lines().enumerate() {
+        let mut w = line.split_whitespace();
+        if w.next() == Some("v") && w.take(3).any(|x| x.parse::<f32>().is_ok_and(|v| !v.is_finite())) {
+            return format!("line {}: vertex coordinate is NaN or infinite", i + 1);
+        }
+    }
+    "a vertex coordinate is NaN or infinite".into()
 }
 
 fn has_per_vertex(attr: &[f32], positions: &[f32], n: usize) -> bool {

@@ -31,14 +31,16 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
         return Err("not a PLY file (it does not start with 'ply')".into());
     }
     let mut reader = Reader::new(Cursor::new(bytes));
-    let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| format!("bad header: {e}"))?;
+    let header = Parser::<Skip>::new()
+        .read_header(&mut reader)
+        .map_err(|e| format!("bad header: {}", one_line(&e.to_string())))?;
     let payload_len = bytes.len().saturating_sub(header_len(bytes)?);
     check_counts(&header, payload_len)?;
 
     let mut verts: Vec<Vertex> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
     for (name, def) in &header.elements {
-        let what = |e: ply_rs_bw::parser::ParseError| format!("element '{name}': {e}");
+        let what = |e: ply_rs_bw::parser::ParseError| format!("element '{name}': {}", one_line(&e.to_string()));
         match name.as_str() {
             "vertex" => {
                 verts = Parser::<Vertex>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?
@@ -89,6 +91,15 @@ fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, 
     let positions = verts.iter().map(|v| Vec3::from(v.p)).collect();
     let material_ids = vec![0; triangles.len()];
     Ok(Mesh { positions, normals, uvs, triangles, material_ids })
+}
+
+/// ply-rs-bw's messages span several lines (message, offending text, cause); errors here are one line.
+fn one_line(msg: &str) -> String {
+    let joined = msg.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+    match joined.char_indices().nth(200) {
+        Some((cut, _)) => format!("{}...", &joined[..cut]),
+        None => joined,
+    }
 }
 
 /// Bytes up to and including the `end_header` line.
