@@ -1,8 +1,227 @@
-//! Loader for gltf files (in progress).
-use crate::scene::Scene;
-use anyhow::{Result, bail};
+//! glTF 2.0 (.gltf with .bin or data URIs, .glb) through the gltf crate.
+//!
+//! The default scene's node tree is flattened into world space in depth-first order
+//! (children in the order the file lists them); each mesh primitive in drawing mode
+//! Triangles is appended in that order. Skins and animations are ignored: a skinned mesh
+//! loads in its bind pose. The glTF y-up frame is used as it is.
+
+use crate::scene::{Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
+use anyhow::{Result, anyhow};
+use glam::{Mat3, Mat4, Vec2, Vec3};
+use gltf::khr_lights_punctual::Kind;
 use std::path::Path;
 
 pub fn load(path: &Path) -> Result<Scene> {
-    bail!("{}: gltf files are not supported yet", path.display())
+    let shown = path.display();
+    // The gltf crate does unchecked arithmetic on some header and accessor fields, which a
+    // hostile file can make overflow (a panic in builds with overflow checks).
+    let result = std::panic::catch_unwind(|| read(path))
+        .unwrap_or_else(|_| Err("malformed file (a length or count is out of range)".into()));
+    result.map_err(|e| anyhow!("{shown}: {e}"))
+}
+
+fn read(path: &Path) -> Result<Scene, String> {
+    let bytes = std::fs::read(path).map_err(|e| format!("cannot read: {e}"))?;
+    if bytes.starts_with(b"glTF") && glb_length_is_bad(&bytes) {
+        return Err("binary glTF header length does not match the file".into());
+    }
+    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| e.to_string())?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    for b in gltf.document.buffers() {
+        if let gltf::buffer::Source::Uri(uri) = b.source()
+            && !uri.starts_with("data:")
+            && !base.join(uri).is_file()
+        {
+            return Err(format!("buffer {}: cannot read {}", b.index(), base.join(uri).display()));
+        }
+    }
+    let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone()).map_err(|e| e.to_string())?;
+    let doc = &gltf.document;
+
+    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, base)).collect();
+    let default_material = materials.len() as u32;
+    materials.push(Material::default());
+
+    let mut mesh = Mesh::default();
+    let mut all_normals = true;
+    let mut camera = None;
+    let mut lights = Vec::new();
+    for (node, world) in flatten(doc)? {
+        if camera.is_none()
+            && let Some(cam) = node.camera()
+        {
+            camera = Some(make_camera(&cam, &world)?);
+        }
+        if let Some(light) = node.light() {
+            lights.push(make_light(&light, &world));
+        }
+        let Some(m) = node.mesh() else { continue };
+        for prim in m.primitives() {
+            if prim.mode() != gltf::mesh::Mode::Triangles {
+                eprintln!(
+                    "warning: {}: mesh {} primitive {} has mode {:?}; only triangles are loaded",
+                    path.display(),
+                    m.index(),
+                    prim.index(),
+                    prim.mode()
+                );
+                continue;
+            }
+            let mat = prim.material().index().map_or(default_material, |i| i as u32);
+            let part = primitive(&prim, &buffers, &world, mat)
+                .map_err(|e| format!("mesh {} primitive {}: {e}", m.index(), prim.index()))?;
+            all_normals &= part.normals.is_some();
+            mesh.append(part);
+        }
+    }
+    if !all_normals {
+        mesh.normals = None;
+    }
+    if mesh.triangles.is_empty() {
+        return Err("no triangles in the default scene".into());
+    }
+    let has_camera = camera.is_some();
+    let mut scene = Scene { mesh, materials, lights, camera: camera.unwrap_or_default(), ..Scene::default() };
+    super::finish_mesh_only(&mut scene, has_camera);
+    Ok(scene)
+}
+
+/// A .glb whose declared length exceeds the data or is shorter than its own header.
+fn glb_length_is_bad(bytes: &[u8]) -> bool {
+    let Some(len) = bytes.get(8..12) else { return true };
+    let len = u32::from_le_bytes([len[0], len[1], len[2], len[3]]) as usize;
+    len < 20 || len > bytes.len()
+}
+
+/// Every node of the default scene (or of all root nodes when the file names no scene) with
+/// its world matrix, parents before children. A node reached twice (a cycle or a shared
+/// child) is an error: glTF node hierarchies are strict trees.
+fn flatten(doc: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, Mat4)>, String> {
+    let roots: Vec<gltf::Node> = match doc.default_scene().or_else(|| doc.scenes().next()) {
+        Some(s) => s.nodes().collect(),
+        None => {
+            let mut is_child = vec![false; doc.nodes().len()];
+            for n in doc.nodes() {
+                for c in n.children() {
+                    is_child[c.index()] = true;
+                }
+            }
+            doc.nodes().filter(|n| !is_child[n.index()]).collect()
+        }
+    };
+    let mut seen = vec![false; doc.nodes().len()];
+    let mut out = Vec::new();
+    let mut stack: Vec<(gltf::Node, Mat4)> = roots.into_iter().rev().map(|n| (n, Mat4::IDENTITY)).collect();
+    while let Some((node, parent)) = stack.pop() {
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(format!("node {} appears twice in the node hierarchy", node.index()));
+        }
+        let world = parent * Mat4::from_cols_array_2d(&node.transform().matrix());
+        if !world.is_finite() {
+            return Err(format!("node {} has a non-finite transform", node.index()));
+        }
+        let children: Vec<gltf::Node> = node.children().collect();
+        stack.extend(children.into_iter().rev().map(|c| (c, world)));
+        out.push((node, world));
+    }
+    Ok(out)
+}
+
+fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat4, mat: u32) -> Result<Mesh, String> {
+    let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
+    let positions: Vec<Vec3> = reader
+        .read_positions()
+        .ok_or("no POSITION data (missing or outside its buffer)")?
+        .map(|p| world.transform_point3(Vec3::from(p)))
+        .collect();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("vertex {i} has a NaN or infinite coordinate"));
+    }
+    let n = positions.len();
+    let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+    let normals: Option<Vec<Vec3>> = reader
+        .read_normals()
+        .map(|it| it.map(|v| (normal_matrix * Vec3::from(v)).normalize_or_zero()).collect::<Vec<_>>())
+        .filter(|v| v.len() == n && v.iter().all(|x| x.is_finite()));
+    let uvs: Option<Vec<Vec2>> =
+        reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>()).filter(|v| v.len() == n);
+    let indices: Vec<u32> = match reader.read_indices() {
+        Some(i) => i.into_u32().collect(),
+        None if prim.indices().is_some() => return Err("index data outside its buffer".into()),
+        None => (0..n as u32).collect(),
+    };
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("index {bad} is out of range for {n} vertices"));
+    }
+    if !indices.len().is_multiple_of(3) {
+        return Err(format!("{} indices is not a multiple of 3", indices.len()));
+    }
+    let triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let material_ids = vec![mat; triangles.len()];
+    Ok(Mesh { positions, normals, uvs, triangles, material_ids })
+}
+
+fn material(m: &gltf::Material, base: &Path) -> Material {
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let strength = m.emissive_strength().unwrap_or(1.0);
+    // Embedded images (buffer views, data URIs) have no path to record yet.
+    let albedo_texture = pbr.base_color_texture().and_then(|info| match info.texture().source().source() {
+        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(Texture { path: base.join(uri) }),
+        _ => None,
+    });
+    Material {
+        name: m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string),
+        bsdf: Bsdf::Diffuse { albedo: Vec3::new(r, g, b) },
+        emission: Vec3::from(m.emissive_factor()) * strength,
+        albedo_texture,
+    }
+}
+
+/// Rotation part of a node's world matrix with scale and shear removed: columns right, up,
+/// backward (the camera looks down its local -Z with local +Y up).
+fn orientation(world: &Mat4) -> Option<Mat3> {
+    let back = world.z_axis.truncate().try_normalize()?;
+    let right = world.y_axis.truncate().cross(back).try_normalize()?;
+    let up = back.cross(right);
+    Some(Mat3::from_cols(right, up, back))
+}
+
+fn make_camera(cam: &gltf::Camera, world: &Mat4) -> Result<Camera, String> {
+    let gltf::camera::Projection::Perspective(p) = cam.projection() else {
+        return Err(format!("camera {} is orthographic; only perspective cameras are supported", cam.index()));
+    };
+    let c2w = orientation(world).ok_or(format!("camera {} has a degenerate transform", cam.index()))?;
+    let mut camera = Camera {
+        position: world.w_axis.truncate(),
+        c2w,
+        hfov_deg: 0.0,
+        vfov_deg: p.yfov().to_degrees(),
+        nclip: p.znear(),
+        fclip: p.zfar().unwrap_or(1e30),
+        lens_radius: 0.0,
+        focal_distance: 1.0,
+    };
+    camera.fit_aspect(p.aspect_ratio().unwrap_or(4.0 / 3.0));
+    Ok(camera)
+}
+
+/// KHR_lights_punctual: intensity = colour x intensity; directions are the node's local -Z.
+/// Spot: `cone_angle` is the outer cone half-angle in degrees (glTF's smooth fall-off
+/// between inner and outer cone has no field in `Light::Spot`; `falloff_exponent` is 0).
+fn make_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Light {
+    let intensity = Vec3::from(light.color()) * light.intensity();
+    let position = world.w_axis.truncate();
+    let direction = world.transform_vector3(-Vec3::Z).try_normalize().unwrap_or(-Vec3::Z);
+    match light.kind() {
+        Kind::Point => Light::Point { position, intensity, attenuation: [0.0, 0.0, 1.0] },
+        Kind::Directional => Light::Directional { direction, radiance: intensity },
+        Kind::Spot { outer_cone_angle, .. } => Light::Spot {
+            position,
+            direction,
+            intensity,
+            cone_angle: outer_cone_angle.to_degrees(),
+            falloff_exponent: 0.0,
+        },
+    }
 }

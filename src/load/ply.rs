@@ -1,8 +1,240 @@
-//! Loader for ply files (in progress).
-use crate::scene::Scene;
-use anyhow::{Result, bail};
+//! PLY (ascii, binary little and big endian) through ply-rs-bw.
+//!
+//! Vertices give positions and, when the header declares them, normals (nx ny nz) and uvs
+//! (u v, s t or texture_u texture_v); faces are index lists of any length, fan-triangulated in
+//! file order. Before parsing, the header's element counts are checked against the file size,
+//! so a header that promises more data than the file holds is an error, not a long loop or
+//! a large allocation.
+
+use crate::scene::{Material, Mesh, Scene};
+use anyhow::{Context, Result, anyhow};
+use glam::{Vec2, Vec3};
+use ply_rs_bw::parser::{Parser, Reader};
+use ply_rs_bw::ply::{
+    ElementDef, Encoding, Header, Property, PropertyAccess, PropertyAccessResult, PropertyType, ScalarType,
+};
+use std::io::Cursor;
 use std::path::Path;
 
 pub fn load(path: &Path) -> Result<Scene> {
-    bail!("{}: ply files are not supported yet", path.display())
+    let shown = path.display();
+    let bytes = std::fs::read(path).with_context(|| format!("{shown}: cannot read"))?;
+    let mesh = parse(&bytes).map_err(|e| anyhow!("{shown}: {e}"))?;
+    let mut scene = Scene { mesh, materials: vec![Material::default()], ..Scene::default() };
+    super::finish_mesh_only(&mut scene, false);
+    Ok(scene)
+}
+
+/// Parses a whole PLY file held in memory.
+pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
+    if !bytes.starts_with(b"ply") {
+        return Err("not a PLY file (it does not start with 'ply')".into());
+    }
+    let mut reader = Reader::new(Cursor::new(bytes));
+    let header = Parser::<Skip>::new()
+        .read_header(&mut reader)
+        .map_err(|e| format!("bad header: {}", one_line(&e.to_string())))?;
+    let payload_len = bytes.len().saturating_sub(header_len(bytes)?);
+    check_counts(&header, payload_len)?;
+
+    let mut verts: Vec<Vertex> = Vec::new();
+    let mut faces: Vec<Face> = Vec::new();
+    for (name, def) in &header.elements {
+        let what = |e: ply_rs_bw::parser::ParseError| format!("element '{name}': {}", one_line(&e.to_string()));
+        match name.as_str() {
+            "vertex" => {
+                verts = Parser::<Vertex>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?
+            }
+            "face" => {
+                faces = Parser::<Face>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?
+            }
+            _ => {
+                Parser::<Skip>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?;
+            }
+        }
+    }
+    let vdef = header.elements.get("vertex").ok_or("no 'vertex' element")?;
+    for axis in ["x", "y", "z"] {
+        if !vdef.properties.contains_key(axis) {
+            return Err(format!("vertex has no property '{axis}'"));
+        }
+    }
+    build(&header, verts, faces)
+}
+
+fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, String> {
+    let vdef = &header.elements["vertex"];
+    let has = |k: &str| vdef.properties.contains_key(k);
+    let with_normals = has("nx") && has("ny") && has("nz");
+    let with_uvs = (has("u") && has("v")) || (has("s") && has("t")) || (has("texture_u") && has("texture_v"));
+    if let Some(i) = verts.iter().position(|v| !v.p.iter().all(|c| c.is_finite())) {
+        return Err(format!("vertex {i} has a NaN or infinite coordinate"));
+    }
+    let n = verts.len();
+    let mut triangles = Vec::with_capacity(faces.len());
+    for (fi, f) in faces.iter().enumerate() {
+        if let Some(bad) = f.error {
+            return Err(format!("face {fi}: {bad}"));
+        }
+        if let Some(&i) = f.idx.iter().find(|&&i| i as usize >= n) {
+            return Err(format!("face {fi} uses vertex {i}, but there are only {n}"));
+        }
+        for k in 1..f.idx.len().saturating_sub(1) {
+            triangles.push([f.idx[0], f.idx[k], f.idx[k + 1]]);
+        }
+    }
+    if triangles.is_empty() {
+        return Err("no faces".into());
+    }
+    let normals = with_normals.then(|| verts.iter().map(|v| Vec3::from(v.n)).collect());
+    let uvs = with_uvs.then(|| verts.iter().map(|v| Vec2::from(v.uv)).collect());
+    let positions = verts.iter().map(|v| Vec3::from(v.p)).collect();
+    let material_ids = vec![0; triangles.len()];
+    Ok(Mesh { positions, normals, uvs, triangles, material_ids })
+}
+
+/// ply-rs-bw's messages span several lines (message, offending text, cause); errors here are one line.
+fn one_line(msg: &str) -> String {
+    let joined = msg.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
+    match joined.char_indices().nth(200) {
+        Some((cut, _)) => format!("{}...", &joined[..cut]),
+        None => joined,
+    }
+}
+
+/// Bytes up to and including the `end_header` line.
+fn header_len(bytes: &[u8]) -> Result<usize, String> {
+    let key = b"end_header";
+    let at = bytes.windows(key.len()).position(|w| w == key).ok_or("no 'end_header' line")?;
+    let nl = bytes[at..].iter().position(|&b| b == b'\n').ok_or("nothing after 'end_header'")?;
+    Ok(at + nl + 1)
+}
+
+/// Rejects headers whose element counts need more bytes than the file has: every binary
+/// element takes at least the size of its scalars and list counts, every ascii property at
+/// least one character and one separator.
+fn check_counts(header: &Header, payload_len: usize) -> Result<(), String> {
+    let mut needed: u128 = 0;
+    for (name, def) in &header.elements {
+        let per = min_element_bytes(def, header.encoding) as u128;
+        needed += per * def.count as u128;
+        if needed > payload_len as u128 {
+            return Err(format!(
+                "header promises {} '{name}' elements, more than the {payload_len} bytes after the header can hold",
+                def.count
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn min_element_bytes(def: &ElementDef, enc: Encoding) -> usize {
+    def.properties
+        .values()
+        .map(|p| match (enc, &p.data_type) {
+            (Encoding::Ascii, _) => 2,
+            (_, PropertyType::Scalar(s)) => scalar_size(s),
+            (_, PropertyType::List(count, _)) => scalar_size(count),
+        })
+        .sum()
+}
+
+fn scalar_size(s: &ScalarType) -> usize {
+    match s {
+        ScalarType::Char | ScalarType::UChar => 1,
+        ScalarType::Short | ScalarType::UShort => 2,
+        ScalarType::Int | ScalarType::UInt | ScalarType::Float => 4,
+        ScalarType::Double => 8,
+    }
+}
+
+/// One vertex as read; absent properties stay zero.
+#[derive(Default)]
+struct Vertex {
+    p: [f32; 3],
+    n: [f32; 3],
+    uv: [f32; 2],
+}
+
+impl PropertyAccess for Vertex {
+    fn new() -> Self {
+        Vertex::default()
+    }
+
+    fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        let value = match property {
+            Property::Float(v) => v,
+            Property::Double(v) => v as f32,
+            Property::Char(v) => v as f32,
+            Property::UChar(v) => v as f32,
+            Property::Short(v) => v as f32,
+            Property::UShort(v) => v as f32,
+            Property::Int(v) => v as f32,
+            Property::UInt(v) => v as f32,
+            _ => return PropertyAccessResult::Ignored,
+        };
+        let slot = match name {
+            "x" => &mut self.p[0],
+            "y" => &mut self.p[1],
+            "z" => &mut self.p[2],
+            "nx" => &mut self.n[0],
+            "ny" => &mut self.n[1],
+            "nz" => &mut self.n[2],
+            "u" | "s" | "texture_u" => &mut self.uv[0],
+            "v" | "t" | "texture_v" => &mut self.uv[1],
+            _ => return PropertyAccessResult::Ignored,
+        };
+        *slot = value;
+        PropertyAccessResult::Set
+    }
+}
+
+/// One polygon's vertex indices; a negative index is remembered as an error.
+#[derive(Default)]
+struct Face {
+    idx: Vec<u32>,
+    error: Option<&'static str>,
+}
+
+impl Face {
+    fn take<T: TryInto<u32> + Copy>(&mut self, list: &[T]) {
+        self.idx.clear();
+        for &i in list {
+            match i.try_into() {
+                Ok(v) => self.idx.push(v),
+                Err(_) => self.error = Some("negative vertex index"),
+            }
+        }
+    }
+}
+
+impl PropertyAccess for Face {
+    fn new() -> Self {
+        Face::default()
+    }
+
+    fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if name != "vertex_indices" && name != "vertex_index" {
+            return PropertyAccessResult::Ignored;
+        }
+        match property {
+            Property::ListChar(l) => self.take(&l),
+            Property::ListUChar(l) => self.take(&l),
+            Property::ListShort(l) => self.take(&l),
+            Property::ListUShort(l) => self.take(&l),
+            Property::ListInt(l) => self.take(&l),
+            Property::ListUInt(l) => self.take(&l),
+            _ => return PropertyAccessResult::UnsupportedType,
+        }
+        PropertyAccessResult::Set
+    }
+}
+
+/// Any element the loader does not use.
+struct Skip;
+
+impl PropertyAccess for Skip {
+    fn new() -> Self {
+        Skip
+    }
 }

@@ -145,3 +145,56 @@ impl Camera {
 fn any_perpendicular(v: Vec3) -> Vec3 {
     if v.x.abs() < 0.9 { Vec3::X.cross(v).normalize() } else { Vec3::Y.cross(v).normalize() }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn image_plane_follows_cs184_conventions() {
+        let cam = Camera::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, Vec3::Y, 60.0, 2.0);
+        // Centre looks at the target.
+        let c = cam.generate_ray(0.5, 0.5);
+        assert!((c.dir - Vec3::NEG_Z).length() < 1e-6);
+        // (0,0) is bottom-left: left is -X, bottom is -Y for this camera.
+        let bl = cam.generate_ray(0.0, 0.0);
+        assert!(bl.dir.x < 0.0 && bl.dir.y < 0.0);
+        // The top edge is vfov/2 above the axis; the right edge hfov/2 to the side.
+        let top = cam.generate_ray(0.5, 1.0).dir;
+        assert!((top.y.atan2(-top.z).to_degrees() - 30.0).abs() < 1e-3);
+        let right = cam.generate_ray(1.0, 0.5).dir;
+        let half_h = right.x.atan2(-right.z).to_degrees();
+        // tan(h/2) = aspect * tan(v/2).
+        assert!((half_h.to_radians().tan() - 2.0 * 30f32.to_radians().tan()).abs() < 1e-4);
+        assert_eq!((c.tmin, c.tmax), (cam.nclip, cam.fclip));
+    }
+
+    #[test]
+    fn cs184_placement_frames_the_box_from_the_hint_direction() {
+        let mut cam = Camera::default();
+        let (lo, hi) = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 1.5, 1.0));
+        cam.cs184_place(Vec3::new(0.0, 0.0, 1.0), lo, hi);
+        let centre = 0.5 * (lo + hi);
+        let diag = (hi - lo).length();
+        assert!((cam.position - (centre + Vec3::Z * 1.5 * diag)).length() < 1e-5);
+        assert!((cam.generate_ray(0.5, 0.5).dir - Vec3::NEG_Z).length() < 1e-6);
+        assert!((cam.c2w.y_axis - Vec3::Y).length() < 1e-6);
+        // Looking straight down the axis does not produce NaN.
+        cam.cs184_place(Vec3::Y, lo, hi);
+        assert!(cam.c2w.is_finite() && cam.position.is_finite());
+    }
+
+    #[test]
+    fn thin_lens_rays_meet_on_the_focal_plane() {
+        let mut cam = Camera::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, 40.0, 1.0);
+        cam.lens_radius = 0.2;
+        cam.focal_distance = 3.0;
+        let pin = cam.generate_ray(0.3, 0.7);
+        let focus = pin.at(3.0 / -pin.dir.z);
+        for lens in [glam::Vec2::new(1.0, 0.0), glam::Vec2::new(-0.5, 0.5), glam::Vec2::new(0.0, -1.0)] {
+            let r = cam.generate_lens_ray(0.3, 0.7, lens);
+            let p = r.at((focus.z - r.origin.z) / r.dir.z);
+            assert!((p - focus).length() < 1e-5, "{p:?} vs {focus:?}");
+        }
+    }
+}

@@ -21,9 +21,9 @@ pub fn parse_camera_settings(text: &str) -> Result<Camera> {
         .enumerate()
         .map(|(i, t)| t.parse::<f32>().map_err(|_| anyhow::anyhow!("value {} ('{t}') is not a number", i + 1)))
         .collect::<Result<_>>()?;
-    if nums.len() < 23 {
+    if nums.len() < 25 {
         bail!(
-            "camera file has {} numbers, expected at least 23 (fov, clip, position, target, angles, c2w)",
+            "camera file has {} numbers, expected at least 25 (fov, clip, position, target, angles, c2w)",
             nums.len()
         );
     }
@@ -32,14 +32,14 @@ pub fn parse_camera_settings(text: &str) -> Result<Camera> {
     }
     let (hfov, vfov, nclip, fclip) = (nums[0], nums[1], nums[3], nums[4]);
     let position = Vec3::new(nums[5], nums[6], nums[7]);
-    let m = &nums[14..23];
+    let m = &nums[16..25];
     // Row-major in the file; glam matrices are column-major.
     let c2w = Mat3::from_cols(Vec3::new(m[0], m[3], m[6]), Vec3::new(m[1], m[4], m[7]), Vec3::new(m[2], m[5], m[8]));
     let mut cam =
         Camera { position, c2w, hfov_deg: hfov, vfov_deg: vfov, nclip, fclip, lens_radius: 0.0, focal_distance: 1.0 };
-    if nums.len() >= 28 {
-        cam.focal_distance = nums[26];
-        cam.lens_radius = nums[27];
+    if nums.len() >= 30 {
+        cam.focal_distance = nums[28];
+        cam.lens_radius = nums[29];
     }
     cam.validate().map_err(|e| anyhow::anyhow!(e))?;
     Ok(cam)

@@ -1,0 +1,207 @@
+//! The command line end to end: the default render, output formats, and bad flags.
+
+mod common;
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn run(args: &[&str]) -> Output {
+    Command::new(common::wavepath_bin()).args(args).output().expect("wavepath runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Reads a little-endian PFM written by wavepath: (width, height, rgb rows bottom-up).
+fn read_pfm(path: &Path) -> (usize, usize, Vec<[f32; 3]>) {
+    let bytes = std::fs::read(path).unwrap();
+    let mut lines = 0;
+    let mut pos = 0;
+    while lines < 3 {
+        if bytes[pos] == b'\n' {
+            lines += 1;
+        }
+        pos += 1;
+    }
+    let header = String::from_utf8_lossy(&bytes[..pos]).into_owned();
+    let mut it = header.split_whitespace();
+    assert_eq!(it.next(), Some("PF"));
+    let w: usize = it.next().unwrap().parse().unwrap();
+    let h: usize = it.next().unwrap().parse().unwrap();
+    let scale: f32 = it.next().unwrap().parse().unwrap();
+    assert!(scale < 0.0, "little-endian PFM");
+    let floats: Vec<f32> = bytes[pos..].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
+    assert_eq!(floats.len(), w * h * 3);
+    (w, h, floats.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+}
+
+#[test]
+fn default_scene_normals_show_the_floor_and_walls() {
+    let dir = tempdir("normals");
+    let out = dir.join("n.pfm");
+    let o = run(&["--shading", "normals", "-r", "80", "60", "-f", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (w, h, px) = read_pfm(&out);
+    assert_eq!((w, h), (80, 60));
+    // The camera looks at the box centre along -Z: the image centre column near the bottom
+    // of the box is floor (normal +Y -> (0.5, 1, 0.5)); the centre is the back wall (+Z).
+    let at = |x: usize, y: usize| px[y * w + x];
+    let centre = at(40, 34);
+    assert!(
+        (centre[0] - 0.5).abs() < 1e-3 && (centre[1] - 0.5).abs() < 1e-3 && (centre[2] - 1.0).abs() < 1e-3,
+        "{centre:?}"
+    );
+    // Corners are outside the box: background (no hit) is black.
+    assert_eq!(at(0, 0), [0.0; 3]);
+    assert!(px.iter().all(|p| p.iter().all(|c| c.is_finite() && (0.0..=1.0).contains(c))));
+    // The seed's log lines are there.
+    let log = stderr(&o);
+    assert!(log.contains("million rays per second") && log.contains("intersection tests per ray"), "{log}");
+}
+
+#[test]
+fn png_exr_and_stats_are_written() {
+    let dir = tempdir("formats");
+    let png = dir.join("a.png");
+    let exr = dir.join("a.exr");
+    let stats = dir.join("s.json");
+    for f in [&png, &exr] {
+        let o = run(&[
+            "--shading",
+            "normals",
+            "-r",
+            "32",
+            "24",
+            "-t",
+            "1",
+            "-f",
+            f.to_str().unwrap(),
+            "--stats",
+            stats.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let img = image::open(&png).unwrap();
+    assert_eq!((img.width(), img.height()), (32, 24));
+    let exr_img = image::open(&exr).unwrap().into_rgb32f();
+    assert_eq!((exr_img.width(), exr_img.height()), (32, 24));
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
+    for key in
+        ["scene", "triangles", "spheres", "effects", "bvh", "rays", "stages", "samples_per_pixel", "invalid_samples"]
+    {
+        assert!(v.get(key).is_some(), "stats lack {key}: {v}");
+    }
+    assert_eq!(v["rays"]["camera"], 32 * 24);
+    assert_eq!(v["threads"], 1);
+}
+
+#[test]
+fn cell_renders_only_that_rectangle() {
+    let dir = tempdir("cell");
+    let out = dir.join("c.pfm");
+    let o = run(&["--shading", "normals", "-r", "40", "30", "-p", "10", "5", "20", "10", "-f", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (w, _, px) = read_pfm(&out);
+    for (i, p) in px.iter().enumerate() {
+        let (x, y) = (i % w, i / w);
+        let inside = (10..30).contains(&x) && (5..15).contains(&y);
+        if !inside {
+            assert_eq!(*p, [0.0; 3], "pixel ({x},{y}) outside the cell was rendered");
+        }
+    }
+    assert!(px.iter().any(|p| *p != [0.0; 3]));
+}
+
+/// Each bad flag gets exactly one line on stderr, naming the problem, and a non-zero exit.
+#[test]
+fn bad_flags_fail_with_one_line() {
+    let dir = tempdir("badflags");
+    let cam = dir.join("cam.txt");
+    std::fs::write(&cam, "1 2 three").unwrap();
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (vec!["-r", "0", "10"], "-r width"),
+        (vec!["-r", "100000", "100000"], "-r width"),
+        (vec!["-r", "20000", "20000"], "pixels"),
+        (vec!["-s", "-4"], "-s"),
+        (vec!["-l", "0"], "-l"),
+        (vec!["-m", "-1"], "-m"),
+        (vec!["-o", "2"], "-o"),
+        (vec!["-t", "0"], "-t"),
+        (vec!["--rr", "0"], "--rr"),
+        (vec!["--rr", "1.5"], "--rr"),
+        (vec!["-a", "0", "0.05"], "-a"),
+        (vec!["-a", "64", "-1"], "-a"),
+        (vec!["-p", "500", "0", "10", "10", "-r", "100", "100"], "-p"),
+        (vec!["-b", "-1"], "-b"),
+        (vec!["-d", "0"], "-d"),
+        (vec!["-f", "out.bmp"], "out.bmp"),
+        (vec!["-s", "many"], "many"),
+        (vec!["--shading", "fancy"], "fancy"),
+        (vec!["-c", cam.to_str().unwrap()], "cam.txt"),
+        (vec!["-c", "/nonexistent/cam.txt"], "cam.txt"),
+        (vec!["/nonexistent/scene.dae"], "/nonexistent/scene.dae"),
+        (vec![dir.join("scene.xyz").to_str().unwrap()], "scene.xyz"),
+    ]
+    .into_iter()
+    .map(|(a, m)| (a.into_iter().map(String::from).collect(), m))
+    .collect();
+    std::fs::write(dir.join("scene.xyz"), "hello").unwrap();
+    for (args, needle) in cases {
+        let mut full = args.clone();
+        full.extend(["-f".into(), dir.join("x.png").to_str().unwrap().into()]);
+        if args.iter().any(|a| a == "-f") {
+            full = args.clone();
+        }
+        let refs: Vec<&str> = full.iter().map(|s| s.as_str()).collect();
+        let o = run(&refs);
+        let err = stderr(&o);
+        assert!(!o.status.success(), "{args:?} succeeded");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?} printed more than one line:\n{err}");
+        assert!(err.contains(needle), "{args:?}: error does not mention {needle}: {err}");
+        assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
+    }
+}
+
+#[test]
+fn help_lists_every_cs184_flag() {
+    let o = run(&["--help"]);
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    for flag in [
+        "-s",
+        "-l",
+        "-m",
+        "-o",
+        "-a",
+        "-t",
+        "-r",
+        "-f",
+        "-p",
+        "-c",
+        "-e",
+        "-b",
+        "-d",
+        "-H",
+        "--shading",
+        "--rr",
+        "--no-bvh",
+        "--seed",
+        "--tonemap",
+        "--integrator",
+        "--camera",
+        "--stats",
+    ] {
+        let listed = text.lines().any(|l| {
+            let l = l.trim_start();
+            l.starts_with(&format!("{flag} ")) || l.starts_with(&format!("{flag},")) || l == flag
+        });
+        assert!(listed, "--help lacks {flag}");
+    }
+}
+
+fn tempdir(name: &str) -> std::path::PathBuf {
+    let d = std::env::temp_dir().join(format!("wavepath-cli-{}-{name}", std::process::id()));
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
