@@ -162,7 +162,9 @@ mod tests {
             (Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0));
         for i in 1..1000 {
             let s = i as f32 / 1000.0;
-            let r = ray([s, 1.0 - s, 3.0], [0.013 * s, -0.007, -1.0]);
+            let target = Vec3::new(s, 1.0 - s, 0.0);
+            let o = target + Vec3::new(-0.039 * s, 0.021, 3.0);
+            let r = Ray::new(o, target - o);
             let h1 = intersect(&r, p10, p01, p00).is_some();
             let h2 = intersect(&r, p10, p11, p01).is_some();
             assert!(h1 || h2, "ray {i} slipped through the shared edge");

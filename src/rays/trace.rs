@@ -53,8 +53,8 @@ pub fn trace_all(accel: &dyn Intersector, rays: &[Ray], out: &mut [HitRecord], t
 pub fn trace(args: &TraceArgs) -> Result<()> {
     let threads = args.threads.or(args.threads_pos).unwrap_or(1).max(1);
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
-    let scene = load(&args.mesh, &LoadOptions::default())?;
     let rays = read_rays(&args.rays)?;
+    let scene = load(&args.mesh, &LoadOptions::default())?;
     let bvh = Bvh::build(&scene);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];
