@@ -209,24 +209,26 @@ impl Intersector for Bvh {
             hits.iter_mut().for_each(|h| *h = None);
             return;
         }
-        // One dispatch for the whole batch, so the loop runs inside the AVX2 context.
-        let run = |hits: &mut [Option<Hit>], c: &mut TraceCounters| match self.tokens() {
+        // One dispatch and one stack for the whole batch, so the loop runs inside the AVX2
+        // context and no stack is cleared per ray.
+        let mut stack = vec![traverse::Entry::default(); self.stack_need];
+        let run = |hits: &mut [Option<Hit>], c: &mut TraceCounters, stack: &mut [traverse::Entry]| match self.tokens() {
             (_, Some(avx)) => simd::with_avx2(avx, |t| {
                 for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                    *h = traverse::closest_hit(self, t, r, c);
+                    *h = traverse::closest_hit_with(self, t, r, c, stack);
                 }
             }),
             (Some(sse), None) => {
                 for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                    *h = traverse::closest_hit(self, sse, r, c);
+                    *h = traverse::closest_hit_with(self, sse, r, c, stack);
                 }
             }
             _ => {
                 for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                    *h = traverse::closest_hit(self, Scalar, r, c);
+                    *h = traverse::closest_hit_with(self, Scalar, r, c, stack);
                 }
             }
         };
-        run(hits, c);
+        run(hits, c, &mut stack);
     }
 }

@@ -9,7 +9,7 @@ use crate::ray::{Hit, Ray};
 
 /// Stack entries for trees up to this depth live in a fixed array; deeper trees (only
 /// possible for adversarial inputs) use a heap stack.
-pub const FIXED_STACK: usize = 256;
+pub const FIXED_STACK: usize = 128;
 
 #[derive(Clone, Copy, Default)]
 pub struct Entry {
@@ -28,6 +28,24 @@ struct Best {
 
 #[inline(always)]
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
+    if bvh.stack_need <= FIXED_STACK {
+        let mut fixed = [Entry::default(); FIXED_STACK];
+        closest_hit_with(bvh, isa, ray, c, &mut fixed)
+    } else {
+        closest_hit_with(bvh, isa, ray, c, &mut vec![Entry::default(); bvh.stack_need])
+    }
+}
+
+/// Closest hit with a caller-provided stack of at least `bvh.stack_need` entries (batches
+/// reuse one stack instead of clearing a fresh one per ray).
+#[inline(always)]
+pub fn closest_hit_with<B: BoxTest>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    c: &mut TraceCounters,
+    stack: &mut [Entry],
+) -> Option<Hit> {
     c.rays += 1;
     let sr = ShearedRay::new(ray)?;
     if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
@@ -35,14 +53,6 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounte
     }
     let br = BoxRay::new(ray);
     let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
-    let mut fixed = [Entry::default(); FIXED_STACK];
-    let mut heap;
-    let stack: &mut [Entry] = if bvh.stack_need <= FIXED_STACK {
-        &mut fixed
-    } else {
-        heap = vec![Entry::default(); bvh.stack_need];
-        &mut heap
-    };
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
