@@ -356,7 +356,7 @@ fn gltf_camera_and_punctual_lights() {
     match s.lights[2] {
         Light::Spot { position, direction, intensity, cone_angle, .. } => {
             assert_eq!((position, direction, intensity), (Vec3::ONE, -Vec3::Z, Vec3::splat(3.0)));
-            assert!((cone_angle - 0.5f32.to_degrees()).abs() < 1e-4);
+            assert!((cone_angle - 1.0f32.to_degrees()).abs() < 1e-4, "full cone angle in degrees");
         }
         ref l => panic!("{l:?}"),
     }

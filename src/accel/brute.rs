@@ -1,9 +1,13 @@
-use super::{Intersector, TraceCounters, sphere, triangle};
+use super::triangle::{ShearedRay, intersect_sheared};
+use super::{Intersector, TraceCounters, sphere};
 use crate::ray::{Hit, Ray};
 use crate::scene::{Scene, Sphere};
 use glam::Vec3;
 
 /// Tests every primitive for every ray: the `--no-bvh` reference and timing baseline.
+///
+/// Uses the same watertight triangle test and the same rule for exact ties (the smaller
+/// primitive id wins) as the BVH, so both return identical hits.
 pub struct BruteForce {
     tris: Vec<[Vec3; 3]>,
     spheres: Vec<Sphere>,
@@ -16,22 +20,31 @@ impl BruteForce {
     }
 }
 
+fn valid(ray: &Ray) -> bool {
+    !(ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax)
+}
+
 impl Intersector for BruteForce {
     fn closest_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit> {
         counters.rays += 1;
         counters.prim_tests += (self.tris.len() + self.spheres.len()) as u64;
-        let mut r = *ray;
-        let mut best = None;
+        let sr = ShearedRay::new(ray).filter(|_| valid(ray))?;
+        let mut best: Option<Hit> = None;
         for (i, [a, b, c]) in self.tris.iter().enumerate() {
-            if let Some((t, u, v)) = triangle::intersect(&r, *a, *b, *c) {
-                r.tmax = t;
+            let tmax = best.map_or(ray.tmax, |h| h.t);
+            // Ascending ids: on an exact tie the earlier (smaller) id is kept.
+            if let Some((t, u, v)) = intersect_sheared(&sr, ray.tmin, tmax, *a, *b, *c)
+                && best.is_none_or(|h| t < h.t)
+            {
                 best = Some(Hit { t, prim: i as u32, u, v });
             }
         }
         let base = self.tris.len() as u32;
         for (i, s) in self.spheres.iter().enumerate() {
-            if let Some(t) = sphere::intersect(&r, s.center, s.radius) {
-                r.tmax = t;
+            let r = Ray { tmax: best.map_or(ray.tmax, |h| h.t), ..*ray };
+            if let Some(t) = sphere::intersect(&r, s.center, s.radius)
+                && best.is_none_or(|h| t < h.t)
+            {
                 best = Some(Hit { t, prim: base + i as u32, u: 0.0, v: 0.0 });
             }
         }
@@ -40,8 +53,9 @@ impl Intersector for BruteForce {
 
     fn any_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> bool {
         counters.rays += 1;
+        let Some(sr) = ShearedRay::new(ray).filter(|_| valid(ray)) else { return false };
         for (i, [a, b, c]) in self.tris.iter().enumerate() {
-            if triangle::intersect(ray, *a, *b, *c).is_some() {
+            if intersect_sheared(&sr, ray.tmin, ray.tmax, *a, *b, *c).is_some() {
                 counters.prim_tests += i as u64 + 1;
                 return true;
             }

@@ -2,10 +2,12 @@
 //! are interchangeable for every caller (camera rays, shading, ray files).
 
 mod brute;
+pub mod bvh;
 pub mod sphere;
 pub mod triangle;
 
 pub use brute::BruteForce;
+pub use bvh::{Bvh, Isa};
 
 use crate::ray::{Hit, Ray};
 
@@ -57,8 +59,12 @@ pub struct BuildInfo {
 
 /// Builds the intersector the settings ask for: the BVH, or brute force for `--no-bvh`.
 pub fn build(scene: &crate::scene::Scene, use_bvh: bool) -> (Box<dyn Intersector>, BuildInfo) {
+    if use_bvh {
+        let bvh = Bvh::build(scene);
+        let info = bvh.info();
+        return (Box::new(bvh), info);
+    }
     let start = std::time::Instant::now();
-    let _ = use_bvh; // The BVH lands with its own issue; until then every query is brute force.
     let accel = BruteForce::new(scene);
     let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), ..BuildInfo::default() };
     (Box::new(accel), info)

@@ -1,29 +1,173 @@
-//! Ray–triangle intersection.
+//! Watertight ray–triangle intersection (Woop, Benthin, Wald 2013, "Watertight
+//! Ray/Triangle Intersection", JCGT 2(1)).
+//!
+//! The ray is sheared so it runs along +z through the origin; each triangle is then tested
+//! with three 2D edge functions that are evaluated identically for the two triangles that
+//! share an edge (same operands, same order), so a ray can never slip between them. Edge
+//! functions that round to exactly zero are recomputed in f64, where the products of the f32
+//! inputs are exact, which settles rays through edges and vertices.
 use crate::ray::Ray;
 use glam::Vec3;
 
-/// Möller–Trumbore test; returns (t, u, v) with t in [tmin, tmax].
-/// Placeholder until the watertight test lands with the BVH.
+/// The per-ray part of the watertight test: the shear that maps the ray onto +z.
+#[derive(Clone, Copy, Debug)]
+pub struct ShearedRay {
+    pub org: Vec3,
+    /// Permuted axes: `kz` is the dominant direction axis; `kx`, `ky` keep the winding.
+    pub kx: usize,
+    pub ky: usize,
+    pub kz: usize,
+    pub sx: f32,
+    pub sy: f32,
+    pub sz: f32,
+}
+
+impl ShearedRay {
+    /// None for a direction that is zero or not finite (such a ray hits nothing).
+    #[inline]
+    pub fn new(ray: &Ray) -> Option<Self> {
+        let d = ray.dir;
+        if !d.is_finite() || !ray.origin.is_finite() {
+            return None;
+        }
+        let a = d.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        if d[kz] == 0.0 {
+            return None;
+        }
+        let mut kx = (kz + 1) % 3;
+        let mut ky = (kx + 1) % 3;
+        if d[kz] < 0.0 {
+            std::mem::swap(&mut kx, &mut ky);
+        }
+        Some(ShearedRay { org: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] })
+    }
+}
+
+/// Watertight test of one triangle; returns (t, u, v) with `t` in `[tmin, tmax]` and `u`, `v`
+/// the weights of corners 1 and 2. Degenerate (zero-area or edge-on) triangles never hit.
 #[inline]
-pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3) -> Option<(f32, f32, f32)> {
-    let e1 = p1 - p0;
-    let e2 = p2 - p0;
-    let pv = ray.dir.cross(e2);
-    let det = e1.dot(pv);
+pub fn intersect_sheared(
+    r: &ShearedRay,
+    tmin: f32,
+    tmax: f32,
+    p0: Vec3,
+    p1: Vec3,
+    p2: Vec3,
+) -> Option<(f32, f32, f32)> {
+    let a = p0 - r.org;
+    let b = p1 - r.org;
+    let c = p2 - r.org;
+    let (kx, ky, kz) = (r.kx, r.ky, r.kz);
+    let ax = a[kx] - r.sx * a[kz];
+    let ay = a[ky] - r.sy * a[kz];
+    let bx = b[kx] - r.sx * b[kz];
+    let by = b[ky] - r.sy * b[kz];
+    let cx = c[kx] - r.sx * c[kz];
+    let cy = c[ky] - r.sy * c[kz];
+    let mut u = cx * by - cy * bx;
+    let mut v = ax * cy - ay * cx;
+    let mut w = bx * ay - by * ax;
+    if u == 0.0 || v == 0.0 || w == 0.0 {
+        // Products of two f32 are exact in f64, so the sign of each edge function is exact.
+        let (ax, ay, bx, by, cx, cy) = (ax as f64, ay as f64, bx as f64, by as f64, cx as f64, cy as f64);
+        u = (cx * by - cy * bx) as f32;
+        v = (ax * cy - ay * cx) as f32;
+        w = (bx * ay - by * ax) as f32;
+    }
+    if (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0) {
+        return None;
+    }
+    let det = u + v + w;
     if det == 0.0 || !det.is_finite() {
         return None;
     }
+    let az = r.sz * a[kz];
+    let bz = r.sz * b[kz];
+    let cz = r.sz * c[kz];
+    let tt = u * az + v * bz + w * cz;
+    // Range check before the division, with the sign of det folded in (no division for misses).
+    let (tt_s, det_s) = if det < 0.0 { (-tt, -det) } else { (tt, det) };
+    if tt_s < tmin * det_s || tt_s > tmax * det_s {
+        return None;
+    }
     let inv = 1.0 / det;
-    let tv = ray.origin - p0;
-    let u = tv.dot(pv) * inv;
-    if !(0.0..=1.0).contains(&u) {
+    let t = tt * inv;
+    // The exact check on the value callers will see.
+    if !(t >= tmin && t <= tmax) {
         return None;
     }
-    let qv = tv.cross(e1);
-    let v = ray.dir.dot(qv) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
+    Some((t, v * inv, w * inv))
+}
+
+/// Watertight test of one triangle against a ray (convenience form; precompute
+/// [`ShearedRay`] once per ray when testing many triangles).
+#[inline]
+pub fn intersect(ray: &Ray, p0: Vec3, p1: Vec3, p2: Vec3) -> Option<(f32, f32, f32)> {
+    let r = ShearedRay::new(ray)?;
+    intersect_sheared(&r, ray.tmin, ray.tmax, p0, p1, p2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
+        Ray::new(Vec3::from(o), Vec3::from(d))
     }
-    let t = e2.dot(qv) * inv;
-    (t >= ray.tmin && t <= ray.tmax).then_some((t, u, v))
+
+    #[test]
+    fn hits_centre_with_barycentrics() {
+        let (a, b, c) = (Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0));
+        let (t, u, v) = intersect(&ray([0.25, 0.25, 2.0], [0.0, 0.0, -1.0]), a, b, c).unwrap();
+        assert_eq!(t, 2.0);
+        assert!((u - 0.25).abs() < 1e-6 && (v - 0.25).abs() < 1e-6);
+        // Back side, unnormalised direction: t in units of dir.
+        let (t, _, _) = intersect(&ray([0.25, 0.25, -2.0], [0.0, 0.0, 4.0]), a, b, c).unwrap();
+        assert_eq!(t, 0.5);
+    }
+
+    #[test]
+    fn misses_outside_and_beyond_range() {
+        let (a, b, c) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+        assert!(intersect(&ray([0.6, 0.6, 1.0], [0.0, 0.0, -1.0]), a, b, c).is_none());
+        let mut r = ray([0.2, 0.2, 1.0], [0.0, 0.0, -1.0]);
+        r.tmax = 0.999;
+        assert!(intersect(&r, a, b, c).is_none());
+        r.tmax = 1.0;
+        assert!(intersect(&r, a, b, c).is_some());
+    }
+
+    #[test]
+    fn degenerate_triangles_and_rays_never_hit() {
+        let r = ray([0.0, 0.0, 1.0], [0.0, 0.0, -1.0]);
+        assert!(intersect(&r, Vec3::ZERO, Vec3::ZERO, Vec3::ZERO).is_none());
+        assert!(intersect(&r, Vec3::new(-1.0, 0.0, 0.0), Vec3::ZERO, Vec3::X).is_none());
+        let zero = ray([0.0, 0.0, 1.0], [0.0, 0.0, 0.0]);
+        assert!(intersect(&zero, Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y).is_none());
+        let nan = ray([0.0, 0.0, 1.0], [f32::NAN, 0.0, -1.0]);
+        assert!(intersect(&nan, Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y).is_none());
+    }
+
+    #[test]
+    fn shared_edge_hits_exactly_one_side_or_both() {
+        // Two triangles sharing the diagonal of the unit square; rays exactly on the diagonal.
+        let (p00, p10, p01, p11) =
+            (Vec3::new(0.0, 0.0, 0.0), Vec3::new(1.0, 0.0, 0.0), Vec3::new(0.0, 1.0, 0.0), Vec3::new(1.0, 1.0, 0.0));
+        for i in 1..1000 {
+            let s = i as f32 / 1000.0;
+            let target = Vec3::new(s, 1.0 - s, 0.0);
+            let o = target + Vec3::new(-0.039 * s, 0.021, 3.0);
+            let r = Ray::new(o, target - o);
+            let h1 = intersect(&r, p10, p01, p00).is_some();
+            let h2 = intersect(&r, p10, p11, p01).is_some();
+            assert!(h1 || h2, "ray {i} slipped through the shared edge");
+        }
+    }
 }

@@ -14,12 +14,14 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     let scene = load(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
     let load_s = t0.elapsed().as_secs_f64();
     let effects = Effects::of(&scene, &Settings::default());
-    if a.json {
-        println!("{}", summary_json(&scene, &effects, load_s));
-    } else {
-        print_text(&scene, &effects, load_s);
+    let text =
+        if a.json { format!("{}\n", summary_json(&scene, &effects, load_s)) } else { text(&scene, &effects, load_s) };
+    // A closed pipe (`wavepath info ... | head`) is not an error worth a panic.
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(e.into()),
+        _ => Ok(()),
     }
-    Ok(())
 }
 
 fn v3(v: glam::Vec3) -> [f32; 3] {
@@ -58,30 +60,34 @@ pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json
     })
 }
 
-fn print_text(scene: &Scene, effects: &Effects, load_s: f64) {
+fn text(scene: &Scene, effects: &Effects, load_s: f64) -> String {
+    use std::fmt::Write;
+    let mut o = String::new();
     let c = &scene.camera;
-    println!("scene:      {}", scene.name);
-    println!("load time:  {load_s:.4} s");
-    println!("triangles:  {}", scene.mesh.triangle_count());
-    println!("vertices:   {}", scene.mesh.positions.len());
-    println!("spheres:    {}", scene.spheres.len());
+    let _ = writeln!(o, "scene:      {}", scene.name);
+    let _ = writeln!(o, "load time:  {load_s:.4} s");
+    let _ = writeln!(o, "triangles:  {}", scene.mesh.triangle_count());
+    let _ = writeln!(o, "vertices:   {}", scene.mesh.positions.len());
+    let _ = writeln!(o, "spheres:    {}", scene.spheres.len());
     if let Some((lo, hi)) = scene.bounds() {
-        println!("bounds:     {lo:?} .. {hi:?}");
+        let _ = writeln!(o, "bounds:     {lo:?} .. {hi:?}");
     }
-    println!(
+    let _ = writeln!(
+        o,
         "camera:     at {:?} looking {:?}, fov {:.3} x {:.3} deg, clip [{}, {}]",
         c.position, -c.c2w.z_axis, c.hfov_deg, c.vfov_deg, c.nclip, c.fclip
     );
-    println!("lights:     {}", scene.lights.len());
+    let _ = writeln!(o, "lights:     {}", scene.lights.len());
     for l in &scene.lights {
-        println!("  {l:?}");
+        let _ = writeln!(o, "  {l:?}");
     }
-    println!("materials:  {}", scene.materials.len());
+    let _ = writeln!(o, "materials:  {}", scene.materials.len());
     for m in &scene.materials {
-        println!("  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
+        let _ = writeln!(o, "  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
     }
-    println!("effects (at the default settings):");
+    let _ = writeln!(o, "effects (at the default settings):");
     for e in &effects.on {
-        println!("  {} ({})", e.name, e.reason);
+        let _ = writeln!(o, "  {} ({})", e.name, e.reason);
     }
+    o
 }

@@ -207,8 +207,9 @@ fn make_camera(cam: &gltf::Camera, world: &Mat4) -> Result<Camera, String> {
 }
 
 /// KHR_lights_punctual: intensity = colour x intensity; directions are the node's local -Z.
-/// Spot: `cone_angle` is the outer cone half-angle in degrees (glTF's smooth fall-off
-/// between inner and outer cone has no field in `Light::Spot`; `falloff_exponent` is 0).
+/// Spot: glTF's outer cone angle is a half-angle in radians, `cone_angle` the full angle in
+/// degrees (glTF's smooth fall-off between inner and outer cone has no field in
+/// `Light::Spot`; `falloff_exponent` is 0).
 fn make_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Light {
     let intensity = Vec3::from(light.color()) * light.intensity();
     let position = world.w_axis.truncate();
@@ -220,7 +221,7 @@ fn make_light(light: &gltf::khr_lights_punctual::Light, world: &Mat4) -> Light {
             position,
             direction,
             intensity,
-            cone_angle: outer_cone_angle.to_degrees(),
+            cone_angle: 2.0 * outer_cone_angle.to_degrees(),
             falloff_exponent: 0.0,
         },
     }

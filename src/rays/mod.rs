@@ -1,6 +1,13 @@
 //! Ray files (the format of ../shared/peers): dumping the renderer's rays and tracing them.
 
-use anyhow::{Result, bail};
+mod dump;
+pub mod file;
+mod trace;
+
+pub use dump::{cosine_direction, diffuse_rays, offset_origin, primary_rays};
+pub use trace::{CHUNK, trace_all};
+
+use anyhow::Result;
 use clap::Args;
 use std::path::PathBuf;
 
@@ -17,6 +24,9 @@ pub struct DumpArgs {
     /// Resolution of the camera rays.
     #[arg(short = 'r', num_args = 2, value_names = ["W", "H"])]
     pub resolution: Option<Vec<u32>>,
+    /// Seed of the diffuse directions.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
 }
 
 #[derive(Args, Debug, Clone)]
@@ -46,9 +56,9 @@ pub struct TraceArgs {
 }
 
 pub fn dump(args: &DumpArgs) -> Result<()> {
-    bail!("{}: rays dump is not yet supported", args.scene.display())
+    dump::dump(args)
 }
 
 pub fn trace(args: &TraceArgs) -> Result<()> {
-    bail!("{}: rays trace is not yet supported", args.mesh.display())
+    trace::trace(args)
 }

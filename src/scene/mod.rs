@@ -27,7 +27,8 @@ pub enum Light {
     Point { position: Vec3, intensity: Vec3, attenuation: [f32; 3] },
     /// Light arriving along `direction` (the direction the light travels), radiance `radiance`.
     Directional { direction: Vec3, radiance: Vec3 },
-    /// Spot light: a point light restricted to a cone around `direction`.
+    /// Spot light: a point light restricted to a cone around `direction`; `cone_angle` is
+    /// COLLADA's `falloff_angle`, the full cone angle in degrees.
     Spot { position: Vec3, direction: Vec3, intensity: Vec3, cone_angle: f32, falloff_exponent: f32 },
     /// Constant radiance from every direction of the upper (world +Y) hemisphere: the CS184 ambient light.
     Hemisphere { radiance: Vec3 },

@@ -1,0 +1,74 @@
+//! The ray–box slab test for the eight children of a node, shared by every instruction set.
+//!
+//! Robustness (Ize 2013, "Robust BVH Ray Traversal"): distances are `(plane - origin) * inv`
+//! (one rounding each, so relative error <= 3 ulp) and the exit distance is widened by
+//! `1 + 2 gamma(3)`, so a box the ray touches is never rejected by rounding. The inverse
+//! direction is never infinite: a zero (or tiny) component becomes +-f32::MAX with the
+//! component's sign (so -0 and +0 give opposite signs), and `0 * MAX = 0` where `0 * inf`
+//! would give NaN. Near and far planes are picked per axis by the sign of the direction, so
+//! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
+//! hi = -inf) always gets entry +inf, exit -inf.
+use super::wide::{Node8, WIDTH};
+use crate::ray::Ray;
+
+/// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
+pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
+
+/// Per-ray values for the box test.
+#[derive(Clone, Copy, Debug)]
+pub struct BoxRay {
+    pub org: [f32; 3],
+    pub inv: [f32; 3],
+    /// Index into `Node8::b` of the near / far plane per axis.
+    pub near: [usize; 3],
+    pub far: [usize; 3],
+    pub tmin: f32,
+}
+
+impl BoxRay {
+    pub fn new(ray: &Ray) -> Self {
+        let mut inv = [0.0; 3];
+        let mut near = [0; 3];
+        let mut far = [0; 3];
+        for a in 0..3 {
+            let d = ray.dir[a];
+            let i = 1.0 / d;
+            inv[a] = if i.is_finite() { i } else { f32::MAX.copysign(d) };
+            let neg = d.is_sign_negative() as usize;
+            near[a] = 2 * a + neg;
+            far[a] = 2 * a + 1 - neg;
+        }
+        BoxRay { org: ray.origin.to_array(), inv, near, far, tmin: ray.tmin }
+    }
+}
+
+/// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
+/// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
+pub trait BoxTest: Copy {
+    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
+}
+
+/// The plain reference path.
+#[derive(Clone, Copy, Debug)]
+pub struct Scalar;
+
+impl BoxTest for Scalar {
+    #[inline(always)]
+    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+        let mut mask = 0;
+        for (i, tn) in tnear.iter_mut().enumerate() {
+            let t0 = (node.b[r.near[0]][i] - r.org[0]) * r.inv[0];
+            let t1 = (node.b[r.near[1]][i] - r.org[1]) * r.inv[1];
+            let t2 = (node.b[r.near[2]][i] - r.org[2]) * r.inv[2];
+            let u0 = (node.b[r.far[0]][i] - r.org[0]) * r.inv[0];
+            let u1 = (node.b[r.far[1]][i] - r.org[1]) * r.inv[1];
+            let u2 = (node.b[r.far[2]][i] - r.org[2]) * r.inv[2];
+            // Same operation order as the SIMD paths, so every path visits the same nodes.
+            let enter = t0.max(t1).max(t2).max(r.tmin);
+            let exit = (u0.min(u1).min(u2) * EXIT_SCALE).min(tmax);
+            *tn = enter;
+            mask |= ((enter <= exit) as u32) << i;
+        }
+        mask
+    }
+}

@@ -1,0 +1,197 @@
+//! Binned SAH build of a binary BVH into one flat node array.
+//!
+//! The top levels split in parallel (`rayon::join`); each parallel subtree builds into its
+//! own array, which the parent appends to its own with the child indices shifted, so the
+//! result is still one flat array with the root at 0 and no pointer per node.
+use glam::Vec3;
+
+/// Most primitives in one leaf (the wide leaves keep this bound).
+pub const MAX_LEAF: usize = 4;
+/// Bins per axis for the SAH sweep.
+const BINS: usize = 16;
+/// Subtrees with fewer primitives are built on the current thread.
+const PARALLEL_MIN: usize = 4096;
+/// Below this many levels SAH splits are used; deeper, object-median splits bound the depth.
+const SAH_MAX_DEPTH: usize = 48;
+/// Cost of a node visit relative to one primitive test.
+pub const C_TRAV: f32 = 1.0;
+
+/// A primitive as the builder sees it: its box and its id (triangles first, then spheres).
+#[derive(Clone, Copy, Debug)]
+pub struct PrimRef {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub id: u32,
+}
+
+impl PrimRef {
+    #[inline]
+    fn centroid(&self) -> Vec3 {
+        0.5 * (self.lo + self.hi)
+    }
+}
+
+/// A binary node: leaf when `count > 0` (prims `a .. a + count` of the reordered refs),
+/// else inner with children `a` and `b`.
+#[derive(Clone, Copy, Debug)]
+pub struct Node2 {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub a: u32,
+    pub b: u32,
+    pub count: u32,
+}
+
+pub fn area(lo: Vec3, hi: Vec3) -> f32 {
+    let d = (hi - lo).max(Vec3::ZERO);
+    2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
+}
+
+fn bounds(refs: &[PrimRef]) -> (Vec3, Vec3, Vec3, Vec3) {
+    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+    let (mut clo, mut chi) = (lo, hi);
+    for r in refs {
+        lo = lo.min(r.lo);
+        hi = hi.max(r.hi);
+        let c = r.centroid();
+        clo = clo.min(c);
+        chi = chi.max(c);
+    }
+    (lo, hi, clo, chi)
+}
+
+/// Builds the tree over `refs`, reordering them into leaf order.
+pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
+    build_par(refs, 0, 0)
+}
+
+fn build_par(refs: &mut [PrimRef], base: usize, depth: usize) -> Vec<Node2> {
+    if refs.len() < PARALLEL_MIN {
+        let mut out = Vec::with_capacity(2 * refs.len() / MAX_LEAF + 1);
+        build_seq(refs, base, depth, &mut out);
+        return out;
+    }
+    let (lo, hi, clo, chi) = bounds(refs);
+    let Some(mid) = split(refs, lo, hi, clo, chi, depth) else {
+        let mut out = Vec::new();
+        build_seq(refs, base, depth, &mut out);
+        return out;
+    };
+    let (l, r) = refs.split_at_mut(mid);
+    let (left, right) = rayon::join(|| build_par(l, base, depth + 1), || build_par(r, base + mid, depth + 1));
+    let mut out = Vec::with_capacity(1 + left.len() + right.len());
+    let lofs = 1u32;
+    let rofs = 1 + left.len() as u32;
+    out.push(Node2 { lo, hi, a: lofs, b: rofs, count: 0 });
+    for (nodes, ofs) in [(left, lofs), (right, rofs)] {
+        out.extend(nodes.into_iter().map(|mut n| {
+            if n.count == 0 {
+                n.a += ofs;
+                n.b += ofs;
+            }
+            n
+        }));
+    }
+    out
+}
+
+fn build_seq(refs: &mut [PrimRef], base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
+    let (lo, hi, clo, chi) = bounds(refs);
+    let me = out.len() as u32;
+    out.push(Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 });
+    if let Some(mid) = split(refs, lo, hi, clo, chi, depth) {
+        let (l, r) = refs.split_at_mut(mid);
+        let a = build_seq(l, base, depth + 1, out);
+        let b = build_seq(r, base + mid, depth + 1, out);
+        out[me as usize] = Node2 { lo, hi, a, b, count: 0 };
+    }
+    me
+}
+
+/// Chooses a split and partitions `refs` around it; None makes a leaf.
+fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: usize) -> Option<usize> {
+    let n = refs.len();
+    if n <= 1 {
+        return None;
+    }
+    let ext = chi - clo;
+    let axis = ext.max_position();
+    if ext[axis] <= 0.0 || depth >= SAH_MAX_DEPTH {
+        // All centroids coincide (or the tree is already deep): a leaf if allowed, else an
+        // object-median split, which halves the count and so bounds the depth.
+        if n <= MAX_LEAF {
+            return None;
+        }
+        let mid = n / 2;
+        refs.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
+        return Some(mid);
+    }
+    let mut best = (f32::INFINITY, 0usize, 0usize); // cost, axis, bin
+    for ax in 0..3 {
+        if ext[ax] <= 0.0 {
+            continue;
+        }
+        let scale = BINS as f32 / ext[ax];
+        let mut cnt = [0u32; BINS];
+        let mut blo = [Vec3::splat(f32::INFINITY); BINS];
+        let mut bhi = [Vec3::splat(f32::NEG_INFINITY); BINS];
+        for r in refs.iter() {
+            let b = bin_of(r.centroid()[ax], clo[ax], scale);
+            cnt[b] += 1;
+            blo[b] = blo[b].min(r.lo);
+            bhi[b] = bhi[b].max(r.hi);
+        }
+        // Right-to-left sweep: cost of the right side for each split position.
+        let mut right_cost = [0f32; BINS];
+        let (mut l, mut h, mut c) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY), 0u32);
+        for i in (1..BINS).rev() {
+            l = l.min(blo[i]);
+            h = h.max(bhi[i]);
+            c += cnt[i];
+            right_cost[i] = if c == 0 { 0.0 } else { area(l, h) * c as f32 };
+        }
+        let (mut l, mut h, mut c) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY), 0u32);
+        for i in 0..BINS - 1 {
+            l = l.min(blo[i]);
+            h = h.max(bhi[i]);
+            c += cnt[i];
+            if c == 0 || c as usize == n {
+                continue;
+            }
+            let cost = area(l, h) * c as f32 + right_cost[i + 1];
+            if cost < best.0 {
+                best = (cost, ax, i + 1);
+            }
+        }
+    }
+    let parent = area(lo, hi).max(f32::MIN_POSITIVE);
+    let split_cost = C_TRAV + best.0 / parent;
+    let leaf_cost = n as f32;
+    if n <= MAX_LEAF && leaf_cost <= split_cost {
+        return None;
+    }
+    if !best.0.is_finite() {
+        // Every bin split left one side empty (tiny extent): fall back to the median.
+        let mid = n / 2;
+        refs.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
+        return Some(mid);
+    }
+    let (ax, bin) = (best.1, best.2);
+    let scale = BINS as f32 / ext[ax];
+    let mut i = 0;
+    let mut j = n;
+    while i < j {
+        if bin_of(refs[i].centroid()[ax], clo[ax], scale) < bin {
+            i += 1;
+        } else {
+            j -= 1;
+            refs.swap(i, j);
+        }
+    }
+    Some(i)
+}
+
+#[inline]
+fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
+    (((c - lo) * scale) as usize).min(BINS - 1)
+}

@@ -1,0 +1,234 @@
+//! The bounding volume hierarchy: binned SAH build ([`build`]), collapse to 8-wide nodes
+//! with SoA child boxes ([`wide`]), and traversal ([`traverse`]) with a box test chosen at
+//! run time ([`Isa`]); the triangle test is the watertight one in every path.
+mod boxtest;
+mod build;
+mod simd;
+mod traverse;
+mod wide;
+
+use super::{BuildInfo, Intersector, TraceCounters};
+use crate::ray::{Hit, Ray};
+use crate::scene::Scene;
+use boxtest::Scalar;
+use build::PrimRef;
+use glam::Vec3;
+use rayon::prelude::*;
+use simd::{Avx2, Sse};
+use std::time::Instant;
+pub use wide::Node8;
+
+/// Instruction set of the box test.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Isa {
+    Scalar,
+    Sse,
+    Avx2,
+    /// Accepted for `WAVEPATH_ISA=avx512`; runs the AVX2 kernel (8 boxes fill one 256-bit
+    /// register, so 512-bit lanes would sit half empty).
+    Avx512,
+}
+
+impl Isa {
+    /// The best instruction set this CPU supports.
+    pub fn detect() -> Isa {
+        if Avx2::new().is_some() {
+            Isa::Avx2
+        } else if Sse::new().is_some() {
+            Isa::Sse
+        } else {
+            Isa::Scalar
+        }
+    }
+
+    /// `WAVEPATH_ISA=scalar|sse|avx2|avx512` if set and valid, else [`Isa::detect`].
+    pub fn from_env() -> Isa {
+        std::env::var("WAVEPATH_ISA").ok().and_then(|s| Isa::parse(&s)).unwrap_or_else(Isa::detect)
+    }
+
+    pub fn parse(s: &str) -> Option<Isa> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "scalar" => Some(Isa::Scalar),
+            "sse" | "sse4" | "sse4.1" => Some(Isa::Sse),
+            "avx2" => Some(Isa::Avx2),
+            "avx512" => Some(Isa::Avx512),
+            _ => None,
+        }
+    }
+
+    /// The path that actually runs for this request on this CPU (never one it lacks).
+    pub fn effective(self) -> Isa {
+        match self {
+            Isa::Avx512 | Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
+            Isa::Avx512 | Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
+            _ => Isa::Scalar,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Isa::Scalar => "scalar",
+            Isa::Sse => "sse",
+            Isa::Avx2 => "avx2",
+            Isa::Avx512 => "avx512",
+        }
+    }
+}
+
+/// An 8-wide BVH over the triangles and spheres of a scene.
+pub struct Bvh {
+    nodes: Vec<Node8>,
+    /// Leaf-ordered primitive data: triangle corners, or (centre, (radius, 0, 0), 0).
+    prims: Vec<[Vec3; 3]>,
+    /// Scene primitive id of each leaf slot (triangles first, then spheres).
+    ids: Vec<u32>,
+    tri_count: u32,
+    stack_need: usize,
+    isa: Isa,
+    info: BuildInfo,
+}
+
+impl Bvh {
+    /// Builds the tree; the box test is the best the CPU has (or `WAVEPATH_ISA`).
+    pub fn build(scene: &Scene) -> Bvh {
+        let start = Instant::now();
+        let mesh = &scene.mesh;
+        let tri_count = mesh.triangle_count();
+        let total = tri_count + scene.spheres.len();
+        assert!(total < wide::MAX_PRIMS, "a BVH holds at most {} primitives", wide::MAX_PRIMS);
+        let mut refs: Vec<PrimRef> = (0..tri_count)
+            .into_par_iter()
+            .map(|i| {
+                let [a, b, c] = mesh.corners(i);
+                PrimRef { lo: a.min(b).min(c), hi: a.max(b).max(c), id: i as u32 }
+            })
+            .collect();
+        refs.extend(scene.spheres.iter().enumerate().map(|(i, s)| {
+            let r = Vec3::splat(s.radius.abs());
+            PrimRef { lo: s.center - r, hi: s.center + r, id: (tri_count + i) as u32 }
+        }));
+        let (nodes, depth, sah_cost, ids, prims) = if refs.is_empty() {
+            (vec![], 0, 0.0, vec![], vec![])
+        } else {
+            let bin = build::build(&mut refs);
+            let w = wide::collapse(&bin);
+            let ids: Vec<u32> = refs.iter().map(|r| r.id).collect();
+            let prims = ids
+                .par_iter()
+                .map(|&id| {
+                    let id = id as usize;
+                    if id < tri_count {
+                        mesh.corners(id)
+                    } else {
+                        let s = &scene.spheres[id - tri_count];
+                        [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO]
+                    }
+                })
+                .collect();
+            (w.nodes, w.depth, w.sah_cost, ids, prims)
+        };
+        let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), nodes: nodes.len(), depth, sah_cost };
+        Bvh {
+            nodes,
+            prims,
+            ids,
+            tri_count: tri_count as u32,
+            stack_need: WIDTH_STACK * (depth + 1),
+            isa: Isa::from_env().effective(),
+            info,
+        }
+    }
+
+    /// The same tree with another box-test path (falls back to what the CPU has).
+    pub fn with_isa(mut self, isa: Isa) -> Bvh {
+        self.isa = isa.effective();
+        self
+    }
+
+    pub fn isa(&self) -> Isa {
+        self.isa
+    }
+
+    pub fn info(&self) -> BuildInfo {
+        self.info
+    }
+
+    /// The wide nodes, root first (for tests and diagnostics).
+    pub fn nodes(&self) -> &[Node8] {
+        &self.nodes
+    }
+
+    fn dispatch_closest(&self, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
+        match self.tokens() {
+            (_, Some(avx)) => simd::with_avx2(avx, |t| traverse::closest_hit(self, t, ray, c)),
+            (Some(sse), None) => traverse::closest_hit(self, sse, ray, c),
+            _ => traverse::closest_hit(self, Scalar, ray, c),
+        }
+    }
+
+    fn tokens(&self) -> (Option<Sse>, Option<Avx2>) {
+        match self.isa {
+            Isa::Scalar => (None, None),
+            Isa::Sse => (Sse::new(), None),
+            Isa::Avx2 | Isa::Avx512 => (Sse::new(), Avx2::new()),
+        }
+    }
+}
+
+/// Stack entries needed per tree level (a node pushes at most all its children).
+const WIDTH_STACK: usize = wide::WIDTH;
+
+impl Intersector for Bvh {
+    fn closest_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit> {
+        if self.nodes.is_empty() {
+            counters.rays += 1;
+            return None;
+        }
+        self.dispatch_closest(ray, counters)
+    }
+
+    fn any_hit(&self, ray: &Ray, c: &mut TraceCounters) -> bool {
+        if self.nodes.is_empty() {
+            c.rays += 1;
+            return false;
+        }
+        match self.tokens() {
+            (_, Some(avx)) => simd::with_avx2(avx, |t| traverse::any_hit(self, t, ray, c)),
+            (Some(sse), None) => traverse::any_hit(self, sse, ray, c),
+            _ => traverse::any_hit(self, Scalar, ray, c),
+        }
+    }
+
+    fn name(&self) -> String {
+        format!("bvh8 {}", self.isa.name())
+    }
+
+    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
+        if self.nodes.is_empty() {
+            c.rays += rays.len() as u64;
+            hits.iter_mut().for_each(|h| *h = None);
+            return;
+        }
+        // One dispatch and one stack for the whole batch, so the loop runs inside the AVX2
+        // context and no stack is cleared per ray.
+        let mut stack = vec![traverse::Entry::default(); self.stack_need];
+        let run = |hits: &mut [Option<Hit>], c: &mut TraceCounters, stack: &mut [traverse::Entry]| match self.tokens() {
+            (_, Some(avx)) => simd::with_avx2(avx, |t| {
+                for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                    *h = traverse::closest_hit_with(self, t, r, c, stack);
+                }
+            }),
+            (Some(sse), None) => {
+                for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                    *h = traverse::closest_hit_with(self, sse, r, c, stack);
+                }
+            }
+            _ => {
+                for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                    *h = traverse::closest_hit_with(self, Scalar, r, c, stack);
+                }
+            }
+        };
+        run(hits, c, &mut stack);
+    }
+}

@@ -1,0 +1,179 @@
+//! Closest-hit and any-hit traversal of the 8-wide tree, generic over the box test so that
+//! the scalar and SIMD paths share every other line (and therefore every decision).
+use super::Bvh;
+use super::boxtest::{BoxRay, BoxTest};
+use super::wide::{LEAF_BIT, WIDTH, leaf_range};
+use crate::accel::triangle::{ShearedRay, intersect_sheared};
+use crate::accel::{TraceCounters, sphere};
+use crate::ray::{Hit, Ray};
+
+/// Stack entries for trees up to this depth live in a fixed array; deeper trees (only
+/// possible for adversarial inputs) use a heap stack.
+pub const FIXED_STACK: usize = 128;
+
+#[derive(Clone, Copy, Default)]
+pub struct Entry {
+    node: u32,
+    t: f32,
+}
+
+/// The closest hit so far.
+struct Best {
+    t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+    found: bool,
+}
+
+#[inline(always)]
+pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
+    if bvh.stack_need <= FIXED_STACK {
+        let mut fixed = [Entry::default(); FIXED_STACK];
+        closest_hit_with(bvh, isa, ray, c, &mut fixed)
+    } else {
+        closest_hit_with(bvh, isa, ray, c, &mut vec![Entry::default(); bvh.stack_need])
+    }
+}
+
+/// Closest hit with a caller-provided stack of at least `bvh.stack_need` entries (batches
+/// reuse one stack instead of clearing a fresh one per ray).
+#[inline(always)]
+pub fn closest_hit_with<B: BoxTest>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    c: &mut TraceCounters,
+    stack: &mut [Entry],
+) -> Option<Hit> {
+    c.rays += 1;
+    let sr = ShearedRay::new(ray)?;
+    if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+        return None;
+    }
+    let br = BoxRay::new(ray);
+    let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
+    let mut sp = 0usize;
+    let mut cur = 0u32;
+    let mut tnear = [0f32; WIDTH];
+    let mut kids = [Entry::default(); WIDTH];
+    loop {
+        if cur & LEAF_BIT == 0 {
+            c.nodes += 1;
+            let node = &bvh.nodes[cur as usize];
+            let mut mask = isa.test(node, &br, best.t, &mut tnear);
+            let mut k = 0;
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                // Insertion by entry distance: kids[0] is the nearest.
+                let e = Entry { node: node.child[i], t: tnear[i] };
+                let mut j = k;
+                while j > 0 && kids[j - 1].t > e.t {
+                    kids[j] = kids[j - 1];
+                    j -= 1;
+                }
+                kids[j] = e;
+                k += 1;
+            }
+            if k > 0 {
+                for e in kids[1..k].iter().rev() {
+                    stack[sp] = *e;
+                    sp += 1;
+                }
+                cur = kids[0].node;
+                continue;
+            }
+        } else {
+            leaf_closest(bvh, cur, &sr, ray, &mut best, c);
+        }
+        // Pop the nearest pending child that can still hold something closer.
+        loop {
+            if sp == 0 {
+                return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
+            }
+            sp -= 1;
+            if stack[sp].t <= best.t {
+                cur = stack[sp].node;
+                break;
+            }
+        }
+    }
+}
+
+#[inline(always)]
+fn leaf_closest(bvh: &Bvh, r: u32, sr: &ShearedRay, ray: &Ray, best: &mut Best, c: &mut TraceCounters) {
+    let (first, count) = leaf_range(r);
+    c.prim_tests += count as u64;
+    for (p, &id) in bvh.prims[first..first + count].iter().zip(&bvh.ids[first..first + count]) {
+        let hit = if id < bvh.tri_count {
+            intersect_sheared(sr, ray.tmin, best.t, p[0], p[1], p[2])
+        } else {
+            sphere_hit(ray, best.t, p)
+        };
+        if let Some((t, u, v)) = hit
+            && (!best.found || t < best.t || (t == best.t && id < best.prim))
+        {
+            *best = Best { t, prim: id, u, v, found: true };
+        }
+    }
+}
+
+/// Spheres are stored in the leaf arrays as (centre, (radius, 0, 0), unused).
+#[inline(always)]
+fn sphere_hit(ray: &Ray, tmax: f32, p: &[glam::Vec3; 3]) -> Option<(f32, f32, f32)> {
+    let r = Ray { tmax, ..*ray };
+    sphere::intersect(&r, p[0], p[1].x).map(|t| (t, 0.0, 0.0))
+}
+
+#[inline(always)]
+pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
+    c.rays += 1;
+    let Some(sr) = ShearedRay::new(ray) else { return false };
+    if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+        return false;
+    }
+    let br = BoxRay::new(ray);
+    let mut fixed = [0u32; FIXED_STACK];
+    let mut heap;
+    let stack: &mut [u32] = if bvh.stack_need <= FIXED_STACK {
+        &mut fixed
+    } else {
+        heap = vec![0u32; bvh.stack_need];
+        &mut heap
+    };
+    stack[0] = 0;
+    let mut sp = 1usize;
+    let mut tnear = [0f32; WIDTH];
+    while sp > 0 {
+        sp -= 1;
+        let cur = stack[sp];
+        if cur & LEAF_BIT == 0 {
+            c.nodes += 1;
+            let node = &bvh.nodes[cur as usize];
+            let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
+            while mask != 0 {
+                let i = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                stack[sp] = node.child[i];
+                sp += 1;
+            }
+        } else {
+            let (first, count) = leaf_range(cur);
+            for (j, (p, &id)) in bvh.prims[first..first + count].iter().zip(&bvh.ids[first..first + count]).enumerate()
+            {
+                let hit = if id < bvh.tri_count {
+                    intersect_sheared(&sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
+                } else {
+                    sphere_hit(ray, ray.tmax, p).is_some()
+                };
+                if hit {
+                    c.prim_tests += j as u64 + 1;
+                    return true;
+                }
+            }
+            c.prim_tests += count as u64;
+        }
+    }
+    false
+}

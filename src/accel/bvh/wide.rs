@@ -1,0 +1,117 @@
+//! Collapse of the binary tree into 8-wide nodes whose child boxes are stored lane by lane,
+//! so one 8-lane compare (or eight scalar ones) tests every child of a node.
+use super::build::{C_TRAV, MAX_LEAF, Node2, area};
+
+pub const WIDTH: usize = 8;
+
+/// Child reference: an inner node index, or (top bit set) a leaf of `count` primitives
+/// starting at `first` in the leaf-ordered primitive arrays.
+pub const LEAF_BIT: u32 = 1 << 31;
+const COUNT_SHIFT: u32 = 27;
+/// Leaf-order primitive positions must fit below the count field.
+pub const MAX_PRIMS: usize = 1 << COUNT_SHIFT;
+pub const EMPTY: u32 = u32::MAX;
+
+#[inline]
+pub fn leaf_ref(first: u32, count: u32) -> u32 {
+    LEAF_BIT | ((count - 1) << COUNT_SHIFT) | first
+}
+
+/// (first, count) of a leaf reference.
+#[inline]
+pub fn leaf_range(r: u32) -> (usize, usize) {
+    ((r & (MAX_PRIMS as u32 - 1)) as usize, (((r >> COUNT_SHIFT) & 0xf) + 1) as usize)
+}
+
+/// One 8-wide node. `b[2 * axis]` holds the children's lower bounds on that axis and
+/// `b[2 * axis + 1]` the upper ones. Unused slots have lo = +inf, hi = -inf: whatever the
+/// ray direction, their entry distance is +inf and exit -inf, so they are never hit.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+pub struct Node8 {
+    pub b: [[f32; WIDTH]; 6],
+    pub child: [u32; WIDTH],
+}
+
+impl Node8 {
+    fn empty() -> Self {
+        let mut b = [[f32::INFINITY; WIDTH]; 6];
+        for axis in 0..3 {
+            b[2 * axis + 1] = [f32::NEG_INFINITY; WIDTH];
+        }
+        Node8 { b, child: [EMPTY; WIDTH] }
+    }
+}
+
+pub struct Wide {
+    pub nodes: Vec<Node8>,
+    pub depth: usize,
+    pub sah_cost: f64,
+}
+
+/// Collapses `bin` (root at 0) into 8-wide nodes: each wide node takes the children of a
+/// binary node and keeps opening its largest inner child until it has eight.
+pub fn collapse(bin: &[Node2]) -> Wide {
+    let mut nodes = Vec::with_capacity(bin.len() / 4 + 1);
+    let root_area = area(bin[0].lo, bin[0].hi).max(f32::MIN_POSITIVE) as f64;
+    let mut cost = 0.0;
+    let depth = if bin[0].count > 0 {
+        // The whole scene is one leaf: a root with a single leaf child.
+        let mut n = Node8::empty();
+        set_child(&mut n, 0, &bin[0], leaf_ref(bin[0].a, bin[0].count));
+        cost += C_TRAV as f64 + bin[0].count as f64;
+        nodes.push(n);
+        1
+    } else {
+        emit(bin, 0, &mut nodes, root_area, &mut cost)
+    };
+    Wide { nodes, depth, sah_cost: cost }
+}
+
+fn set_child(n: &mut Node8, slot: usize, c: &Node2, r: u32) {
+    for axis in 0..3 {
+        n.b[2 * axis][slot] = c.lo[axis];
+        n.b[2 * axis + 1][slot] = c.hi[axis];
+    }
+    n.child[slot] = r;
+}
+
+/// Emits the wide node for binary inner node `i`; returns the depth of its subtree.
+fn emit(bin: &[Node2], i: usize, nodes: &mut Vec<Node8>, root_area: f64, cost: &mut f64) -> usize {
+    let mut kids: Vec<u32> = vec![bin[i].a, bin[i].b];
+    while kids.len() < WIDTH {
+        let open = kids
+            .iter()
+            .enumerate()
+            .filter(|(_, k)| bin[**k as usize].count == 0)
+            .max_by(|a, b| {
+                let (na, nb) = (&bin[*a.1 as usize], &bin[*b.1 as usize]);
+                area(na.lo, na.hi).total_cmp(&area(nb.lo, nb.hi))
+            })
+            .map(|(j, _)| j);
+        let Some(j) = open else { break };
+        let k = kids.swap_remove(j) as usize;
+        kids.push(bin[k].a);
+        kids.push(bin[k].b);
+    }
+    *cost += C_TRAV as f64 * area(bin[i].lo, bin[i].hi) as f64 / root_area;
+    let me = nodes.len();
+    nodes.push(Node8::empty());
+    let mut depth = 1;
+    for (slot, &k) in kids.iter().enumerate() {
+        let c = &bin[k as usize];
+        let r = if c.count > 0 {
+            debug_assert!(c.count as usize <= MAX_LEAF);
+            *cost += c.count as f64 * area(c.lo, c.hi) as f64 / root_area;
+            leaf_ref(c.a, c.count)
+        } else {
+            let idx = nodes.len() as u32;
+            depth = depth.max(1 + emit(bin, k as usize, nodes, root_area, cost));
+            idx
+        };
+        let mut n = nodes[me];
+        set_child(&mut n, slot, c, r);
+        nodes[me] = n;
+    }
+    depth
+}

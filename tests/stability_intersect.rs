@@ -1,0 +1,136 @@
+//! Watertightness: rays aimed exactly at shared edges and vertices of closed meshes never
+//! pass through, at the origin, translated by 1e5 and scaled by 1e-4.
+mod common;
+mod meshgen;
+
+use glam::Vec3;
+use meshgen::{icosphere, scene_of};
+use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
+use wavepath::ray::Ray;
+use wavepath::sampling::Sampler;
+use wavepath::scene::Mesh;
+
+fn transformed(mut m: Mesh, scale: f32, offset: Vec3) -> Mesh {
+    for p in &mut m.positions {
+        *p = *p * scale + offset;
+    }
+    m
+}
+
+/// Targets on edges and at vertices: each vertex, and points along each edge.
+fn targets(m: &Mesh, per_edge: usize) -> Vec<Vec3> {
+    let mut out = m.positions.clone();
+    for t in &m.triangles {
+        for k in 0..3 {
+            let (a, b) = (m.positions[t[k] as usize], m.positions[t[(k + 1) % 3] as usize]);
+            for j in 1..=per_edge {
+                let s = j as f32 / (per_edge + 1) as f32;
+                out.push(a + (b - a) * s);
+            }
+        }
+    }
+    out
+}
+
+/// Counts rays that leak: from the inside point `c` toward each target (must hit), and from
+/// outside through each target toward `c` (must hit). Returns (rays, leaks).
+fn leaks(bvh: &Bvh, targets: &[Vec3], c: Vec3, radius: f32, seed: u64) -> (usize, usize) {
+    let mut tc = TraceCounters::default();
+    let mut s = Sampler::for_sample(seed, 0, 0);
+    let (mut n, mut bad) = (0, 0);
+    for &p in targets {
+        // From a jittered inside point through the edge point.
+        let jitter = Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5) * (0.2 * radius);
+        let o = c + jitter;
+        let inside = Ray::new(o, p - o);
+        // From outside through the edge point (towards the centre).
+        let o2 = c + (p - c) * 3.0 + jitter;
+        let outside = Ray::new(o2, p - o2);
+        for r in [inside, outside] {
+            n += 1;
+            if bvh.closest_hit(&r, &mut tc).is_none() || !bvh.any_hit(&r, &mut tc) {
+                bad += 1;
+            }
+        }
+    }
+    (n, bad)
+}
+
+#[test]
+fn no_leaks_through_edges_and_vertices() {
+    let base = icosphere(40); // 32,000 triangles
+    let mut total = 0;
+    for (scale, offset) in
+        [(1.0, Vec3::ZERO), (1.0, Vec3::splat(1e5)), (1e-4, Vec3::ZERO), (1e-4, Vec3::new(3.0, -2.0, 1.0))]
+    {
+        let m = transformed(base.clone(), scale, offset);
+        let t = targets(&m, 3);
+        let scene = scene_of(m, vec![]);
+        for isa in [Isa::Scalar, Isa::Avx2] {
+            let bvh_isa = Bvh::build(&scene).with_isa(isa);
+            let (n, bad) = leaks(&bvh_isa, &t, offset, scale, 11);
+            assert_eq!(bad, 0, "{bad} of {n} rays leaked (scale {scale}, offset {offset}, {isa:?})");
+            total += n;
+        }
+    }
+    assert!(total >= 1_000_000, "only {total} rays");
+}
+
+#[test]
+fn axis_parallel_rays_hit_closed_mesh() {
+    let m = icosphere(16);
+    let bvh = Bvh::build(&scene_of(m, vec![]));
+    let mut c = TraceCounters::default();
+    for i in 0..=400 {
+        let x = i as f32 / 200.0 - 1.0;
+        for (o, d) in [
+            (Vec3::new(x * 0.5, 0.0, 0.0), Vec3::X),
+            (Vec3::new(0.0, x * 0.5, 0.0), Vec3::NEG_Y),
+            (Vec3::new(0.0, 0.0, x * 0.5), Vec3::new(-0.0, 0.0, 1.0)),
+            (Vec3::new(0.0, x * 0.5, 0.0), Vec3::new(-1.0, -0.0, 0.0)),
+        ] {
+            let r = Ray::new(o, d);
+            let h = bvh.closest_hit(&r, &mut c).expect("a ray from inside must hit");
+            assert!((r.at(h.t).length() - 1.0).abs() < 0.02);
+        }
+    }
+}
+
+#[test]
+fn rays_starting_on_the_surface() {
+    let m = icosphere(16);
+    let scene = scene_of(m, vec![]);
+    let bvh = Bvh::build(&scene);
+    let mut c = TraceCounters::default();
+    for (i, &p) in scene.mesh.positions.iter().enumerate().step_by(7) {
+        // Leaving outward from a vertex: nothing else to hit beyond tiny t.
+        let out = Ray { tmin: 1e-4, ..Ray::new(p, p) };
+        assert!(bvh.closest_hit(&out, &mut c).is_none(), "vertex {i}");
+        // Going inward: the far side, near distance 2 |p| cos.
+        let inward = Ray { tmin: 1e-4, ..Ray::new(p, -p) };
+        let h = bvh.closest_hit(&inward, &mut c).expect("must hit the far side");
+        assert!((h.t - 2.0).abs() < 0.01, "t = {}", h.t);
+    }
+}
+
+#[test]
+fn bunny_is_watertight_where_closed() {
+    let Some(path) = common::scene("meshes/stanford-bunny.obj") else { return };
+    let Ok(scene) = wavepath::load::load(&path, &Default::default()) else {
+        eprintln!("skipped: the OBJ loader is not available yet");
+        return;
+    };
+    let bvh = Bvh::build(&scene);
+    let (lo, hi) = scene.bounds().unwrap();
+    let c = 0.5 * (lo + hi);
+    // Rays from outside through vertices toward the centre must hit something.
+    let mut tc = TraceCounters::default();
+    let mut miss = 0;
+    for &p in &scene.mesh.positions {
+        let o = c + (p - c) * 3.0;
+        if bvh.closest_hit(&Ray::new(o, p - o), &mut tc).is_none() {
+            miss += 1;
+        }
+    }
+    assert_eq!(miss, 0);
+}
