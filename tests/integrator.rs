@@ -197,3 +197,20 @@ fn cell_renders_only_its_pixels() {
         }
     }
 }
+
+mod common;
+
+/// The CS184 scenes (loaded by the COLLADA loader) render with both integrators alike and
+/// without a single NaN or Inf sample.
+#[test]
+fn cs184_scenes_agree_and_stay_finite() {
+    for name in ["CBspheres_lambertian", "CBempty"] {
+        let Some(path) = common::scene(&format!("cs184/sky/{name}.dae")) else { return };
+        let mut scene = wavepath::load::load(&path, &wavepath::load::LoadOptions::default()).unwrap();
+        scene.camera.fit_aspect(32.0 / 24.0);
+        let s = Settings { light_samples: 1, ..settings(3, 16) };
+        compare(&scene, &s, name);
+        let (_, st) = wavefront(&scene, &Settings { hemisphere: true, ..s.clone() });
+        assert_eq!(st.invalid_samples, 0);
+    }
+}

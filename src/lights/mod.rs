@@ -152,7 +152,8 @@ impl LightSet {
                 }
                 Light::Spot { position, direction, intensity, cone_angle, falloff_exponent } => {
                     if let Some(axis) = direction.try_normalize() {
-                        let cos_cutoff = cone_angle.to_radians().clamp(0.0, std::f32::consts::PI).cos();
+                        // `cone_angle` is the full cone angle (COLLADA falloff_angle) in degrees.
+                        let cos_cutoff = (0.5 * cone_angle).to_radians().clamp(0.0, std::f32::consts::PI).cos();
                         lights.push(SampledLight::Spot {
                             position,
                             axis,

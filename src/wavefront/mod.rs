@@ -1,7 +1,9 @@
 //! The wavefront integrator: paths live in structure-of-arrays queues and move through
 //! five stages, each one module with one entry point, parallel over chunks and timed:
 //!
-//!     generate -> (traverse -> shade -> shadow -> compact)* until no path is left
+//! ```text
+//! generate -> (traverse -> shade -> shadow -> compact)* until no path is left
+//! ```
 //!
 //! A frame takes one batch of samples for every active pixel (with adaptive sampling a
 //! batch is the `-a` batch size and converged pixels leave before the next frame); a frame
