@@ -57,6 +57,9 @@ pub struct Settings {
     pub seed: u64,
     pub cell: Option<Cell>,
     pub integrator: IntegratorKind,
+    /// Render only camera samples with these indices, `[first, end)`, of the `spp` per
+    /// pixel (a `--split samples` part); `None`: all of them.
+    pub sample_range: Option<(u32, u32)>,
 }
 
 impl Default for Settings {
@@ -77,11 +80,21 @@ impl Default for Settings {
             seed: 0,
             cell: None,
             integrator: IntegratorKind::Wavefront,
+            sample_range: None,
         }
     }
 }
 
 impl Settings {
+    /// The sample indices this render takes for each pixel, `[first, end)`.
+    pub fn sample_span(&self) -> (u32, u32) {
+        let spp = self.spp.max(1);
+        match self.sample_range {
+            Some((a, b)) => (a.min(spp), b.min(spp)),
+            None => (0, spp),
+        }
+    }
+
     /// The pixel rectangle to render: the `-p` cell clipped to the image, or the whole image.
     pub fn region(&self) -> Cell {
         match self.cell {

@@ -97,9 +97,10 @@ pub fn render_recursive(
             for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
                 let pixel = (y * w + x) as u32;
                 let mut sums = PixelSums::default();
-                for i in 0..spp {
+                let (first, end) = s.sample_span();
+                for i in first..end {
                     if let Some((b, tol)) = s.adaptive
-                        && i > 0
+                        && i > first
                         && i.is_multiple_of(b)
                         && sums.converged(tol)
                     {

@@ -29,7 +29,8 @@ pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Setting
             for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
                 let pixel = (y * w + x) as u64;
                 let mut sum = Vec3::ZERO;
-                for s in 0..spp {
+                let (first, end) = settings.sample_span();
+                for s in first..end {
                     let (jx, jy) = if spp == 1 {
                         (0.5, 0.5)
                     } else {
@@ -41,7 +42,7 @@ pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Setting
                         sum += n * 0.5 + Vec3::splat(0.5);
                     }
                 }
-                *out = sum / spp as f32;
+                *out = sum / (end - first).max(1) as f32;
             }
             c
         })

@@ -59,7 +59,6 @@ pub fn render_wavefront(
     let start = Instant::now();
     let t = Transport::new(scene, s);
     let (w, h) = (s.width, s.height);
-    let spp = s.spp.max(1);
     let region = s.region();
     let mut acc = Accumulator::new(w, h);
     let mut stats = RenderStats::default();
@@ -69,13 +68,14 @@ pub fn render_wavefront(
     let mut active: Vec<u32> = (region.y..region.y + region.h)
         .flat_map(|y| (region.x..region.x + region.w).map(move |x| (y * w + x) as u32))
         .collect();
-    let mut n = 0u32;
-    while n < spp && !active.is_empty() {
+    let (first, end) = s.sample_span();
+    let mut n = first;
+    while n < end && !active.is_empty() {
         let check = match s.adaptive {
             Some((b, _)) => (n / b + 1) * b,
-            None => spp,
+            None => end,
         }
-        .min(spp);
+        .min(end);
         let batch = (check - n).min(cap as u32);
         let per_wave = (cap / batch as usize).max(1);
         for pixels in active.chunks(per_wave) {
@@ -86,7 +86,7 @@ pub fn render_wavefront(
         n += batch;
         if let Some((b, tol)) = s.adaptive
             && n.is_multiple_of(b)
-            && n < spp
+            && n < end
         {
             active.retain(|&p| !acc.pixels[p as usize].converged(tol));
         }
