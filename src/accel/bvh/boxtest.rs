@@ -8,7 +8,9 @@
 //! would give NaN. Near and far planes are picked per axis by the sign of the direction, so
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
+use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
+use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
 
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
@@ -42,10 +44,19 @@ impl BoxRay {
     }
 }
 
-/// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
-/// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
+/// The per-instruction-set kernels of the traversal.
 pub trait BoxTest: Copy {
+    /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
+    /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
+
+    /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in
+    /// `[tmin, tmax]`: a cleared bit is a certain miss. The reference keeps every lane.
+    #[inline(always)]
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+        let _ = (blk, sr, tmin, tmax);
+        lanes
+    }
 }
 
 /// The plain reference path.

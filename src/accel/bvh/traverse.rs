@@ -2,6 +2,7 @@
 //! the scalar and SIMD paths share every other line (and therefore every decision).
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest};
+use super::leaf::LANES;
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
 use crate::accel::{TraceCounters, sphere};
@@ -85,7 +86,7 @@ pub fn closest_hit_with<B: BoxTest>(
                 continue;
             }
         } else {
-            leaf_closest(bvh, cur, &sr, ray, &mut best, c);
+            leaf_closest(bvh, isa, cur, &sr, ray, &mut best, c);
         }
         // Pop the nearest pending child that can still hold something closer.
         loop {
@@ -101,11 +102,32 @@ pub fn closest_hit_with<B: BoxTest>(
     }
 }
 
+/// Lanes of leaf `r` that need the scalar test: the SIMD kernels drop certain misses.
 #[inline(always)]
-fn leaf_closest(bvh: &Bvh, r: u32, sr: &ShearedRay, ray: &Ray, best: &mut Best, c: &mut TraceCounters) {
+fn leaf_candidates<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, tmin: f32, tmax: f32) -> (usize, u32) {
     let (first, count) = leaf_range(r);
-    c.prim_tests += count as u64;
-    for (p, &id) in bvh.prims[first..first + count].iter().zip(&bvh.ids[first..first + count]) {
+    let block = first / LANES;
+    let all = (1u32 << count) - 1;
+    let tri = bvh.tri_lanes[block] as u32;
+    (first, isa.tri_filter(&bvh.blocks[block], sr, tmin, tmax, tri) | (all & !tri))
+}
+
+#[inline(always)]
+fn leaf_closest<B: BoxTest>(
+    bvh: &Bvh,
+    isa: B,
+    r: u32,
+    sr: &ShearedRay,
+    ray: &Ray,
+    best: &mut Best,
+    c: &mut TraceCounters,
+) {
+    c.prim_tests += leaf_range(r).1 as u64;
+    let (first, mut cand) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
+    while cand != 0 {
+        let j = first + cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        let (p, id) = (&bvh.prims[j], bvh.ids[j]);
         let hit = if id < bvh.tri_count {
             intersect_sheared(sr, ray.tmin, best.t, p[0], p[1], p[2])
         } else {
@@ -159,20 +181,21 @@ pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) 
                 sp += 1;
             }
         } else {
-            let (first, count) = leaf_range(cur);
-            for (j, (p, &id)) in bvh.prims[first..first + count].iter().zip(&bvh.ids[first..first + count]).enumerate()
-            {
+            c.prim_tests += leaf_range(cur).1 as u64;
+            let (first, mut cand) = leaf_candidates(bvh, isa, cur, &sr, ray.tmin, ray.tmax);
+            while cand != 0 {
+                let j = first + cand.trailing_zeros() as usize;
+                cand &= cand - 1;
+                let (p, id) = (&bvh.prims[j], bvh.ids[j]);
                 let hit = if id < bvh.tri_count {
                     intersect_sheared(&sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
                 } else {
                     sphere_hit(ray, ray.tmax, p).is_some()
                 };
                 if hit {
-                    c.prim_tests += j as u64 + 1;
                     return true;
                 }
             }
-            c.prim_tests += count as u64;
         }
     }
     false
