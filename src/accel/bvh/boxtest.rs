@@ -16,31 +16,34 @@ use crate::ray::Ray;
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
 
-/// Per-ray values for the box test.
+/// Per-ray values for the box test. The plane indices are private so they stay below 6
+/// (the SIMD kernels index node planes with them unchecked).
 #[derive(Clone, Copy, Debug)]
 pub struct BoxRay {
-    pub org: [f32; 3],
-    pub inv: [f32; 3],
+    pub(super) org: [f32; 3],
+    pub(super) inv: [f32; 3],
     /// Index into `Node8::b` of the near / far plane per axis.
-    pub near: [usize; 3],
-    pub far: [usize; 3],
-    pub tmin: f32,
+    pub(super) near: [usize; 3],
+    pub(super) far: [usize; 3],
+    pub(super) tmin: f32,
 }
 
 impl BoxRay {
+    #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let mut inv = [0.0; 3];
-        let mut near = [0; 3];
-        let mut far = [0; 3];
-        for a in 0..3 {
-            let d = ray.dir[a];
+        let d = ray.dir.to_array();
+        let inv = d.map(|d| {
             let i = 1.0 / d;
-            inv[a] = if i.is_finite() { i } else { f32::MAX.copysign(d) };
-            let neg = d.is_sign_negative() as usize;
-            near[a] = 2 * a + neg;
-            far[a] = 2 * a + 1 - neg;
+            if i.is_finite() { i } else { f32::MAX.copysign(d) }
+        });
+        let neg = d.map(|d| d.is_sign_negative() as usize);
+        BoxRay {
+            org: ray.origin.to_array(),
+            inv,
+            near: [neg[0], 2 + neg[1], 4 + neg[2]],
+            far: [1 - neg[0], 3 - neg[1], 5 - neg[2]],
+            tmin: ray.tmin,
         }
-        BoxRay { org: ray.origin.to_array(), inv, near, far, tmin: ray.tmin }
     }
 }
 

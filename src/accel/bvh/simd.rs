@@ -40,13 +40,13 @@ impl BoxTest for Sse {
     #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected; loads/stores are unaligned ones on
-        // in-bounds arrays of 8 f32 at offsets 0 and 4.
+        // in-bounds arrays of 8 f32 at offsets 0 and 4 (`BoxRay` plane indices are < 6).
         unsafe {
             let mut mask = 0u32;
             for half in 0..2 {
                 let o = half * 4;
                 let lane = |plane: usize, axis: usize| {
-                    let p = _mm_loadu_ps(node.b[plane].as_ptr().add(o));
+                    let p = _mm_loadu_ps(node.b.as_ptr().add(plane).cast::<f32>().add(o));
                     _mm_mul_ps(_mm_sub_ps(p, _mm_set1_ps(r.org[axis])), _mm_set1_ps(r.inv[axis]))
                 };
                 let t0 = lane(r.near[0], 0);
@@ -79,10 +79,10 @@ impl BoxTest for Avx2 {
     #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; loads/stores are unaligned
-        // ones on in-bounds arrays of exactly 8 f32.
+        // ones on in-bounds arrays of exactly 8 f32 (`BoxRay` plane indices are < 6).
         unsafe {
             let lane = |plane: usize, axis: usize| {
-                let p = _mm256_loadu_ps(node.b[plane].as_ptr());
+                let p = _mm256_loadu_ps(node.b.as_ptr().add(plane).cast::<f32>());
                 _mm256_mul_ps(_mm256_sub_ps(p, _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
             };
             let t0 = lane(r.near[0], 0);

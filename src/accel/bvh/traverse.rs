@@ -48,19 +48,21 @@ pub fn closest_hit_with<B: BoxTest>(
     stack: &mut [Entry],
 ) -> Option<Hit> {
     c.rays += 1;
-    let sr = ShearedRay::new(ray)?;
-    if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
         return None;
     }
+    // The shear is set up at the first leaf: many rays never reach one.
+    let mut sr = None;
     let br = BoxRay::new(ray);
     let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
     let mut kids = [Entry::default(); WIDTH];
+    let mut visited = 0u64;
     loop {
         if cur & LEAF_BIT == 0 {
-            c.nodes += 1;
+            visited += 1;
             let node = &bvh.nodes[cur as usize];
             let mut mask = isa.test(node, &br, best.t, &mut tnear);
             let mut k = 0;
@@ -86,11 +88,12 @@ pub fn closest_hit_with<B: BoxTest>(
                 continue;
             }
         } else {
-            leaf_closest(bvh, isa, cur, &sr, ray, &mut best, c);
+            leaf_closest(bvh, isa, cur, sr.get_or_insert_with(|| ShearedRay::of(ray)), ray, &mut best, c);
         }
         // Pop the nearest pending child that can still hold something closer.
         loop {
             if sp == 0 {
+                c.nodes += visited;
                 return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
             }
             sp -= 1;
@@ -151,10 +154,10 @@ fn sphere_hit(ray: &Ray, tmax: f32, p: &[glam::Vec3; 3]) -> Option<(f32, f32, f3
 #[inline(always)]
 pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
     c.rays += 1;
-    let Some(sr) = ShearedRay::new(ray) else { return false };
-    if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
         return false;
     }
+    let mut sr = None;
     let br = BoxRay::new(ray);
     let mut fixed = [0u32; FIXED_STACK];
     let mut heap;
@@ -182,13 +185,14 @@ pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) 
             }
         } else {
             c.prim_tests += leaf_range(cur).1 as u64;
-            let (first, mut cand) = leaf_candidates(bvh, isa, cur, &sr, ray.tmin, ray.tmax);
+            let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
+            let (first, mut cand) = leaf_candidates(bvh, isa, cur, sr, ray.tmin, ray.tmax);
             while cand != 0 {
                 let j = first + cand.trailing_zeros() as usize;
                 cand &= cand - 1;
                 let (p, id) = (&bvh.prims[j], bvh.ids[j]);
                 let hit = if id < bvh.tri_count {
-                    intersect_sheared(&sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
+                    intersect_sheared(sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
                 } else {
                     sphere_hit(ray, ray.tmax, p).is_some()
                 };
