@@ -58,33 +58,39 @@ pub fn closest_hit_with<B: BoxTest>(
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
-    let mut kids = [Entry::default(); WIDTH];
     let mut visited = 0u64;
     loop {
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
             let mut mask = isa.test(node, &br, best.t, &mut tnear);
-            let mut k = 0;
-            while mask != 0 {
+            if mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                // Insertion by entry distance: kids[0] is the nearest.
-                let e = Entry { node: node.child[i], t: tnear[i] };
-                let mut j = k;
-                while j > 0 && kids[j - 1].t > e.t {
-                    kids[j] = kids[j - 1];
-                    j -= 1;
+                if mask == 0 {
+                    // One child hit (the common case): no ordering, no stack traffic.
+                    cur = node.child[i];
+                    continue;
                 }
-                kids[j] = e;
-                k += 1;
-            }
-            if k > 0 {
-                for e in kids[1..k].iter().rev() {
-                    stack[sp] = *e;
+                // Several: push them all, kept sorted by entry distance with the nearest on
+                // top (insertion; most nodes have two or three hit children), then pop it.
+                let base = sp;
+                stack[sp] = Entry { node: node.child[i], t: tnear[i] };
+                sp += 1;
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let e = Entry { node: node.child[i], t: tnear[i] };
+                    let mut j = sp;
+                    while j > base && stack[j - 1].t < e.t {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j] = e;
                     sp += 1;
                 }
-                cur = kids[0].node;
+                sp -= 1;
+                cur = stack[sp].node;
                 continue;
             }
         } else {
