@@ -11,11 +11,14 @@ use glam::Vec3;
 /// Triangles per block (one SSE register per coordinate).
 pub const LANES: usize = 4;
 
-/// Four triangles: `c[corner][axis][lane]`.
+/// Four triangles: `c[corner][axis][lane]`, and the lanes that hold triangles (the others
+/// are spheres or padding), in what would otherwise be alignment padding (192 bytes, three
+/// cache lines).
 #[derive(Clone, Copy, Debug, Default)]
 #[repr(C, align(64))]
 pub struct Tri4 {
     pub c: [[[f32; LANES]; 3]; 3],
+    pub tri_lanes: u32,
 }
 
 /// Leaf-ordered primitives, each leaf padded to a whole block.
@@ -23,8 +26,6 @@ pub struct Leaves {
     pub prims: Vec<[Vec3; 3]>,
     pub ids: Vec<u32>,
     pub blocks: Vec<Tri4>,
-    /// Per block: the lanes that hold triangles (the others are spheres or padding).
-    pub tri_lanes: Vec<u8>,
 }
 
 /// Moves every leaf of `nodes` to a block boundary (rewriting the leaf references) and
@@ -34,7 +35,6 @@ pub fn pad_leaves(nodes: &mut [Node8], prims: &[[Vec3; 3]], ids: &[u32], tri_cou
         prims: Vec::with_capacity(prims.len() * 2),
         ids: Vec::with_capacity(prims.len() * 2),
         blocks: Vec::with_capacity(prims.len() / 2),
-        tri_lanes: Vec::with_capacity(prims.len() / 2),
     };
     for node in nodes.iter_mut() {
         for child in node.child.iter_mut() {
@@ -45,7 +45,7 @@ pub fn pad_leaves(nodes: &mut [Node8], prims: &[[Vec3; 3]], ids: &[u32], tri_cou
             let start = out.prims.len();
             assert!(start + LANES < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} padded primitive slots");
             let mut block = Tri4::default();
-            let mut lanes = 0u8;
+            let mut lanes = 0u32;
             for lane in 0..count {
                 let (p, id) = (prims[first + lane], ids[first + lane]);
                 if id < tri_count {
@@ -63,8 +63,8 @@ pub fn pad_leaves(nodes: &mut [Node8], prims: &[[Vec3; 3]], ids: &[u32], tri_cou
                 out.prims.push([Vec3::ZERO; 3]);
                 out.ids.push(u32::MAX);
             }
+            block.tri_lanes = lanes;
             out.blocks.push(block);
-            out.tri_lanes.push(lanes);
             *child = leaf_ref(start as u32, count as u32);
         }
     }

@@ -86,8 +86,6 @@ pub struct Bvh {
     ids: Vec<u32>,
     /// The triangles of leaf `first / LANES`, lane by lane, for the SIMD filter.
     blocks: Vec<leaf::Tri4>,
-    /// Per block: the lanes that hold triangles.
-    tri_lanes: Vec<u8>,
     tri_count: u32,
     stack_need: usize,
     isa: Isa,
@@ -141,7 +139,6 @@ impl Bvh {
             prims: leaves.prims,
             ids: leaves.ids,
             blocks: leaves.blocks,
-            tri_lanes: leaves.tri_lanes,
             tri_count: tri_count as u32,
             stack_need: WIDTH_STACK * (depth + 1),
             isa: Isa::from_env().effective(),

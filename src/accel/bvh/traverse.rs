@@ -117,8 +117,8 @@ fn leaf_candidates<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, tmin:
     let (first, count) = leaf_range(r);
     let block = first / LANES;
     let all = (1u32 << count) - 1;
-    let tri = bvh.tri_lanes[block] as u32;
-    (first, isa.tri_filter(&bvh.blocks[block], sr, tmin, tmax, tri) | (all & !tri))
+    let blk = &bvh.blocks[block];
+    (first, isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes))
 }
 
 #[inline(always)]
