@@ -26,11 +26,21 @@ impl ShearedRay {
     /// None for a direction that is zero or not finite (such a ray hits nothing).
     #[inline]
     pub fn new(ray: &Ray) -> Option<Self> {
-        let d = ray.dir;
-        if !d.is_finite() || !ray.origin.is_finite() {
-            return None;
-        }
-        let a = d.abs();
+        Self::traceable(ray).then(|| Self::of(ray))
+    }
+
+    /// Whether a ray can hit anything: finite origin and a finite, non-zero direction.
+    #[inline]
+    pub fn traceable(ray: &Ray) -> bool {
+        ray.dir.is_finite() && ray.origin.is_finite() && ray.dir != Vec3::ZERO
+    }
+
+    /// The shear of a [`traceable`](Self::traceable) ray (callers that test no triangle
+    /// never pay for it).
+    #[inline]
+    pub fn of(ray: &Ray) -> Self {
+        let d = ray.dir.to_array();
+        let a = ray.dir.abs();
         let kz = if a.x >= a.y && a.x >= a.z {
             0
         } else if a.y >= a.z {
@@ -38,15 +48,12 @@ impl ShearedRay {
         } else {
             2
         };
-        if d[kz] == 0.0 {
-            return None;
-        }
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
+        let mut kx = if kz == 2 { 0 } else { kz + 1 };
+        let mut ky = if kx == 2 { 0 } else { kx + 1 };
         if d[kz] < 0.0 {
             std::mem::swap(&mut kx, &mut ky);
         }
-        Some(ShearedRay { org: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] })
+        ShearedRay { org: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] }
     }
 }
 

@@ -8,44 +8,58 @@
 //! would give NaN. Near and far planes are picked per axis by the sign of the direction, so
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
+use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
+use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
 
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
 
-/// Per-ray values for the box test.
+/// Per-ray values for the box test. The plane indices are private so they stay below 6
+/// (the SIMD kernels index node planes with them unchecked).
 #[derive(Clone, Copy, Debug)]
 pub struct BoxRay {
-    pub org: [f32; 3],
-    pub inv: [f32; 3],
+    pub(super) org: [f32; 3],
+    pub(super) inv: [f32; 3],
     /// Index into `Node8::b` of the near / far plane per axis.
-    pub near: [usize; 3],
-    pub far: [usize; 3],
-    pub tmin: f32,
+    pub(super) near: [usize; 3],
+    pub(super) far: [usize; 3],
+    pub(super) tmin: f32,
 }
 
 impl BoxRay {
+    #[inline]
     pub fn new(ray: &Ray) -> Self {
-        let mut inv = [0.0; 3];
-        let mut near = [0; 3];
-        let mut far = [0; 3];
-        for a in 0..3 {
-            let d = ray.dir[a];
+        let d = ray.dir.to_array();
+        let inv = d.map(|d| {
             let i = 1.0 / d;
-            inv[a] = if i.is_finite() { i } else { f32::MAX.copysign(d) };
-            let neg = d.is_sign_negative() as usize;
-            near[a] = 2 * a + neg;
-            far[a] = 2 * a + 1 - neg;
+            if i.is_finite() { i } else { f32::MAX.copysign(d) }
+        });
+        let neg = d.map(|d| d.is_sign_negative() as usize);
+        BoxRay {
+            org: ray.origin.to_array(),
+            inv,
+            near: [neg[0], 2 + neg[1], 4 + neg[2]],
+            far: [1 - neg[0], 3 - neg[1], 5 - neg[2]],
+            tmin: ray.tmin,
         }
-        BoxRay { org: ray.origin.to_array(), inv, near, far, tmin: ray.tmin }
     }
 }
 
-/// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
-/// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
+/// The per-instruction-set kernels of the traversal.
 pub trait BoxTest: Copy {
+    /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
+    /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
+
+    /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in
+    /// `[tmin, tmax]`: a cleared bit is a certain miss. The reference keeps every lane.
+    #[inline(always)]
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+        let _ = (blk, sr, tmin, tmax);
+        lanes
+    }
 }
 
 /// The plain reference path.

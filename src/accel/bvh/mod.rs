@@ -3,6 +3,7 @@
 //! run time ([`Isa`]); the triangle test is the watertight one in every path.
 mod boxtest;
 mod build;
+mod leaf;
 mod simd;
 mod traverse;
 mod wide;
@@ -78,10 +79,13 @@ impl Isa {
 /// An 8-wide BVH over the triangles and spheres of a scene.
 pub struct Bvh {
     nodes: Vec<Node8>,
-    /// Leaf-ordered primitive data: triangle corners, or (centre, (radius, 0, 0), 0).
+    /// Leaf-ordered primitive data: triangle corners, or (centre, (radius, 0, 0), 0); every
+    /// leaf starts at a multiple of [`leaf::LANES`] (padding slots are never read).
     prims: Vec<[Vec3; 3]>,
     /// Scene primitive id of each leaf slot (triangles first, then spheres).
     ids: Vec<u32>,
+    /// The triangles of leaf `first / LANES`, lane by lane, for the SIMD filter.
+    blocks: Vec<leaf::Tri4>,
     tri_count: u32,
     stack_need: usize,
     isa: Isa,
@@ -127,11 +131,14 @@ impl Bvh {
                 .collect();
             (w.nodes, w.depth, w.sah_cost, ids, prims)
         };
+        let mut nodes = nodes;
+        let leaves = leaf::pad_leaves(&mut nodes, &prims, &ids, tri_count as u32);
         let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), nodes: nodes.len(), depth, sah_cost };
         Bvh {
             nodes,
-            prims,
-            ids,
+            prims: leaves.prims,
+            ids: leaves.ids,
+            blocks: leaves.blocks,
             tri_count: tri_count as u32,
             stack_need: WIDTH_STACK * (depth + 1),
             isa: Isa::from_env().effective(),

@@ -1,7 +1,9 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a token whose constructor checked the CPU at run time.
 use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE};
+use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
+use crate::accel::triangle::ShearedRay;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
@@ -38,13 +40,13 @@ impl BoxTest for Sse {
     #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected; loads/stores are unaligned ones on
-        // in-bounds arrays of 8 f32 at offsets 0 and 4.
+        // in-bounds arrays of 8 f32 at offsets 0 and 4 (`BoxRay` plane indices are < 6).
         unsafe {
             let mut mask = 0u32;
             for half in 0..2 {
                 let o = half * 4;
                 let lane = |plane: usize, axis: usize| {
-                    let p = _mm_loadu_ps(node.b[plane].as_ptr().add(o));
+                    let p = _mm_loadu_ps(node.b.as_ptr().add(plane).cast::<f32>().add(o));
                     _mm_mul_ps(_mm_sub_ps(p, _mm_set1_ps(r.org[axis])), _mm_set1_ps(r.inv[axis]))
                 };
                 let t0 = lane(r.near[0], 0);
@@ -64,6 +66,12 @@ impl BoxTest for Sse {
             mask
         }
     }
+
+    #[inline(always)]
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+        // SAFETY: `Sse` exists only if SSE4.1 was detected.
+        unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
+    }
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -71,10 +79,10 @@ impl BoxTest for Avx2 {
     #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; loads/stores are unaligned
-        // ones on in-bounds arrays of exactly 8 f32.
+        // ones on in-bounds arrays of exactly 8 f32 (`BoxRay` plane indices are < 6).
         unsafe {
             let lane = |plane: usize, axis: usize| {
-                let p = _mm256_loadu_ps(node.b[plane].as_ptr());
+                let p = _mm256_loadu_ps(node.b.as_ptr().add(plane).cast::<f32>());
                 _mm256_mul_ps(_mm256_sub_ps(p, _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
             };
             let t0 = lane(r.near[0], 0);
@@ -91,6 +99,68 @@ impl BoxTest for Avx2 {
             _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
             _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
         }
+    }
+
+    #[inline(always)]
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+        // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
+        unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
+    }
+}
+
+/// The watertight test of `crate::accel::triangle::intersect_sheared` up to its range check,
+/// on four triangles at once with the same operations in the same order (separate multiply
+/// and add, never fused), so a lane it rejects is one the scalar test rejects too. Lanes with
+/// an edge function of exactly zero are kept: only the scalar f64 recomputation settles them.
+///
+/// # Safety
+/// The CPU must have SSE4.1.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 {
+    // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
+    // each lane array is 16 bytes at a multiple of 16).
+    unsafe {
+        let (kx, ky, kz) = (sr.kx, sr.ky, sr.kz);
+        let org = sr.org.to_array();
+        let (ox, oy, oz) = (_mm_set1_ps(org[kx]), _mm_set1_ps(org[ky]), _mm_set1_ps(org[kz]));
+        let (sx, sy, sz) = (_mm_set1_ps(sr.sx), _mm_set1_ps(sr.sy), _mm_set1_ps(sr.sz));
+        // Sheared corner: (x, y, z) = (p[kx] - o[kx] - sx * az, p[ky] - o[ky] - sy * az, p[kz] - o[kz]).
+        let corner = |c: usize| {
+            let p = &blk.c[c];
+            let z = _mm_sub_ps(_mm_load_ps(p[kz].as_ptr()), oz);
+            let x = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[kx].as_ptr()), ox), _mm_mul_ps(sx, z));
+            let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[ky].as_ptr()), oy), _mm_mul_ps(sy, z));
+            (x, y, z)
+        };
+        let (ax, ay, az) = corner(0);
+        let (bx, by, bz) = corner(1);
+        let (cx, cy, cz) = corner(2);
+        let u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+        let v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+        let w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+        let zero = _mm_setzero_ps();
+        let on_edge = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)), _mm_cmpeq_ps(w, zero));
+        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
+        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
+        let det = _mm_add_ps(_mm_add_ps(u, v), w);
+        let sign = _mm_set1_ps(-0.0);
+        let det_abs = _mm_andnot_ps(sign, det);
+        // det != 0 and finite (NaN fails the ordered compare).
+        let det_ok = _mm_and_ps(_mm_cmpneq_ps(det, zero), _mm_cmplt_ps(det_abs, _mm_set1_ps(f32::INFINITY)));
+        let tt = _mm_add_ps(
+            _mm_add_ps(_mm_mul_ps(u, _mm_mul_ps(sz, az)), _mm_mul_ps(v, _mm_mul_ps(sz, bz))),
+            _mm_mul_ps(w, _mm_mul_ps(sz, cz)),
+        );
+        // (tt, det) with the sign of det folded in; det is non-zero and not NaN where it matters.
+        let tt_s = _mm_xor_ps(tt, _mm_and_ps(det, sign));
+        let out_of_range = _mm_or_ps(
+            _mm_cmplt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmin), det_abs)),
+            _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmax), det_abs)),
+        );
+        let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
+        let keep = _mm_or_ps(on_edge, accept);
+        _mm_movemask_ps(keep) as u32
     }
 }
 

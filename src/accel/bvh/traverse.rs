@@ -2,6 +2,7 @@
 //! the scalar and SIMD paths share every other line (and therefore every decision).
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest};
+use super::leaf::LANES;
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
 use crate::accel::{TraceCounters, sphere};
@@ -47,49 +48,58 @@ pub fn closest_hit_with<B: BoxTest>(
     stack: &mut [Entry],
 ) -> Option<Hit> {
     c.rays += 1;
-    let sr = ShearedRay::new(ray)?;
-    if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
         return None;
     }
+    // The shear is set up at the first leaf: many rays never reach one.
+    let mut sr = None;
     let br = BoxRay::new(ray);
     let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
-    let mut kids = [Entry::default(); WIDTH];
+    let mut visited = 0u64;
     loop {
         if cur & LEAF_BIT == 0 {
-            c.nodes += 1;
+            visited += 1;
             let node = &bvh.nodes[cur as usize];
             let mut mask = isa.test(node, &br, best.t, &mut tnear);
-            let mut k = 0;
-            while mask != 0 {
+            if mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                // Insertion by entry distance: kids[0] is the nearest.
-                let e = Entry { node: node.child[i], t: tnear[i] };
-                let mut j = k;
-                while j > 0 && kids[j - 1].t > e.t {
-                    kids[j] = kids[j - 1];
-                    j -= 1;
+                if mask == 0 {
+                    // One child hit (the common case): no ordering, no stack traffic.
+                    cur = node.child[i];
+                    continue;
                 }
-                kids[j] = e;
-                k += 1;
-            }
-            if k > 0 {
-                for e in kids[1..k].iter().rev() {
-                    stack[sp] = *e;
+                // Several: push them all, kept sorted by entry distance with the nearest on
+                // top (insertion; most nodes have two or three hit children), then pop it.
+                let base = sp;
+                stack[sp] = Entry { node: node.child[i], t: tnear[i] };
+                sp += 1;
+                while mask != 0 {
+                    let i = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let e = Entry { node: node.child[i], t: tnear[i] };
+                    let mut j = sp;
+                    while j > base && stack[j - 1].t < e.t {
+                        stack[j] = stack[j - 1];
+                        j -= 1;
+                    }
+                    stack[j] = e;
                     sp += 1;
                 }
-                cur = kids[0].node;
+                sp -= 1;
+                cur = stack[sp].node;
                 continue;
             }
         } else {
-            leaf_closest(bvh, cur, &sr, ray, &mut best, c);
+            leaf_closest(bvh, isa, cur, sr.get_or_insert_with(|| ShearedRay::of(ray)), ray, &mut best, c);
         }
         // Pop the nearest pending child that can still hold something closer.
         loop {
             if sp == 0 {
+                c.nodes += visited;
                 return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
             }
             sp -= 1;
@@ -101,11 +111,32 @@ pub fn closest_hit_with<B: BoxTest>(
     }
 }
 
+/// Lanes of leaf `r` that need the scalar test: the SIMD kernels drop certain misses.
 #[inline(always)]
-fn leaf_closest(bvh: &Bvh, r: u32, sr: &ShearedRay, ray: &Ray, best: &mut Best, c: &mut TraceCounters) {
+fn leaf_candidates<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, tmin: f32, tmax: f32) -> (usize, u32) {
     let (first, count) = leaf_range(r);
-    c.prim_tests += count as u64;
-    for (p, &id) in bvh.prims[first..first + count].iter().zip(&bvh.ids[first..first + count]) {
+    let block = first / LANES;
+    let all = (1u32 << count) - 1;
+    let blk = &bvh.blocks[block];
+    (first, isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes))
+}
+
+#[inline(always)]
+fn leaf_closest<B: BoxTest>(
+    bvh: &Bvh,
+    isa: B,
+    r: u32,
+    sr: &ShearedRay,
+    ray: &Ray,
+    best: &mut Best,
+    c: &mut TraceCounters,
+) {
+    c.prim_tests += leaf_range(r).1 as u64;
+    let (first, mut cand) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
+    while cand != 0 {
+        let j = first + cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        let (p, id) = (&bvh.prims[j], bvh.ids[j]);
         let hit = if id < bvh.tri_count {
             intersect_sheared(sr, ray.tmin, best.t, p[0], p[1], p[2])
         } else {
@@ -129,10 +160,10 @@ fn sphere_hit(ray: &Ray, tmax: f32, p: &[glam::Vec3; 3]) -> Option<(f32, f32, f3
 #[inline(always)]
 pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
     c.rays += 1;
-    let Some(sr) = ShearedRay::new(ray) else { return false };
-    if ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
         return false;
     }
+    let mut sr = None;
     let br = BoxRay::new(ray);
     let mut fixed = [0u32; FIXED_STACK];
     let mut heap;
@@ -159,20 +190,22 @@ pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) 
                 sp += 1;
             }
         } else {
-            let (first, count) = leaf_range(cur);
-            for (j, (p, &id)) in bvh.prims[first..first + count].iter().zip(&bvh.ids[first..first + count]).enumerate()
-            {
+            c.prim_tests += leaf_range(cur).1 as u64;
+            let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
+            let (first, mut cand) = leaf_candidates(bvh, isa, cur, sr, ray.tmin, ray.tmax);
+            while cand != 0 {
+                let j = first + cand.trailing_zeros() as usize;
+                cand &= cand - 1;
+                let (p, id) = (&bvh.prims[j], bvh.ids[j]);
                 let hit = if id < bvh.tri_count {
-                    intersect_sheared(&sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
+                    intersect_sheared(sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
                 } else {
                     sphere_hit(ray, ray.tmax, p).is_some()
                 };
                 if hit {
-                    c.prim_tests += j as u64 + 1;
                     return true;
                 }
             }
-            c.prim_tests += count as u64;
         }
     }
     false
