@@ -1,0 +1,153 @@
+//! Combining parts into the render a single process would have made.
+
+use super::file::{self, Part, PartMeta};
+use super::spec::Split;
+use super::stats::PartStats;
+use crate::film::Accumulator;
+use anyhow::{Result, bail};
+use serde_json::{Value, json};
+use std::path::Path;
+
+/// A merged render: the sums of every pixel and the parts' headers (in part order).
+pub struct Merged {
+    pub acc: Accumulator,
+    pub parts: Vec<PartMeta>,
+}
+
+/// Reads and merges part files. Refuses, with one line naming the part, a file that is not
+/// a complete part, parts of different scenes, settings, splits or counts, a part given
+/// twice, and a missing part.
+pub fn merge_files(paths: &[impl AsRef<Path>]) -> Result<Merged> {
+    if paths.is_empty() {
+        bail!("merge: no part files given");
+    }
+    let parts = paths.iter().map(|p| file::read(p.as_ref())).collect::<Result<Vec<_>>>()?;
+    merge(parts)
+}
+
+/// Merges parts already read (see [`merge_files`]).
+pub fn merge(parts: Vec<Part>) -> Result<Merged> {
+    let Some(first) = parts.first() else { bail!("merge: no part files given") };
+    let (f, fname) = (first.meta.clone(), first.path.display().to_string());
+    let f = &f;
+    let n = f.part.count as usize;
+    let mut slots: Vec<Option<Part>> = (0..n).map(|_| None).collect();
+    for p in parts {
+        let (m, name) = (&p.meta, p.path.display());
+        let differs = |what: &str, a: &dyn std::fmt::Display, b: &dyn std::fmt::Display| -> anyhow::Error {
+            anyhow::anyhow!("{name}: {what} differs from {fname} ({a} vs {b})")
+        };
+        if m.scene_hash != f.scene_hash {
+            return Err(differs(
+                "scene",
+                &format!("{} {}", m.scene, m.scene_hash),
+                &format!("{} {}", f.scene, f.scene_hash),
+            ));
+        }
+        if m.part.count != f.part.count {
+            return Err(differs("number of parts", &m.part.count, &f.part.count));
+        }
+        if m.part.split != f.part.split {
+            return Err(differs("split", &m.part.split.name(), &f.part.split.name()));
+        }
+        if m.settings != f.settings || (m.width, m.height, m.spp) != (f.width, f.height, f.spp) {
+            return Err(differs("render settings", &m.settings, &f.settings));
+        }
+        let i = m.part.index as usize;
+        if let Some(other) = &slots[i] {
+            bail!("{name}: part {} given twice (also {})", m.part.label(), other.path.display());
+        }
+        slots[i] = Some(p);
+    }
+    if let Some(i) = slots.iter().position(|s| s.is_none()) {
+        bail!("merge: part {i}/{n} is missing ({} of {n} parts given)", slots.iter().flatten().count());
+    }
+    let parts: Vec<Part> = slots.into_iter().flatten().collect();
+    let mut acc = Accumulator::new(f.width, f.height);
+    for p in &parts {
+        if p.meta.part.split == Split::Tiles {
+            let h = p.acc.height;
+            for (y, row) in p.acc.pixels.chunks(p.acc.width).enumerate() {
+                let owned = p.meta.part.owns_row(y, h);
+                if !owned && row.iter().any(|px| px.taken != 0) {
+                    bail!("{}: has samples in row {y}, which belongs to another part", p.path.display());
+                }
+            }
+        }
+        // Part order, so the summation order (and the result) never depends on argument order.
+        // For tiles every pixel has one non-zero term and 0 + x == x exactly.
+        for (a, b) in acc.pixels.iter_mut().zip(&p.acc.pixels) {
+            a.merge(b);
+        }
+    }
+    Ok(Merged { acc, parts: parts.into_iter().map(|p| p.meta).collect() })
+}
+
+impl Merged {
+    /// Statistics of the whole render: rays and time per stage summed over the parts,
+    /// `render_s` and `wall_s` of the slowest part (the wall time when parts run at once).
+    pub fn stats_json(&self) -> Value {
+        let m = &self.parts[0];
+        let mut total = PartStats::default();
+        let (mut slowest_render, mut slowest_wall, mut build) = (0.0f64, 0.0f64, 0.0f64);
+        for p in &self.parts {
+            let s = &p.stats;
+            total.camera_rays += s.camera_rays;
+            total.extension_rays += s.extension_rays;
+            total.shadow_rays += s.shadow_rays;
+            total.prim_tests += s.prim_tests;
+            total.nodes += s.nodes;
+            for (a, b) in total.stages.iter_mut().zip(s.stages) {
+                *a += b;
+            }
+            total.render_s += s.render_s;
+            total.wall_s += s.wall_s;
+            slowest_render = slowest_render.max(s.render_s);
+            slowest_wall = slowest_wall.max(s.wall_s);
+            build = build.max(s.build_s);
+        }
+        let taken = self.acc.samples_taken();
+        let pixels = taken.len().max(1) as f64;
+        let rays = total.rays();
+        let traced = (rays).max(1) as f64;
+        let st = total.stages;
+        json!({
+            "scene": m.scene,
+            "scene_hash": m.scene_hash,
+            "width": m.width,
+            "height": m.height,
+            "spp": m.spp,
+            "split": m.part.split.name(),
+            "parts": self.parts.len(),
+            "rays": {
+                "camera": total.camera_rays,
+                "extension": total.extension_rays,
+                "shadow": total.shadow_rays,
+                "total": rays,
+            },
+            "render_s": slowest_render,
+            "wall_s": slowest_wall,
+            "render_s_sum": total.render_s,
+            "wall_s_sum": total.wall_s,
+            "bvh": { "build_s": build },
+            "mrays_per_s": if slowest_render > 0.0 { rays as f64 / slowest_render / 1e6 } else { 0.0 },
+            "intersection_tests_per_ray": total.prim_tests as f64 / traced,
+            "nodes_visited_per_ray": total.nodes as f64 / traced,
+            "stages": { "generate": st[0], "traverse": st[1], "shade": st[2], "shadow": st[3], "compact": st[4] },
+            "samples_per_pixel": {
+                "mean": taken.iter().map(|&t| t as f64).sum::<f64>() / pixels,
+                "min": taken.iter().copied().min().unwrap_or(0),
+                "max": taken.iter().copied().max().unwrap_or(0),
+            },
+            "invalid_samples": self.acc.invalid_samples(),
+            "per_part": self.parts.iter().map(|p| json!({
+                "part": p.part.label(),
+                "host": p.stats.host,
+                "threads": p.stats.threads,
+                "render_s": p.stats.render_s,
+                "wall_s": p.stats.wall_s,
+                "rays": p.stats.rays(),
+            })).collect::<Vec<_>>(),
+        })
+    }
+}
