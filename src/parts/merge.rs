@@ -51,7 +51,8 @@ pub fn merge(parts: Vec<Part>) -> Result<Merged> {
             return Err(differs("split", &m.part.split.name(), &f.part.split.name()));
         }
         if m.settings != f.settings || (m.width, m.height, m.spp) != (f.width, f.height, f.spp) {
-            return Err(differs("render settings", &m.settings, &f.settings));
+            let (a, b) = setting_difference(&m.settings, &f.settings);
+            return Err(differs("render settings", &a, &b));
         }
         let i = m.part.index as usize;
         if let Some(other) = &slots[i] {
@@ -81,6 +82,21 @@ pub fn merge(parts: Vec<Part>) -> Result<Merged> {
         }
     }
     Ok(Merged { acc, parts: parts.into_iter().map(|p| p.meta).collect() })
+}
+
+/// The settings that differ between two settings keys (`Debug` of [`crate::settings::Settings`]),
+/// so the refusal says `seed: 3` vs `seed: 0` rather than two whole structs.
+fn setting_difference(a: &str, b: &str) -> (String, String) {
+    let fields = |s: &str| -> Vec<String> {
+        let inner = s.trim_start_matches("Settings {").trim_end_matches('}');
+        inner.split(", ").map(|f| f.trim().to_string()).collect()
+    };
+    let (fa, fb) = (fields(a), fields(b));
+    if fa.len() != fb.len() {
+        return (a.to_string(), b.to_string());
+    }
+    let (da, db): (Vec<_>, Vec<_>) = fa.into_iter().zip(fb).filter(|(x, y)| x != y).unzip();
+    (da.join(", "), db.join(", "))
 }
 
 impl Merged {
