@@ -150,6 +150,32 @@ pub struct Part {
     pub acc: Accumulator,
 }
 
+/// The part's header alone (cheap: no pixels), so a merge can check every part before it
+/// reads any pixels and then read them one at a time.
+pub fn read_meta(path: &Path) -> Result<PartMeta> {
+    let name = path.display();
+    let file = std::fs::File::open(path).with_context(|| format!("{name}: cannot read"))?;
+    let meta = exr::meta::MetaData::read_from_buffered(std::io::BufReader::new(file), false)
+        .map_err(|e| anyhow!("{name}: not a readable OpenEXR part file ({e})"))?;
+    let header = meta.headers.first().ok_or_else(|| anyhow!("{name}: OpenEXR file without a layer"))?;
+    parse_meta(path, header.own_attributes.other.get(&Text::from(META_ATTRIBUTE)))
+}
+
+fn parse_meta(path: &Path, attribute: Option<&AttributeValue>) -> Result<PartMeta> {
+    let name = path.display();
+    let meta = match attribute {
+        Some(AttributeValue::Text(t)) => t.to_string(),
+        _ => bail!("{name}: not a wavepath part file (no {META_ATTRIBUTE} header attribute)"),
+    };
+    let meta: PartMeta =
+        serde_json::from_str(&meta).map_err(|e| anyhow!("{name}: damaged {META_ATTRIBUTE} header attribute ({e})"))?;
+    if meta.format != FORMAT {
+        bail!("{name}: part file format {} (this wavepath reads format {FORMAT})", meta.format);
+    }
+    PartSpec::new(meta.part.index, meta.part.count, meta.part.split).with_context(|| format!("{name}: bad part"))?;
+    Ok(meta)
+}
+
 /// Reads a part file; anything that is not a complete part of this format is an error
 /// naming the file.
 pub fn read(path: &Path) -> Result<Part> {
@@ -164,20 +190,11 @@ pub fn read(path: &Path) -> Result<Part> {
         .from_buffered(std::io::Cursor::new(&bytes))
         .map_err(|e| anyhow!("{name}: not a readable OpenEXR part file ({e})"))?;
     let layer = &image.layer_data;
-    let meta = match layer.attributes.other.get(&Text::from(META_ATTRIBUTE)) {
-        Some(AttributeValue::Text(t)) => t.to_string(),
-        _ => bail!("{name}: not a wavepath part file (no {META_ATTRIBUTE} header attribute)"),
-    };
-    let meta: PartMeta =
-        serde_json::from_str(&meta).map_err(|e| anyhow!("{name}: damaged {META_ATTRIBUTE} header attribute ({e})"))?;
-    if meta.format != FORMAT {
-        bail!("{name}: part file format {} (this wavepath reads format {FORMAT})", meta.format);
-    }
+    let meta = parse_meta(path, layer.attributes.other.get(&Text::from(META_ATTRIBUTE)))?;
     let (w, h) = (layer.size.x(), layer.size.y());
     if (w, h) != (meta.width, meta.height) {
         bail!("{name}: image is {w}x{h} but the header says {}x{}", meta.width, meta.height);
     }
-    PartSpec::new(meta.part.index, meta.part.count, meta.part.split).with_context(|| format!("{name}: bad part"))?;
     let channel = |cname: &str| -> Result<&[u32]> {
         let c = layer
             .channel_data

@@ -6,7 +6,7 @@ use super::stats::PartStats;
 use crate::film::Accumulator;
 use anyhow::{Result, bail};
 use serde_json::{Value, json};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// A merged render: the sums of every pixel and the parts' headers (in part order).
 pub struct Merged {
@@ -16,24 +16,41 @@ pub struct Merged {
 
 /// Reads and merges part files. Refuses, with one line naming the part, a file that is not
 /// a complete part, parts of different scenes, settings, splits or counts, a part given
-/// twice, and a missing part.
+/// twice, and a missing part. Every header is checked before any pixels are read; then the
+/// parts are read and added one at a time, in part order, so memory stays at two images
+/// and the summation order never depends on the order the files are given in.
 pub fn merge_files(paths: &[impl AsRef<Path>]) -> Result<Merged> {
     if paths.is_empty() {
         bail!("merge: no part files given");
     }
-    let parts = paths.iter().map(|p| file::read(p.as_ref())).collect::<Result<Vec<_>>>()?;
-    merge(parts)
+    let metas = paths
+        .iter()
+        .map(|p| Ok((p.as_ref().to_path_buf(), file::read_meta(p.as_ref())?)))
+        .collect::<Result<Vec<_>>>()?;
+    let order = check(&metas)?;
+    let (w, h) = (metas[0].1.width, metas[0].1.height);
+    let mut acc = Accumulator::new(w, h);
+    let mut parts = Vec::with_capacity(order.len());
+    for k in order {
+        let (path, meta) = &metas[k];
+        let part = file::read(path)?;
+        if &part.meta != meta {
+            bail!("{}: changed while merging", path.display());
+        }
+        add(&mut acc, &part)?;
+        parts.push(part.meta);
+    }
+    Ok(Merged { acc, parts })
 }
 
-/// Merges parts already read (see [`merge_files`]).
-pub fn merge(parts: Vec<Part>) -> Result<Merged> {
-    let Some(first) = parts.first() else { bail!("merge: no part files given") };
-    let (f, fname) = (first.meta.clone(), first.path.display().to_string());
-    let f = &f;
+/// Checks that the parts belong together; returns their positions in part order.
+fn check(parts: &[(PathBuf, PartMeta)]) -> Result<Vec<usize>> {
+    let (fpath, f) = &parts[0];
+    let fname = fpath.display();
     let n = f.part.count as usize;
-    let mut slots: Vec<Option<Part>> = (0..n).map(|_| None).collect();
-    for p in parts {
-        let (m, name) = (&p.meta, p.path.display());
+    let mut slots: Vec<Option<usize>> = vec![None; n];
+    for (k, (path, m)) in parts.iter().enumerate() {
+        let name = path.display();
         let differs = |what: &str, a: &dyn std::fmt::Display, b: &dyn std::fmt::Display| -> anyhow::Error {
             anyhow::anyhow!("{name}: {what} differs from {fname} ({a} vs {b})")
         };
@@ -55,33 +72,32 @@ pub fn merge(parts: Vec<Part>) -> Result<Merged> {
             return Err(differs("render settings", &a, &b));
         }
         let i = m.part.index as usize;
-        if let Some(other) = &slots[i] {
-            bail!("{name}: part {} given twice (also {})", m.part.label(), other.path.display());
+        if let Some(other) = slots[i] {
+            bail!("{name}: part {} given twice (also {})", m.part.label(), parts[other].0.display());
         }
-        slots[i] = Some(p);
+        slots[i] = Some(k);
     }
     if let Some(i) = slots.iter().position(|s| s.is_none()) {
         bail!("merge: part {i}/{n} is missing ({} of {n} parts given)", slots.iter().flatten().count());
     }
-    let parts: Vec<Part> = slots.into_iter().flatten().collect();
-    let mut acc = Accumulator::new(f.width, f.height);
-    for p in &parts {
-        if p.meta.part.split == Split::Tiles {
-            let h = p.acc.height;
-            for (y, row) in p.acc.pixels.chunks(p.acc.width).enumerate() {
-                let owned = p.meta.part.owns_row(y, h);
-                if !owned && row.iter().any(|px| px.taken != 0) {
-                    bail!("{}: has samples in row {y}, which belongs to another part", p.path.display());
-                }
+    Ok(slots.into_iter().flatten().collect())
+}
+
+/// Adds one part's sums. For tiles every pixel gets one non-zero term and 0 + x == x
+/// exactly, so the merge reproduces the single-process sums bit for bit.
+fn add(acc: &mut Accumulator, p: &Part) -> Result<()> {
+    if p.meta.part.split == Split::Tiles {
+        let h = p.acc.height;
+        for (y, row) in p.acc.pixels.chunks(p.acc.width).enumerate() {
+            if !p.meta.part.owns_row(y, h) && row.iter().any(|px| px.taken != 0) {
+                bail!("{}: has samples in row {y}, which belongs to another part", p.path.display());
             }
         }
-        // Part order, so the summation order (and the result) never depends on argument order.
-        // For tiles every pixel has one non-zero term and 0 + x == x exactly.
-        for (a, b) in acc.pixels.iter_mut().zip(&p.acc.pixels) {
-            a.merge(b);
-        }
     }
-    Ok(Merged { acc, parts: parts.into_iter().map(|p| p.meta).collect() })
+    for (a, b) in acc.pixels.iter_mut().zip(&p.acc.pixels) {
+        a.merge(b);
+    }
+    Ok(())
 }
 
 /// The settings that differ between two settings keys (`Debug` of [`crate::settings::Settings`]),

@@ -16,7 +16,7 @@ pub mod spec;
 pub mod stats;
 
 pub use file::{Part, PartMeta};
-pub use merge::{Merged, merge, merge_files};
+pub use merge::{Merged, merge_files};
 pub use render::render_part;
 pub use spec::{PartSpec, Split};
 pub use stats::PartStats;
