@@ -10,6 +10,7 @@ pub mod film;
 pub mod integrator;
 pub mod lights;
 pub mod load;
+pub mod parts;
 pub mod ray;
 pub mod rays;
 pub mod render;

@@ -31,6 +31,24 @@ pub enum Command {
     /// Write or trace ray files (the format of ../shared/peers).
     #[command(subcommand)]
     Rays(RaysCommand),
+    /// Merge part files written by `--part` into the image one process would have rendered.
+    Merge(MergeArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct MergeArgs {
+    /// Part files (.exr written with --part), all N of them, in any order.
+    #[arg(required = true, value_name = "PARTS")]
+    pub parts: Vec<PathBuf>,
+    /// Output image: .png (tone-mapped), .exr, .hdr, .pfm (linear).
+    #[arg(short = 'f', value_name = "FILE", required = true)]
+    pub output: PathBuf,
+    /// PNG transfer curve.
+    #[arg(long, value_enum, default_value_t = Tonemap::Cs184)]
+    pub tonemap: Tonemap,
+    /// Write the merged statistics (JSON) to FILE.
+    #[arg(long, value_name = "FILE")]
+    pub stats: Option<PathBuf>,
 }
 
 #[derive(Args, Debug)]
@@ -123,4 +141,14 @@ pub struct RenderArgs {
     /// Write machine-readable statistics (JSON) to FILE.
     #[arg(long, value_name = "FILE")]
     pub stats: Option<PathBuf>,
+    /// Render only part I of N (0-based) into an .exr part file for `wavepath merge`;
+    /// `auto`: I and N from a Slurm array job or a Kubernetes Indexed Job.
+    #[arg(long, value_name = "I/N|auto")]
+    pub part: Option<String>,
+    /// N for `--part auto` under Kubernetes (else the WAVEPATH_PARTS variable).
+    #[arg(long, value_name = "N")]
+    pub parts: Option<u32>,
+    /// How parts divide the render: bands of rows (exact merge) or sample ranges.
+    #[arg(long, value_enum, default_value_t = crate::parts::Split::Tiles)]
+    pub split: crate::parts::Split,
 }

@@ -3,10 +3,12 @@
 
 mod args;
 mod info;
+mod merge_cmd;
+mod part_cmd;
 mod render_cmd;
 mod settings_from_args;
 
-pub use args::{Cli, Command, RaysCommand, RenderArgs};
+pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs};
 
 use clap::Parser;
 
@@ -31,6 +33,8 @@ pub fn main() -> i32 {
         Some(Command::Info(a)) => info::run(a),
         Some(Command::Rays(RaysCommand::Dump(a))) => crate::rays::dump(a),
         Some(Command::Rays(RaysCommand::Trace(a))) => crate::rays::trace(a),
+        Some(Command::Merge(a)) => merge_cmd::run(a),
+        None if cli.render.part.is_some() => part_cmd::run(&cli.render),
         None => render_cmd::run(&cli.render),
     };
     match result {

@@ -95,7 +95,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
 }
 
 /// `<out>_rate.png` beside the output image.
-fn rate_image_path(out: &Path) -> PathBuf {
+pub fn rate_image_path(out: &Path) -> PathBuf {
     let stem = out.file_stem().and_then(|s| s.to_str()).unwrap_or("wavepath");
     out.with_file_name(format!("{stem}_rate.png"))
 }
@@ -116,7 +116,7 @@ fn progress_bar(s: &Settings) -> Option<indicatif::ProgressBar> {
     Some(bar)
 }
 
-fn check_output_extension(out: &Path) -> Result<()> {
+pub fn check_output_extension(out: &Path) -> Result<()> {
     let ext = out.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
     if !matches!(ext.as_str(), "png" | "exr" | "hdr" | "pfm") {
         bail!("{}: unknown image format; use .png, .exr, .hdr or .pfm", out.display());

@@ -5,7 +5,7 @@ mod normals;
 pub use normals::render_normals;
 
 use crate::accel::Intersector;
-use crate::film::Film;
+use crate::film::{Accumulator, Film};
 use crate::integrator::recursive::render_recursive;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, Settings, Shading};
@@ -47,6 +47,21 @@ pub fn render_with_progress(
         },
     };
     Ok(RenderOutput { film: acc.to_film(), samples: acc.samples_taken(), stats })
+}
+
+/// The per-pixel sums behind the film, for renders that are merged later (`--part`):
+/// light transport only, since normals shading keeps no sums.
+pub fn render_sums(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    settings: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> Result<(Accumulator, RenderStats)> {
+    Ok(match (settings.shading, settings.integrator) {
+        (Shading::Normals, _) => anyhow::bail!("normals shading keeps no per-pixel sums"),
+        (_, IntegratorKind::Wavefront) => render_wavefront(scene, accel, settings, progress),
+        (_, IntegratorKind::Recursive) => render_recursive(scene, accel, settings, progress),
+    })
 }
 
 /// Runs `f` on a rayon pool with `threads` workers (0 = all cores).

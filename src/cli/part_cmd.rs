@@ -1,0 +1,57 @@
+//! `wavepath [FLAGS] SCENE --part I/N|auto -f PART.exr`: renders one part of a split render.
+
+use super::RenderArgs;
+use super::render_cmd::prepare_scene;
+use super::settings_from_args::settings;
+use crate::parts::{PartMeta, PartSpec, PartStats, identity};
+use anyhow::{Result, bail};
+use std::path::PathBuf;
+use std::time::Instant;
+
+pub fn run(a: &RenderArgs) -> Result<()> {
+    let t0 = Instant::now();
+    let s = settings(a)?;
+    let text = a.part.as_deref().unwrap_or("auto");
+    let spec = PartSpec::parse(text, a.parts, a.split, &|k| std::env::var(k).ok())?;
+    spec.check(&s)?;
+    let out: PathBuf = match &a.output {
+        Some(p) if p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),
+        Some(p) => bail!("{}: a part is written as OpenEXR; give -f PART.exr", p.display()),
+        None => bail!("--part needs -f PART.exr (where the part file goes)"),
+    };
+    let scene = prepare_scene(a, &s)?;
+    let scene_hash = identity::scene_hash(&scene);
+    let (acc, mut stats) = crate::render::with_threads(s.threads, || -> Result<_> {
+        let (accel, build) = crate::accel::build(&scene, s.use_bvh);
+        let (acc, mut stats) = crate::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
+        stats.build_s = build.build_s;
+        stats.threads = rayon::current_num_threads();
+        Ok((acc, stats))
+    })??;
+    stats.host = crate::parts::stats::host_name();
+    stats.wall_s = t0.elapsed().as_secs_f64();
+    let meta = PartMeta {
+        format: crate::parts::file::FORMAT,
+        part: spec,
+        scene: scene.name.clone(),
+        scene_hash,
+        settings: identity::settings_key(&s),
+        width: s.width,
+        height: s.height,
+        spp: s.spp,
+        stats: stats.clone(),
+    };
+    crate::parts::file::write(&out, &meta, &acc)?;
+    let _: &PartStats = &stats;
+    eprintln!(
+        "[wavepath] Part {} ({} split) of {}: {} rays in {:.3} s render, {:.3} s wall; wrote {}",
+        spec.label(),
+        spec.split.name(),
+        scene.name,
+        stats.rays(),
+        stats.render_s,
+        stats.wall_s,
+        out.display()
+    );
+    Ok(())
+}

@@ -1,0 +1,52 @@
+//! What must agree between parts before they may be merged: the scene they rendered and
+//! the settings they rendered it with.
+
+use crate::scene::Scene;
+use crate::settings::Settings;
+
+/// FNV-1a, 64 bit: stable across runs, platforms and Rust versions (unlike `DefaultHasher`),
+/// which is all a check that two processes loaded the same scene needs.
+struct Fnv(u64);
+
+impl Fnv {
+    fn new() -> Self {
+        Fnv(0xcbf2_9ce4_8422_2325)
+    }
+    fn bytes(&mut self, b: &[u8]) {
+        for &x in b {
+            self.0 = (self.0 ^ x as u64).wrapping_mul(0x0000_0100_0000_01b3);
+        }
+    }
+    fn tagged(&mut self, tag: &str, b: &[u8]) {
+        self.bytes(tag.as_bytes());
+        self.bytes(&(b.len() as u64).to_le_bytes());
+        self.bytes(b);
+    }
+}
+
+/// Hash of the scene as loaded and prepared (camera file, lens and aspect applied): the mesh
+/// arrays byte for byte, everything else through its `Debug` form (floats print round-trip).
+pub fn scene_hash(scene: &Scene) -> String {
+    let mut h = Fnv::new();
+    let m = &scene.mesh;
+    h.tagged("positions", bytemuck::cast_slice(&m.positions));
+    h.tagged("triangles", bytemuck::cast_slice(&m.triangles));
+    h.tagged("material_ids", bytemuck::cast_slice(&m.material_ids));
+    if let Some(n) = &m.normals {
+        h.tagged("normals", bytemuck::cast_slice(n));
+    }
+    if let Some(uv) = &m.uvs {
+        h.tagged("uvs", bytemuck::cast_slice(uv));
+    }
+    let rest =
+        format!("{:?}|{:?}|{:?}|{:?}|{:?}", scene.spheres, scene.materials, scene.lights, scene.camera, scene.env);
+    h.tagged("rest", rest.as_bytes());
+    format!("{:016x}", h.0)
+}
+
+/// The settings that decide the image, as text: everything except what only decides how
+/// it is computed (threads) or which part is computed (cell, sample range).
+pub fn settings_key(s: &Settings) -> String {
+    let canonical = Settings { threads: 0, cell: None, sample_range: None, ..s.clone() };
+    format!("{canonical:?}")
+}

@@ -1,0 +1,52 @@
+//! A part's statistics, kept in its file, and the statistics of a merged render.
+
+use crate::stats::RenderStats;
+use serde::{Deserialize, Serialize};
+
+/// What one part did and how long it took.
+#[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]
+pub struct PartStats {
+    pub host: String,
+    pub camera_rays: u64,
+    pub extension_rays: u64,
+    pub shadow_rays: u64,
+    pub prim_tests: u64,
+    pub nodes: u64,
+    /// Seconds per stage: generate, traverse, shade, shadow, compact.
+    pub stages: [f64; 5],
+    /// Seconds in the integrator.
+    pub render_s: f64,
+    /// Seconds from the start of the process to the part file being complete (load, BVH
+    /// build, render, encode).
+    pub wall_s: f64,
+    pub build_s: f64,
+    pub threads: usize,
+}
+
+impl PartStats {
+    pub fn add_render(&mut self, st: &RenderStats) {
+        self.camera_rays += st.camera_rays;
+        self.extension_rays += st.extension_rays;
+        self.shadow_rays += st.shadow_rays;
+        self.prim_tests += st.counters.prim_tests;
+        self.nodes += st.counters.nodes;
+        let s = &st.stages;
+        for (a, b) in self.stages.iter_mut().zip([s.generate, s.traverse, s.shade, s.shadow, s.compact]) {
+            *a += b;
+        }
+        self.render_s += st.render_s;
+    }
+
+    pub fn rays(&self) -> u64 {
+        self.camera_rays + self.extension_rays + self.shadow_rays
+    }
+}
+
+/// The host name for the stats (which node ran a part), without spawning a process.
+pub fn host_name() -> String {
+    std::env::var("HOSTNAME")
+        .ok()
+        .or_else(|| std::fs::read_to_string("/proc/sys/kernel/hostname").ok())
+        .map(|h| h.trim().to_string())
+        .unwrap_or_default()
+}

@@ -1,0 +1,299 @@
+//! Split renders: parts merged by `wavepath merge` must give the single-process image
+//! (bit for bit for tiles, up to summation order for sample ranges), and every way of
+//! handing merge the wrong parts must be refused with one line naming the part.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use wavepath::accel;
+use wavepath::load::default_scene;
+use wavepath::parts::{PartSpec, Split, merge_files, render_part};
+use wavepath::settings::Settings;
+
+fn tempdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("wavepath-parts-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn run(args: &[&str]) -> Output {
+    Command::new(common::wavepath_bin()).args(args).output().unwrap()
+}
+
+fn ok(args: &[&str]) {
+    let o = run(args);
+    assert!(o.status.success(), "wavepath {args:?} failed: {}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// Runs a merge that must fail; returns its one-line message.
+fn refused(args: &[&str]) -> String {
+    let o = run(args);
+    assert!(!o.status.success(), "wavepath {args:?} should have failed");
+    let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
+    assert_eq!(err.lines().count(), 1, "not one line: {err}");
+    err
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Linear pixels of an EXR as f32 bits (independent of wavepath's own reader).
+fn exr_bits(p: &Path) -> Vec<u32> {
+    let img = image::open(p).unwrap().into_rgb32f();
+    img.into_raw().into_iter().map(f32::to_bits).collect()
+}
+
+/// Renders `base` split `n` ways and merges; returns (single, merged) image paths.
+fn split_and_merge(dir: &Path, base: &[&str], n: u32, split: &str) -> (PathBuf, PathBuf) {
+    let single = dir.join("single.exr");
+    let mut a = base.to_vec();
+    a.extend(["-f", s(&single)]);
+    ok(&a);
+    let mut parts = Vec::new();
+    for i in 0..n {
+        let p = dir.join(format!("part-{i}.exr"));
+        let label = format!("{i}/{n}");
+        let mut a = base.to_vec();
+        a.extend(["--split", split, "--part", &label, "-f", s(&p)]);
+        ok(&a);
+        parts.push(p);
+    }
+    let merged = dir.join("merged.exr");
+    let mut a = vec!["merge"];
+    // Reverse order: the merge must not depend on the order parts are given.
+    a.extend(parts.iter().rev().map(|p| s(p)));
+    a.extend(["-f", s(&merged)]);
+    ok(&a);
+    (single, merged)
+}
+
+#[test]
+fn tile_parts_merge_bit_identical_to_one_process() {
+    let dir = tempdir("tiles");
+    let base = ["-s", "4", "-m", "3", "-r", "64", "48", "--seed", "7"];
+    for n in [1, 2, 3, 4, 7] {
+        let (single, merged) = split_and_merge(&dir, &base, n, "tiles");
+        assert_eq!(exr_bits(&single), exr_bits(&merged), "{n} parts");
+    }
+    // Adaptive sampling decides per pixel, so it splits by tiles exactly too.
+    let adaptive = ["-s", "64", "-a", "8", "0.1", "-m", "2", "-r", "40", "30"];
+    let (single, merged) = split_and_merge(&dir, &adaptive, 3, "tiles");
+    assert_eq!(exr_bits(&single), exr_bits(&merged), "adaptive");
+    assert_eq!(
+        std::fs::read(dir.join("single_rate.png")).unwrap(),
+        std::fs::read(dir.join("merged_rate.png")).unwrap()
+    );
+    // And the recursive reference.
+    let rec = ["-s", "2", "-m", "3", "-r", "32", "24", "--integrator", "recursive"];
+    let (single, merged) = split_and_merge(&dir, &rec, 2, "tiles");
+    assert_eq!(exr_bits(&single), exr_bits(&merged), "recursive");
+}
+
+/// For sample ranges the merge adds each pixel's per-part f64 sums, the single process adds
+/// the samples one by one. Radiance is non-negative, so both are within (n-1) u T of the
+/// exact sum T (u = 2^-53, n samples): they differ by at most 2 (n-1) u T, far below half an
+/// f32 ulp, so a merged f32 mean equals the single one or is its neighbour (1 ulp).
+#[test]
+fn sample_parts_merge_within_the_summation_order_bound() {
+    let dir = tempdir("samples");
+    let scene = default_scene();
+    let mut st = Settings { width: 48, height: 36, spp: 24, max_depth: 4, ..Settings::default() };
+    st.shading = wavepath::settings::Shading::Global;
+    let (bvh, _) = accel::build(&scene, true);
+    let (single, _) = wavepath::render::render_sums(&scene, bvh.as_ref(), &st, &|_| {}).unwrap();
+    let n = 5;
+    let mut files = Vec::new();
+    for i in 0..n {
+        let spec = PartSpec::new(i, n, Split::Samples).unwrap();
+        let (acc, stats) = render_part(&scene, bvh.as_ref(), &st, &spec, &|_| {}).unwrap();
+        let meta = wavepath::parts::PartMeta {
+            format: wavepath::parts::file::FORMAT,
+            part: spec,
+            scene: scene.name.clone(),
+            scene_hash: wavepath::parts::identity::scene_hash(&scene),
+            settings: wavepath::parts::identity::settings_key(&st),
+            width: st.width,
+            height: st.height,
+            spp: st.spp,
+            stats,
+        };
+        let p = dir.join(format!("s{i}.exr"));
+        wavepath::parts::file::write(&p, &meta, &acc).unwrap();
+        files.push(p);
+    }
+    let merged = merge_files(&files).unwrap();
+    let bound = 2.0 * (st.spp as f64 - 1.0) * f64::EPSILON / 2.0;
+    let (mut same, mut neighbours) = (0, 0);
+    let (fa, fb) = (single.to_film(), merged.acc.to_film());
+    for (i, (a, b)) in single.pixels.iter().zip(&merged.acc.pixels).enumerate() {
+        assert_eq!((a.taken, a.valid), (b.taken, b.valid), "pixel {i}: sample counts");
+        let pairs = [(a.sum.x, b.sum.x), (a.sum.y, b.sum.y), (a.sum.z, b.sum.z), (a.s1, b.s1), (a.s2, b.s2)];
+        for (x, y) in pairs {
+            assert!((x - y).abs() <= bound * x.abs().max(y.abs()), "pixel {i}: {x} vs {y}");
+        }
+        for (x, y) in fa.pixels[i].to_array().into_iter().zip(fb.pixels[i].to_array()) {
+            let d = (x.to_bits() as i64 - y.to_bits() as i64).abs();
+            assert!(d <= 1, "pixel {i}: {x} vs {y} differ by {d} ulp");
+            if d == 0 { same += 1 } else { neighbours += 1 }
+        }
+    }
+    // Most pixels round to the very same f32; the rest by one step.
+    assert!(same > 10 * neighbours, "{same} identical channels, {neighbours} one ulp apart");
+    // Every sample index was taken exactly once across the parts.
+    assert!(merged.acc.pixels.iter().all(|p| p.taken == st.spp));
+}
+
+#[test]
+fn wrong_parts_are_refused_naming_the_part() {
+    let dir = tempdir("refuse");
+    let d = |n: &str| dir.join(n);
+    let base = ["-s", "3", "-m", "2", "-r", "32", "24"];
+    let part = |extra: &[&str], label: &str, out: &Path| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        a.extend(["--part", label, "-f", s(out)]);
+        ok(&a);
+    };
+    for i in 0..3 {
+        part(&[], &format!("{i}/3"), &d(&format!("p{i}.exr")));
+    }
+    let (p0, p1, p2) = (d("p0.exr"), d("p1.exr"), d("p2.exr"));
+    ok(&["merge", s(&p0), s(&p1), s(&p2), "-f", s(&d("ok.png"))]);
+
+    let e = refused(&["merge", s(&p0), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("part 1/3 is missing"), "{e}");
+    let e = refused(&["merge", s(&p0), s(&p1), s(&p1), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("p1.exr") && e.contains("twice"), "{e}");
+
+    // A copy of a part under another name is still the same part.
+    std::fs::copy(&p1, d("copy.exr")).unwrap();
+    let e = refused(&["merge", s(&p0), s(&p1), s(&d("copy.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("copy.exr") && e.contains("twice"), "{e}");
+
+    // Different settings, different N, different split, different scene.
+    part(&["--seed", "3"], "1/3", &d("seed.exr"));
+    let e = refused(&["merge", s(&p0), s(&d("seed.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("seed.exr") && e.contains("settings"), "{e}");
+    part(&[], "1/4", &d("n4.exr"));
+    let e = refused(&["merge", s(&p0), s(&d("n4.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("n4.exr") && e.contains("number of parts"), "{e}");
+    part(&["--split", "samples"], "1/3", &d("samples.exr"));
+    let e = refused(&["merge", s(&p0), s(&d("samples.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("samples.exr") && e.contains("split"), "{e}");
+    if let Some(cb) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
+        let other = d("other.exr");
+        let mut a = vec![s(&cb)];
+        a.extend(base);
+        a.extend(["--part", "1/3", "-f", s(&other)]);
+        ok(&a);
+        let e = refused(&["merge", s(&p0), s(&d("other.exr")), s(&p2), "-f", s(&d("x.png"))]);
+        assert!(e.contains("other.exr") && e.contains("scene"), "{e}");
+    }
+    // The same scene with another camera (a lens) is a different scene.
+    part(&["-b", "0.05"], "1/3", &d("lens.exr"));
+    let e = refused(&["merge", s(&p0), s(&d("lens.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("lens.exr") && e.contains("scene"), "{e}");
+
+    // Truncated, garbage, empty, and an ordinary EXR that is not a part.
+    let bytes = std::fs::read(&p1).unwrap();
+    for (name, content) in [
+        ("truncated.exr", bytes[..bytes.len() / 2].to_vec()),
+        ("garbage.exr", b"this is not an image".repeat(50)),
+        ("empty.exr", Vec::new()),
+    ] {
+        std::fs::write(d(name), content).unwrap();
+        let e = refused(&["merge", s(&p0), s(&d(name)), s(&p2), "-f", s(&d("x.png"))]);
+        assert!(e.contains(name), "{e}");
+    }
+    let plain = d("plain.exr");
+    let mut a = base.to_vec();
+    a.extend(["-f", s(&plain)]);
+    ok(&a);
+    let e = refused(&["merge", s(&p0), s(&d("plain.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("plain.exr") && e.contains("not a wavepath part"), "{e}");
+    let e = refused(&["merge", s(&p0), s(&d("nonexistent.exr")), s(&p2), "-f", s(&d("x.png"))]);
+    assert!(e.contains("nonexistent.exr"), "{e}");
+    assert!(!d("x.png").exists(), "a refused merge wrote an image");
+}
+
+#[test]
+fn part_flags_are_checked() {
+    let dir = tempdir("flags");
+    let out = dir.join("p.exr");
+    let o = s(&out);
+    for (args, says) in [
+        (vec!["-s", "8", "-a", "4", "0.1", "--split", "samples", "--part", "0/2", "-f", o], "adaptive"),
+        (vec!["-s", "2", "--split", "samples", "--part", "0/4", "-f", o], "at least 4 samples"),
+        (vec!["--part", "2/2", "-f", o], "below the number of parts"),
+        (vec!["--part", "1-2", "-f", o], "I/N"),
+        (vec!["--part", "0/2", "-f", s(&dir.join("p.png"))], "OpenEXR"),
+        (vec!["--part", "0/2", "-p", "0", "0", "4", "4", "-f", o], "-p"),
+    ] {
+        let e = refused(&args);
+        assert!(e.contains(says), "{args:?}: {e}");
+    }
+    // `auto` outside a scheduler has nothing to go on; inside one it reads the environment.
+    let o2 = run(&["--part", "auto", "-f", o]);
+    assert!(!o2.status.success());
+    let env_run = |vars: &[(&str, &str)], out: &Path| {
+        let mut c = Command::new(common::wavepath_bin());
+        c.args(["-s", "2", "-r", "16", "12", "--part", "auto", "-f", s(out)]);
+        for k in [
+            "SLURM_ARRAY_TASK_ID",
+            "SLURM_ARRAY_TASK_MIN",
+            "SLURM_ARRAY_TASK_COUNT",
+            "JOB_COMPLETION_INDEX",
+            "WAVEPATH_PARTS",
+        ] {
+            c.env_remove(k);
+        }
+        c.envs(vars.iter().copied());
+        let r = c.output().unwrap();
+        assert!(r.status.success(), "{vars:?}: {}", String::from_utf8_lossy(&r.stderr));
+    };
+    env_run(&[("SLURM_ARRAY_TASK_ID", "0"), ("SLURM_ARRAY_TASK_COUNT", "2")], &dir.join("a.exr"));
+    env_run(&[("JOB_COMPLETION_INDEX", "1"), ("WAVEPATH_PARTS", "2")], &dir.join("b.exr"));
+    ok(&["merge", s(&dir.join("b.exr")), s(&dir.join("a.exr")), "-f", s(&dir.join("ab.exr"))]);
+    ok(&["-s", "2", "-r", "16", "12", "-f", s(&dir.join("one.exr"))]);
+    assert_eq!(exr_bits(&dir.join("one.exr")), exr_bits(&dir.join("ab.exr")));
+}
+
+/// A part killed while rendering leaves nothing a merge would take; a re-run replaces a
+/// part in one step and leaves no temporary files behind.
+#[test]
+fn killed_parts_leave_no_file_and_reruns_replace_atomically() {
+    let dir = tempdir("kill");
+    let out = dir.join("p0.exr");
+    // Far more work than the test waits for.
+    let mut child = Command::new(common::wavepath_bin())
+        .args(["-s", "100000", "-m", "5", "-r", "320", "240", "--part", "0/2", "-f", s(&out)])
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    child.kill().unwrap();
+    let status = child.wait().unwrap();
+    assert!(!status.success(), "the part finished before it was killed");
+    assert!(!out.exists(), "a killed part left {}", out.display());
+
+    let base = ["-s", "2", "-r", "16", "12"];
+    let part = |extra: &[&str], label: &str, out: &Path| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        a.extend(["--part", label, "-f", s(out)]);
+        ok(&a);
+    };
+    part(&["--seed", "9"], "0/2", &out);
+    part(&[], "1/2", &dir.join("p1.exr"));
+    let e = refused(&["merge", s(&out), s(&dir.join("p1.exr")), "-f", s(&dir.join("x.exr"))]);
+    assert!(e.contains("settings"), "{e}");
+    // Re-running the stale part with the right settings replaces it.
+    part(&[], "0/2", &out);
+    ok(&["merge", s(&out), s(&dir.join("p1.exr")), "-f", s(&dir.join("m.exr"))]);
+    let mut names: Vec<String> =
+        std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    names.sort();
+    assert!(names.iter().all(|n| !n.starts_with('.') && !n.contains("partial")), "left behind: {names:?}");
+}
