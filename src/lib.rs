@@ -17,4 +17,5 @@ pub mod sampling;
 pub mod scene;
 pub mod settings;
 pub mod stats;
+pub mod study;
 pub mod wavefront;

@@ -31,6 +31,8 @@ pub enum Command {
     /// Write or trace ray files (the format of ../shared/peers).
     #[command(subcommand)]
     Rays(RaysCommand),
+    /// What accuracy costs in time: sweep a setting, measure time and error vs a reference.
+    Study(crate::cli::study_cmd::StudyArgs),
 }
 
 #[derive(Args, Debug)]

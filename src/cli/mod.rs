@@ -5,6 +5,7 @@ mod args;
 mod info;
 mod render_cmd;
 mod settings_from_args;
+pub mod study_cmd;
 
 pub use args::{Cli, Command, RaysCommand, RenderArgs};
 
@@ -31,6 +32,7 @@ pub fn main() -> i32 {
         Some(Command::Info(a)) => info::run(a),
         Some(Command::Rays(RaysCommand::Dump(a))) => crate::rays::dump(a),
         Some(Command::Rays(RaysCommand::Trace(a))) => crate::rays::trace(a),
+        Some(Command::Study(a)) => study_cmd::run(a),
         None => render_cmd::run(&cli.render),
     };
     match result {
