@@ -18,6 +18,9 @@ pub struct ErrorStats {
     /// 1.96 sqrt(var / n), from the render's own per-pixel sums: what the render believes its
     /// error is, without a reference.
     pub ci95: f64,
+    /// The RMSE the render predicts from its own samples: sqrt of the mean variance of the
+    /// pixel means (equals the expected RMSE of an unbiased render against the truth).
+    pub predicted_rmse: f64,
     /// The RMSE the reference's own noise alone would add (sqrt of its mean variance of the
     /// mean): errors near this floor are not resolved by the reference.
     pub ref_floor: f64,
@@ -46,7 +49,7 @@ impl Reference {
 /// Compares a render's per-pixel sums with the reference.
 pub fn compare(acc: &Accumulator, reference: &Reference) -> ErrorStats {
     assert_eq!((acc.width, acc.height), (reference.mean.width, reference.mean.height), "image sizes differ");
-    let (mut se, mut rel, mut ci, mut floor, mut spp) = (0.0, 0.0, 0.0, 0.0, 0.0);
+    let (mut se, mut rel, mut ci, mut floor, mut spp, mut var) = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0);
     for ((p, r), rv) in acc.pixels.iter().zip(&reference.mean.pixels).zip(&reference.variance.pixels) {
         let x = p.mean().as_dvec3();
         let r = r.as_dvec3();
@@ -56,6 +59,7 @@ pub fn compare(acc: &Accumulator, reference: &Reference) -> ErrorStats {
         rel += rel_px.x + rel_px.y + rel_px.z;
         let half = p.variance_of_mean().max(DVec3::ZERO);
         ci += 1.96 * (half.x.sqrt() + half.y.sqrt() + half.z.sqrt());
+        var += half.x + half.y + half.z;
         let rv = rv.as_dvec3();
         floor += rv.x + rv.y + rv.z;
         spp += p.taken as f64;
@@ -65,6 +69,7 @@ pub fn compare(acc: &Accumulator, reference: &Reference) -> ErrorStats {
         rmse: (se / n).sqrt(),
         rel_mse: rel / n,
         ci95: ci / n,
+        predicted_rmse: (var / n).sqrt(),
         ref_floor: (floor / n).sqrt(),
         mean_spp: spp / acc.pixels.len().max(1) as f64,
     }
@@ -109,6 +114,7 @@ mod tests {
         assert!((e.rmse - 0.5f64.sqrt()).abs() < 1e-12);
         assert!((e.rel_mse - 0.5 / 1.01).abs() < 1e-12);
         assert!((e.ci95 - 1.96 / 2.0).abs() < 1e-12);
+        assert!((e.predicted_rmse - 0.5f64.sqrt()).abs() < 1e-12);
         assert!((e.ref_floor - 0.02f64.sqrt()).abs() < 1e-7);
         assert_eq!(e.mean_spp, 2.0);
     }

@@ -121,6 +121,9 @@ pub fn run(
     } else {
         format!("reference: rendered in {:.2} s -> {}", reference_info.seconds, reference_info.path.display())
     });
+    // One untimed render first, so thread start-up and cold caches do not land on the
+    // first measured point.
+    let _ = crate::wavefront::render_wavefront(scene, accel, &cfg.base, &|_| {});
     let mut points = Vec::new();
     for (ci, c) in curves.iter().enumerate() {
         let runs: Vec<(Settings, Option<f32>)> = match &c.ladder {

@@ -8,7 +8,7 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 pub const CSV_HEADER: &str = "sweep,curve,spp,light_samples,max_depth,rr,hemisphere,adaptive_tolerance,\
-seconds,rays,mean_spp,rmse,rel_mse,ci95_mean,ref_floor,invalid_samples";
+seconds,rays,mean_spp,rmse,rel_mse,ci95_mean,predicted_rmse,ref_floor,invalid_samples";
 
 /// One line per render.
 pub fn csv(result: &StudyResult) -> String {
@@ -18,7 +18,7 @@ pub fn csv(result: &StudyResult) -> String {
         let s = &p.settings;
         let _ = writeln!(
             out,
-            "{},\"{}\",{},{},{},{},{},{},{:.6},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{}",
+            "{},\"{}\",{},{},{},{},{},{},{:.6},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
             result.sweep.name(),
             result.curves[p.curve].label.replace('"', "'"),
             s.spp,
@@ -33,6 +33,7 @@ pub fn csv(result: &StudyResult) -> String {
             p.error.rmse,
             p.error.rel_mse,
             p.error.ci95,
+            p.error.predicted_rmse,
             p.error.ref_floor,
             p.invalid_samples
         );
