@@ -62,6 +62,8 @@ where
         .map_err(err)?;
     chart
         .configure_mesh()
+        .x_labels(12)
+        .y_labels(16)
         .x_desc("render time (s)")
         .y_desc("RMSE vs reference (linear RGB)")
         .x_label_formatter(&|v| tick(*v))
