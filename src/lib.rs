@@ -18,4 +18,5 @@ pub mod sampling;
 pub mod scene;
 pub mod settings;
 pub mod stats;
+pub mod study;
 pub mod wavefront;

@@ -33,6 +33,8 @@ pub enum Command {
     Rays(RaysCommand),
     /// Merge part files written by `--part` into the image one process would have rendered.
     Merge(MergeArgs),
+    /// What accuracy costs in time: sweep a setting, measure time and error vs a reference.
+    Study(crate::cli::study_cmd::StudyArgs),
 }
 
 #[derive(Args, Debug)]

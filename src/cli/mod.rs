@@ -7,6 +7,7 @@ mod merge_cmd;
 mod part_cmd;
 mod render_cmd;
 mod settings_from_args;
+pub mod study_cmd;
 
 pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs};
 
@@ -34,6 +35,7 @@ pub fn main() -> i32 {
         Some(Command::Rays(RaysCommand::Dump(a))) => crate::rays::dump(a),
         Some(Command::Rays(RaysCommand::Trace(a))) => crate::rays::trace(a),
         Some(Command::Merge(a)) => merge_cmd::run(a),
+        Some(Command::Study(a)) => study_cmd::run(a),
         None if cli.render.part.is_some() => part_cmd::run(&cli.render),
         None => render_cmd::run(&cli.render),
     };

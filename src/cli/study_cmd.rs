@@ -1,0 +1,127 @@
+//! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`crate::study`]).
+
+use crate::load::{CameraMode, LoadOptions, default_scene, load};
+use crate::settings::{Settings, Shading};
+use crate::study::{StudyConfig, SweepKind};
+use anyhow::{Result, bail};
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Args, Debug, Clone)]
+#[command(long_about = "Sweeps one setting and, for each value, renders at samples per pixel \
+    1, 2, 4, ... (up to --max-spp, or until a render takes longer than --time-budget), \
+    measuring wall time, rays traced and the error against a converged reference (RMSE and \
+    relative MSE over linear RGB, and the mean per-pixel 95% confidence half-width). The \
+    reference is rendered once at --ref-spp and cached in --cache, keyed by a hash of the \
+    scene file and the settings. Writes study.csv, error_vs_time.png/.svg (log-log, one curve \
+    per setting), the images at equal time and report.md into --out.\n\n\
+    Sweeps: spp (one curve); light-samples (-l 1..64); sampling (light importance vs uniform \
+    hemisphere); depth (-m 1..16 without roulette, and -m 4, 16 with --rr); roulette (-m 16, \
+    --rr 1.0 down to 0.1); adaptive (-a 64 T for T = 0.2..0.01, against fixed spp).")]
+pub struct StudyArgs {
+    /// Scene file; omitted: the embedded Cornell box.
+    pub scene: Option<PathBuf>,
+    /// The setting to sweep.
+    #[arg(long, value_enum)]
+    pub sweep: SweepKind,
+    /// Resolution of every render (small: a study renders many images).
+    #[arg(short = 'r', num_args = 2, value_names = ["W", "H"], default_values_t = [64, 48])]
+    pub resolution: Vec<i64>,
+    /// Maximum ray depth of the renders (the depth and roulette sweeps vary it).
+    #[arg(short = 'm', value_name = "N", default_value_t = 5)]
+    pub max_depth: i64,
+    /// Samples per area light (the light-samples sweep varies it).
+    #[arg(short = 'l', value_name = "N", default_value_t = 1)]
+    pub light_samples: i64,
+    /// Russian roulette continue probability (the depth and roulette sweeps vary it).
+    #[arg(long = "rr", value_name = "P", default_value_t = 0.65)]
+    pub rr: f64,
+    /// Largest samples per pixel of each ladder (and the adaptive sweep's maximum).
+    #[arg(long, value_name = "N", default_value_t = 1024)]
+    pub max_spp: i64,
+    /// Samples per pixel of the reference.
+    #[arg(long, value_name = "N", default_value_t = 4096)]
+    pub ref_spp: i64,
+    /// A ladder stops after the first render slower than this (seconds).
+    #[arg(long, value_name = "S", default_value_t = 10.0)]
+    pub time_budget: f64,
+    /// Folder of cached references.
+    #[arg(long, value_name = "DIR", default_value = ".wavepath-cache")]
+    pub cache: PathBuf,
+    /// Output folder; default: study-<scene>-<sweep>.
+    #[arg(long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Base seed (the reference uses its own, derived from it).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(short = 't', value_name = "N")]
+    pub threads: Option<i64>,
+    /// COLLADA camera framing.
+    #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
+    pub camera: CameraMode,
+}
+
+fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
+    if v < lo || v > hi {
+        bail!("{name} must be between {lo} and {hi}, got {v}");
+    }
+    Ok(v)
+}
+
+fn config(a: &StudyArgs) -> Result<StudyConfig> {
+    let w = in_range("-r width", a.resolution[0], 1, 4096)? as usize;
+    let h = in_range("-r height", a.resolution[1], 1, 4096)? as usize;
+    let max_depth = in_range("-m", a.max_depth, 1, 64)? as u32;
+    if !(a.rr.is_finite() && a.rr > 0.0 && a.rr <= 1.0) {
+        bail!("--rr must be in (0, 1], got {}", a.rr);
+    }
+    if !(a.time_budget.is_finite() && a.time_budget > 0.0) {
+        bail!("--time-budget must be a positive number of seconds, got {}", a.time_budget);
+    }
+    let base = Settings {
+        width: w,
+        height: h,
+        spp: 1,
+        light_samples: in_range("-l", a.light_samples, 1, 1 << 16)? as u32,
+        max_depth,
+        rr_continue: a.rr as f32,
+        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
+        seed: a.seed,
+        threads: match a.threads {
+            Some(t) => in_range("-t", t, 1, 4096)? as usize,
+            None => 0,
+        },
+        ..Settings::default()
+    };
+    Ok(StudyConfig {
+        sweep: a.sweep,
+        base,
+        max_spp: in_range("--max-spp", a.max_spp, 1, 1 << 20)? as u32,
+        ref_spp: in_range("--ref-spp", a.ref_spp, 1, 1 << 24)? as u32,
+        time_budget: a.time_budget,
+        cache_dir: a.cache.clone(),
+    })
+}
+
+pub fn run(a: &StudyArgs) -> Result<()> {
+    let cfg = config(a)?;
+    let mut scene = match &a.scene {
+        Some(p) => load(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
+        None => default_scene(),
+    };
+    scene.camera.fit_aspect(cfg.base.width as f32 / cfg.base.height as f32);
+    let identity = crate::study::reference::scene_identity(a.scene.as_deref())?;
+    let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
+    let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
+    let camera_label = format!("{:?}", a.camera);
+    let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
+    let log = |m: &str| eprintln!("[wavepath study] {m}");
+    let result = crate::render::with_threads(cfg.base.threads, || -> Result<_> {
+        let (accel, _) = crate::accel::build(&scene, true);
+        crate::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
+    })??;
+    crate::study::report::write_all(&result, &out, &stem, &command)?;
+    log(&format!("wrote {}/report.md, study.csv, error_vs_time.png and .svg", out.display()));
+    Ok(())
+}

@@ -1,0 +1,187 @@
+//! "What accuracy costs in time": sweeps one setting, renders each value at a ladder of
+//! sample counts, and measures wall time, rays traced and the error against a converged
+//! reference, so a user sees which setting buys the most accuracy per second.
+//!
+//! The reference is rendered once per scene and settings and cached (see [`reference`]);
+//! it uses its own seed so it shares no random numbers with the renders it judges.
+
+pub mod metrics;
+pub mod plot;
+pub mod reference;
+pub mod report;
+pub mod sweep;
+
+pub use metrics::{ErrorStats, Reference, compare, log_log_slope};
+pub use sweep::{Curve, Ladder, SweepKind, curves, spp_ladder};
+
+use crate::accel::Intersector;
+use crate::film::Film;
+use crate::scene::Scene;
+use crate::settings::Settings;
+use anyhow::Result;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// What a study runs.
+#[derive(Clone, Debug)]
+pub struct StudyConfig {
+    pub sweep: SweepKind,
+    /// Resolution, light samples, depth, roulette, seed and threads of every render.
+    pub base: Settings,
+    /// Largest samples per pixel of a ladder (and the adaptive sweep's maximum).
+    pub max_spp: u32,
+    /// Samples per pixel of the reference.
+    pub ref_spp: u32,
+    /// A ladder stops after the first render slower than this many seconds (the next one
+    /// would take about twice as long).
+    pub time_budget: f64,
+    pub cache_dir: PathBuf,
+}
+
+/// One measured render.
+#[derive(Clone, Debug)]
+pub struct Point {
+    /// Index into [`StudyResult::curves`].
+    pub curve: usize,
+    pub settings: Settings,
+    /// Adaptive tolerance, if the render was adaptive.
+    pub tolerance: Option<f32>,
+    pub seconds: f64,
+    pub rays: u64,
+    pub invalid_samples: u64,
+    pub error: ErrorStats,
+    pub film: Film,
+    /// Camera samples each pixel took.
+    pub samples: Vec<u32>,
+}
+
+/// Everything a study measured.
+#[derive(Clone, Debug)]
+pub struct StudyResult {
+    pub sweep: SweepKind,
+    pub curves: Vec<Curve>,
+    pub points: Vec<Point>,
+    pub reference: Reference,
+    pub reference_settings: Settings,
+    pub reference_info: reference::ReferenceInfo,
+}
+
+impl StudyResult {
+    pub fn curve_points(&self, curve: usize) -> impl Iterator<Item = &Point> {
+        self.points.iter().filter(move |p| p.curve == curve)
+    }
+
+    /// The time every curve reaches (the smallest of the curves' longest renders), and for
+    /// each curve its point closest to that time (log scale): the equal-time comparison.
+    pub fn equal_time(&self) -> (f64, Vec<Option<&Point>>) {
+        let longest: Vec<f64> = (0..self.curves.len())
+            .map(|c| self.curve_points(c).map(|p| p.seconds).fold(0.0, f64::max))
+            .filter(|&t| t > 0.0)
+            .collect();
+        let target = longest.iter().copied().fold(f64::INFINITY, f64::min);
+        let picks = (0..self.curves.len())
+            .map(|c| {
+                self.curve_points(c).min_by(|a, b| {
+                    let da = (a.seconds.max(1e-9) / target).ln().abs();
+                    let db = (b.seconds.max(1e-9) / target).ln().abs();
+                    da.total_cmp(&db)
+                })
+            })
+            .collect();
+        (target, picks)
+    }
+}
+
+/// Runs the study on a loaded scene. `identity` is what keys the reference cache (the scene
+/// file's bytes), `stem` names the cache entry; `log` is told what is happening.
+pub fn run(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    identity: &[u8],
+    camera_label: &str,
+    stem: &str,
+    cfg: &StudyConfig,
+    log: &dyn Fn(&str),
+) -> Result<StudyResult> {
+    let curves = curves(cfg.sweep, &cfg.base);
+    let mut ref_base = cfg.base.clone();
+    if cfg.sweep.needs_deep_reference() {
+        ref_base.max_depth = ref_base.max_depth.max(sweep::DEEP);
+        ref_base.shading = crate::settings::Shading::Global;
+    }
+    let ref_settings = reference::reference_settings(&ref_base, cfg.ref_spp);
+    log(&format!(
+        "reference: {}x{} at {} spp, -l {} -m {}",
+        ref_settings.width, ref_settings.height, ref_settings.spp, ref_settings.light_samples, ref_settings.max_depth
+    ));
+    let (reference, reference_info) =
+        reference::reference(scene, accel, &ref_settings, identity, camera_label, &cfg.cache_dir, stem)?;
+    log(&if reference_info.cached {
+        format!("reference: reused {}", reference_info.path.display())
+    } else {
+        format!("reference: rendered in {:.2} s -> {}", reference_info.seconds, reference_info.path.display())
+    });
+    // One untimed render first, so thread start-up and cold caches do not land on the
+    // first measured point.
+    let _ = crate::wavefront::render_wavefront(scene, accel, &cfg.base, &|_| {});
+    let mut points = Vec::new();
+    for (ci, c) in curves.iter().enumerate() {
+        let runs: Vec<(Settings, Option<f32>)> = match &c.ladder {
+            Ladder::Spp => {
+                spp_ladder(cfg.max_spp).into_iter().map(|s| (Settings { spp: s, ..c.settings.clone() }, None)).collect()
+            }
+            Ladder::Tolerances(ts) => ts
+                .iter()
+                .map(|&t| {
+                    let batch = sweep::ADAPTIVE_BATCH.min(cfg.max_spp.max(1));
+                    (Settings { spp: cfg.max_spp.max(1), adaptive: Some((batch, t)), ..c.settings.clone() }, Some(t))
+                })
+                .collect(),
+        };
+        for (s, tolerance) in runs {
+            let p = measure(scene, accel, &s, tolerance, ci, &reference);
+            log(&format!(
+                "{:<28} spp {:>5} {}{:>8.3} s  {:>10} rays  rmse {:.5}  relMSE {:.5}  ci95 {:.5}",
+                c.label,
+                s.spp,
+                tolerance.map(|t| format!("T {t:<5} mean spp {:>7.1} ", p.error.mean_spp)).unwrap_or_default(),
+                p.seconds,
+                p.rays,
+                p.error.rmse,
+                p.error.rel_mse,
+                p.error.ci95
+            ));
+            let slow = p.seconds > cfg.time_budget;
+            points.push(p);
+            if slow {
+                break;
+            }
+        }
+    }
+    Ok(StudyResult { sweep: cfg.sweep, curves, points, reference, reference_settings: ref_settings, reference_info })
+}
+
+/// Renders once with `s` and measures it.
+pub fn measure(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    s: &Settings,
+    tolerance: Option<f32>,
+    curve: usize,
+    reference: &Reference,
+) -> Point {
+    let t0 = Instant::now();
+    let (acc, stats) = crate::wavefront::render_wavefront(scene, accel, s, &|_| {});
+    let seconds = t0.elapsed().as_secs_f64();
+    Point {
+        curve,
+        settings: s.clone(),
+        tolerance,
+        seconds,
+        rays: stats.total_rays(),
+        invalid_samples: stats.invalid_samples,
+        error: compare(&acc, reference),
+        film: acc.to_film(),
+        samples: acc.samples_taken(),
+    }
+}

@@ -1,0 +1,113 @@
+//! The study's files: a CSV of every render, the plot, the images at equal time and a
+//! Markdown report that shows them.
+
+use super::{Ladder, StudyResult};
+use crate::film::{Tonemap, rate_film, write_image, write_rate_image};
+use anyhow::{Context, Result};
+use std::fmt::Write as _;
+use std::path::Path;
+
+pub const CSV_HEADER: &str = "sweep,curve,spp,light_samples,max_depth,rr,hemisphere,adaptive_tolerance,\
+seconds,rays,mean_spp,rmse,rel_mse,ci95_mean,predicted_rmse,ref_floor,invalid_samples";
+
+/// One line per render.
+pub fn csv(result: &StudyResult) -> String {
+    let mut out = String::from(CSV_HEADER);
+    out.push('\n');
+    for p in &result.points {
+        let s = &p.settings;
+        let _ = writeln!(
+            out,
+            "{},\"{}\",{},{},{},{},{},{},{:.6},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
+            result.sweep.name(),
+            result.curves[p.curve].label.replace('"', "'"),
+            s.spp,
+            s.light_samples,
+            s.max_depth,
+            s.rr_continue,
+            s.hemisphere,
+            p.tolerance.map(|t| t.to_string()).unwrap_or_default(),
+            p.seconds,
+            p.rays,
+            p.error.mean_spp,
+            p.error.rmse,
+            p.error.rel_mse,
+            p.error.ci95,
+            p.error.predicted_rmse,
+            p.error.ref_floor,
+            p.invalid_samples
+        );
+    }
+    out
+}
+
+/// Writes study.csv, error_vs_time.{png,svg}, the images and report.md into `dir`.
+pub fn write_all(result: &StudyResult, dir: &Path, scene_label: &str, command: &str) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("{}: cannot create folder", dir.display()))?;
+    let write = |name: &str, text: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, text).with_context(|| format!("{}: cannot write", p.display()))
+    };
+    write("study.csv", &csv(result))?;
+    let title = format!("{scene_label}: error vs time ({} sweep)", result.sweep.name());
+    super::plot::write_plots(result, &title, &dir.join("error_vs_time.png"), &dir.join("error_vs_time.svg"))?;
+    write_image(&result.reference.mean, &dir.join("reference.png"), Tonemap::Cs184)?;
+
+    let (target, picks) = result.equal_time();
+    let rs = &result.reference_settings;
+    let mut md = String::new();
+    let _ = writeln!(md, "# What accuracy costs in time: {scene_label}, {} sweep\n", result.sweep.name());
+    let _ = writeln!(md, "Made by:\n\n```sh\n{command}\n```\n");
+    let _ = writeln!(
+        md,
+        "Reference: {}x{}, {} spp, -l {} -m {} --rr {} ({}). Errors are over linear RGB; \
+         relMSE = mean (x - r)^2 / (r^2 + 0.01); ci95 is the mean per-pixel 95% confidence \
+         half-width the render computes from its own samples.\n",
+        rs.width,
+        rs.height,
+        rs.spp,
+        rs.light_samples,
+        rs.max_depth,
+        rs.rr_continue,
+        if result.reference_info.cached {
+            "from the cache".to_string()
+        } else {
+            format!("{:.1} s", result.reference_info.seconds)
+        }
+    );
+    let _ = writeln!(md, "![error vs time](error_vs_time.png)\n");
+    let _ = writeln!(md, "## Each setting at about {target:.3} s\n");
+    let _ = writeln!(md, "| setting | spp | seconds | rays | RMSE | relMSE | ci95 | image |");
+    let _ = writeln!(md, "|---|---|---|---|---|---|---|---|");
+    let mut images = vec![("reference".to_string(), "reference.png".to_string())];
+    for (ci, pick) in picks.iter().enumerate() {
+        let Some(p) = pick else { continue };
+        let c = &result.curves[ci];
+        let name = format!("equal_time_{}.png", c.slug);
+        write_image(&p.film, &dir.join(&name), Tonemap::Cs184)?;
+        let spp = match p.tolerance {
+            Some(t) => format!("T {t}: mean {:.1} of {}", p.error.mean_spp, p.settings.spp),
+            None => p.settings.spp.to_string(),
+        };
+        let _ = writeln!(
+            md,
+            "| {} | {spp} | {:.3} | {} | {:.4e} | {:.4e} | {:.4e} | ![]({name}) |",
+            c.label, p.seconds, p.rays, p.error.rmse, p.error.rel_mse, p.error.ci95
+        );
+        images.push((c.label.clone(), name));
+        if matches!(c.ladder, Ladder::Tolerances(_)) {
+            let rate = rate_film(p.film.width, p.film.height, &p.samples, p.settings.spp);
+            write_rate_image(&rate, &dir.join("adaptive_rate.png"))?;
+            images.push((
+                format!("sample rate of {} (blue: few, red: all {})", c.label, p.settings.spp),
+                "adaptive_rate.png".into(),
+            ));
+        }
+    }
+    let _ = writeln!(md, "\n## Images\n");
+    for (label, name) in images {
+        let _ = writeln!(md, "**{label}**\n\n![{label}]({name})\n");
+    }
+    let _ = writeln!(md, "All measurements: [study.csv](study.csv).");
+    write("report.md", &md)
+}

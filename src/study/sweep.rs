@@ -1,0 +1,161 @@
+//! Which settings a sweep varies: each sweep is a set of curves, each curve one setting
+//! rendered at a ladder of sample counts (or, for adaptive sampling, of tolerances), so
+//! error against time shows which setting buys the most accuracy per second.
+
+use crate::settings::Settings;
+
+/// The setting a study varies.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum SweepKind {
+    /// Samples per pixel 1, 2, 4, ... up to the cap: one curve.
+    Spp,
+    /// Samples per area light (-l) 1 ... 64, each over the spp ladder.
+    LightSamples,
+    /// Uniform hemisphere (-H) against light importance sampling, each over the spp ladder.
+    Sampling,
+    /// Maximum depth (-m) 1 ... 16, without Russian roulette and with it.
+    Depth,
+    /// Russian roulette continue probability at the deepest depth.
+    Roulette,
+    /// Adaptive sampling (-a 64 T) for T from 0.2 to 0.01, against fixed spp.
+    Adaptive,
+}
+
+impl SweepKind {
+    pub fn name(self) -> &'static str {
+        match self {
+            SweepKind::Spp => "spp",
+            SweepKind::LightSamples => "light-samples",
+            SweepKind::Sampling => "sampling",
+            SweepKind::Depth => "depth",
+            SweepKind::Roulette => "roulette",
+            SweepKind::Adaptive => "adaptive",
+        }
+    }
+
+    /// Whether this sweep judges against full transport at [`DEEP`] bounces rather than the
+    /// base depth (its curves differ in bias, not only in noise).
+    pub fn needs_deep_reference(self) -> bool {
+        matches!(self, SweepKind::Depth | SweepKind::Roulette)
+    }
+}
+
+/// The depth that stands for "all bounces" in the depth and roulette sweeps.
+pub const DEEP: u32 = 16;
+/// Batch size of the adaptive sweep (`-a 64 T`).
+pub const ADAPTIVE_BATCH: u32 = 64;
+/// Tolerances of the adaptive sweep.
+pub const ADAPTIVE_TOLERANCES: [f32; 5] = [0.2, 0.1, 0.05, 0.02, 0.01];
+
+/// How a curve's points are made.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Ladder {
+    /// The same settings at spp = 1, 2, 4, ... up to the cap.
+    Spp,
+    /// Adaptive sampling at each tolerance, spp = the cap.
+    Tolerances(Vec<f32>),
+}
+
+/// One curve of a sweep: a label, the settings it varies from the base, and its ladder.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Curve {
+    pub label: String,
+    /// Short file-name-safe name.
+    pub slug: String,
+    pub settings: Settings,
+    pub ladder: Ladder,
+}
+
+fn curve(label: String, slug: String, settings: Settings) -> Curve {
+    Curve { label, slug, settings, ladder: Ladder::Spp }
+}
+
+/// The curves of `kind` around `base` (whose `spp` is ignored; the ladder sets it).
+pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
+    let b = || Settings { adaptive: None, ..base.clone() };
+    match kind {
+        SweepKind::Spp => vec![curve(format!("-l {} -m {}", base.light_samples, base.max_depth), "spp".into(), b())],
+        SweepKind::LightSamples => [1u32, 2, 4, 8, 16, 32, 64]
+            .iter()
+            .map(|&l| curve(format!("-l {l}"), format!("l{l}"), Settings { light_samples: l, ..b() }))
+            .collect(),
+        SweepKind::Sampling => vec![
+            curve("light importance sampling".into(), "importance".into(), Settings { hemisphere: false, ..b() }),
+            curve("uniform hemisphere (-H)".into(), "hemisphere".into(), Settings { hemisphere: true, ..b() }),
+        ],
+        SweepKind::Depth => {
+            let mut out = Vec::new();
+            for m in [1u32, 2, 4, 8, DEEP] {
+                out.push(curve(format!("-m {m}, no roulette"), format!("m{m}"), depth_settings(&b(), m, 1.0)));
+            }
+            for m in [4u32, DEEP] {
+                let rr = base.rr_continue;
+                out.push(curve(format!("-m {m}, --rr {rr}"), format!("m{m}-rr{rr}"), depth_settings(&b(), m, rr)));
+            }
+            out
+        }
+        SweepKind::Roulette => [1.0f32, 0.9, 0.8, 0.65, 0.5, 0.3, 0.1]
+            .iter()
+            .map(|&rr| {
+                let label = if rr == 1.0 { format!("-m {DEEP}, no roulette") } else { format!("-m {DEEP}, --rr {rr}") };
+                curve(label, format!("rr{rr}"), depth_settings(&b(), DEEP, rr))
+            })
+            .collect(),
+        SweepKind::Adaptive => vec![
+            curve("fixed spp".into(), "fixed".into(), b()),
+            Curve {
+                label: format!("adaptive -a {ADAPTIVE_BATCH} T"),
+                slug: "adaptive".into(),
+                settings: b(),
+                ladder: Ladder::Tolerances(ADAPTIVE_TOLERANCES.to_vec()),
+            },
+        ],
+    }
+}
+
+fn depth_settings(b: &Settings, m: u32, rr: f32) -> Settings {
+    let shading = if m > 1 { crate::settings::Shading::Global } else { crate::settings::Shading::Direct };
+    Settings { max_depth: m, rr_continue: rr, shading, ..b.clone() }
+}
+
+/// Sample counts of the spp ladder: powers of two up to `cap` (and `cap` itself).
+pub fn spp_ladder(cap: u32) -> Vec<u32> {
+    let cap = cap.max(1);
+    let mut v: Vec<u32> = (0..31).map(|i| 1u32 << i).take_while(|&s| s <= cap).collect();
+    if *v.last().unwrap_or(&0) != cap {
+        v.push(cap);
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ladder_is_powers_of_two_up_to_the_cap() {
+        assert_eq!(spp_ladder(1), vec![1]);
+        assert_eq!(spp_ladder(16), vec![1, 2, 4, 8, 16]);
+        assert_eq!(spp_ladder(20), vec![1, 2, 4, 8, 16, 20]);
+    }
+
+    #[test]
+    fn every_sweep_has_curves_with_distinct_slugs() {
+        let base = Settings { max_depth: 5, ..Settings::default() };
+        for k in [
+            SweepKind::Spp,
+            SweepKind::LightSamples,
+            SweepKind::Sampling,
+            SweepKind::Depth,
+            SweepKind::Roulette,
+            SweepKind::Adaptive,
+        ] {
+            let c = curves(k, &base);
+            assert!(!c.is_empty());
+            let mut slugs: Vec<_> = c.iter().map(|c| c.slug.clone()).collect();
+            slugs.sort();
+            slugs.dedup();
+            assert_eq!(slugs.len(), c.len(), "{k:?}");
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! The accuracy-versus-time study: its Monte Carlo errors behave as theory says (RMSE ~
+//! 1/sqrt(spp); importance sampling beats uniform hemisphere sampling at equal samples),
+//! its reference cache is reused and keyed by the settings, and the command writes its files.
+mod common;
+
+use std::path::PathBuf;
+use wavepath::accel::{Intersector, build};
+use wavepath::load::{LoadOptions, default_scene, load};
+use wavepath::scene::Scene;
+use wavepath::settings::{Settings, Shading};
+use wavepath::study::{self, StudyConfig, SweepKind, log_log_slope};
+
+const W: usize = 32;
+const H: usize = 24;
+
+fn base(max_depth: u32) -> Settings {
+    Settings {
+        width: W,
+        height: H,
+        max_depth,
+        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
+        ..Settings::default()
+    }
+}
+
+/// A fresh folder under the system temp dir, unique to this test and process.
+fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("wavepath-study-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn cornell_box() -> Scene {
+    let mut s = default_scene();
+    s.camera.fit_aspect(W as f32 / H as f32);
+    s
+}
+
+fn config(sweep: SweepKind, base: Settings, max_spp: u32, ref_spp: u32, cache: PathBuf) -> StudyConfig {
+    StudyConfig { sweep, base, max_spp, ref_spp, time_budget: 1e9, cache_dir: cache }
+}
+
+fn run(scene: &Scene, accel: &dyn Intersector, cfg: &StudyConfig) -> study::StudyResult {
+    study::run(scene, accel, b"test scene", "test", "test", cfg, &|_| {}).unwrap()
+}
+
+/// RMSE against a converged reference falls as spp^(-1/2). Each sample count is rendered
+/// with four independent seeds (never the reference's) and their squared errors averaged,
+/// so the few bright light-edge pixels that dominate one render's error do not decide the
+/// fit. The one-sample render is left out: it looks through pixel centres (as the CS184
+/// reference does), so its error has a different, aliasing, component.
+#[test]
+fn rmse_falls_as_one_over_sqrt_spp() {
+    let scene = cornell_box();
+    let (accel, _) = build(&scene, true);
+    for depth in [1, 3] {
+        let b = base(depth);
+        let ref_s = study::reference::reference_settings(&b, 8192);
+        let cache = temp_dir(&format!("slope{depth}"));
+        let (reference, _) =
+            study::reference::reference(&scene, accel.as_ref(), &ref_s, b"test", "test", &cache, "slope").unwrap();
+        let mut pts = Vec::new();
+        let (mut last, mut predicted) = (None, 0.0);
+        for spp in study::spp_ladder(256).into_iter().filter(|&s| s >= 2) {
+            let mut mse = 0.0;
+            predicted = 0.0;
+            for seed in 0..4 {
+                let s = Settings { spp, seed: 1000 * seed + spp as u64, ..b.clone() };
+                let p = study::measure(&scene, accel.as_ref(), &s, None, 0, &reference);
+                assert_eq!(p.invalid_samples, 0);
+                mse += p.error.rmse * p.error.rmse / 4.0;
+                predicted += p.error.predicted_rmse * p.error.predicted_rmse / 4.0;
+                last = Some(p);
+            }
+            pts.push((spp as f64, mse.sqrt()));
+        }
+        let slope = log_log_slope(&pts);
+        eprintln!("depth {depth}: log-log slope of RMSE vs spp = {slope:.3}; points {pts:?}");
+        assert!((-0.6..=-0.4).contains(&slope), "depth {depth}: slope {slope}");
+        // The render's own variance estimate predicts its error against the reference
+        // (E[squared error] = variance of the mean), and the mean 95% half-width is 1.96
+        // times the mean sigma, which is below the root mean square of sigma.
+        let last = last.unwrap();
+        let ratio = predicted.sqrt() / pts.last().unwrap().1;
+        assert!((0.7..1.4).contains(&ratio), "predicted / measured rmse = {ratio}");
+        assert!(last.error.ci95 > 0.0 && last.error.ci95 < 1.96 * last.error.predicted_rmse);
+        // The reference at 8192 spp resolves errors well below the 256 spp renders'
+        // (theory: sqrt(256 / 8192) = 0.18 of their predicted RMSE).
+        let floor = last.error.ref_floor / predicted.sqrt();
+        assert!((0.1..0.3).contains(&floor), "reference floor / predicted rmse = {floor}");
+    }
+}
+
+/// Light importance sampling has lower error than uniform hemisphere sampling at equal
+/// samples per pixel, on the Cornell box (embedded, and the CS184 file when present).
+#[test]
+fn importance_sampling_beats_hemisphere_sampling() {
+    let mut scenes = vec![cornell_box()];
+    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
+        let mut s = load(&p, &LoadOptions::default()).unwrap();
+        s.camera.fit_aspect(W as f32 / H as f32);
+        scenes.push(s);
+    }
+    for scene in scenes {
+        let (accel, _) = build(&scene, true);
+        let cfg = config(SweepKind::Sampling, base(1), 32, 2048, temp_dir("sampling"));
+        let r = run(&scene, accel.as_ref(), &cfg);
+        assert_eq!(r.curves.len(), 2);
+        assert!(!r.curves[0].settings.hemisphere && r.curves[1].settings.hemisphere);
+        for spp in [8, 16, 32] {
+            let at = |c: usize| r.curve_points(c).find(|p| p.settings.spp == spp).unwrap().error;
+            let (is, hemi) = (at(0), at(1));
+            eprintln!("{}: spp {spp}: importance rmse {:.4} hemisphere {:.4}", scene.name, is.rmse, hemi.rmse);
+            assert!(is.rmse < hemi.rmse, "{}: spp {spp}: {} >= {}", scene.name, is.rmse, hemi.rmse);
+            assert!(is.rel_mse < hemi.rel_mse);
+        }
+    }
+}
+
+/// The reference is rendered once: the second study reads it from the cache (identical
+/// values); another setting or another scene gets another entry.
+#[test]
+fn reference_is_cached_and_keyed_by_settings() {
+    let scene = cornell_box();
+    let (accel, _) = build(&scene, true);
+    let cache = temp_dir("cache");
+    let cfg = config(SweepKind::Spp, base(1), 2, 64, cache.clone());
+    let a = run(&scene, accel.as_ref(), &cfg);
+    assert!(!a.reference_info.cached);
+    let b = run(&scene, accel.as_ref(), &cfg);
+    assert!(b.reference_info.cached);
+    assert_eq!(a.reference, b.reference);
+    assert_eq!(a.points[1].error, b.points[1].error.clone());
+    let other = config(SweepKind::Spp, Settings { light_samples: 2, ..base(1) }, 2, 64, cache.clone());
+    assert!(!run(&scene, accel.as_ref(), &other).reference_info.cached);
+    let entries = std::fs::read_dir(&cache)
+        .unwrap()
+        .filter(|e| e.as_ref().unwrap().path().extension().is_some_and(|x| x == "exr"))
+        .count();
+    assert_eq!(entries, 4, "two references, each a mean and a variance image");
+    // A different scene identity with the same settings is a different key.
+    let s = study::reference::reference_settings(&base(1), 64);
+    assert_ne!(study::reference::cache_key(b"a", "x", &s), study::reference::cache_key(b"b", "x", &s));
+}
+
+/// The depth sweep judges every depth against full transport, so truncating paths shows
+/// as bias that more samples do not remove: -m 1 (direct light only) is much darker than
+/// the reference, -m 16 is not.
+#[test]
+fn depth_sweep_shows_truncation_bias() {
+    let scene = cornell_box();
+    let (accel, _) = build(&scene, true);
+    let cfg = config(SweepKind::Depth, base(5), 16, 512, temp_dir("depth"));
+    let r = run(&scene, accel.as_ref(), &cfg);
+    assert_eq!(r.reference_settings.max_depth, study::sweep::DEEP);
+    // Pixels that see the light (radiance 10) are left out: their jittered coverage noise
+    // would swamp the mean of a 16-spp image.
+    let lit: Vec<bool> = r.reference.mean.pixels.iter().map(|p| p.max_element() < 2.0).collect();
+    let mean = |f: &wavepath::film::Film| {
+        f.pixels.iter().zip(&lit).filter(|(_, k)| **k).map(|(p, _)| p.element_sum() as f64).sum::<f64>()
+    };
+    let reference = mean(&r.reference.mean);
+    let bias = |label: &str| {
+        let c = r.curves.iter().position(|c| c.label == label).unwrap();
+        (mean(&r.curve_points(c).last().unwrap().film) - reference) / reference
+    };
+    let (m1, m16) = (bias("-m 1, no roulette"), bias("-m 16, no roulette"));
+    eprintln!("relative bias of the image mean: -m 1 {m1:.4}, -m 16 {m16:.4}");
+    assert!(m1 < -0.1, "-m 1 bias {m1}");
+    assert!(m16.abs() < 0.03, "-m 16 bias {m16}");
+}
+
+/// `wavepath study` writes the CSV (one row per render), both plots, the images and the report.
+#[test]
+fn command_writes_csv_plots_and_report() {
+    let out = temp_dir("cli");
+    let cache = out.join("cache");
+    let status = std::process::Command::new(common::wavepath_bin())
+        .args(["study", "--sweep", "adaptive", "-r", "16", "12", "-m", "2", "--max-spp", "128", "--ref-spp", "256"])
+        .arg("--cache")
+        .arg(&cache)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(status.status.success(), "{}", String::from_utf8_lossy(&status.stderr));
+    let csv = std::fs::read_to_string(out.join("study.csv")).unwrap();
+    let rows: Vec<&str> = csv.lines().collect();
+    assert_eq!(rows[0], study::report::CSV_HEADER);
+    // Fixed spp 1..128 (8 renders) and 5 tolerances.
+    assert_eq!(rows.len(), 1 + 8 + 5, "{csv}");
+    for name in ["error_vs_time.png", "error_vs_time.svg", "reference.png", "report.md", "adaptive_rate.png"] {
+        assert!(out.join(name).is_file(), "{name} missing");
+    }
+    let png = image::open(out.join("error_vs_time.png")).unwrap();
+    assert_eq!((png.width(), png.height()), study::plot::SIZE);
+    let svg = std::fs::read_to_string(out.join("error_vs_time.svg")).unwrap();
+    assert!(svg.contains("render time (s)"));
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("![error vs time](error_vs_time.png)") && md.contains("adaptive_rate.png"));
+    let help = std::process::Command::new(common::wavepath_bin()).args(["study", "--help"]).output().unwrap();
+    assert!(help.status.success() && String::from_utf8_lossy(&help.stdout).contains("--sweep"));
+}
