@@ -3,7 +3,7 @@
 use crate::accel::TraceCounters;
 use serde::Serialize;
 
-/// Seconds spent in each wavefront stage, summed over worker threads (CPU-seconds); `None`
+/// Seconds spent in each wavefront stage, summed over worker threads (thread-seconds); `None`
 /// for a stage that did not run (it is then absent from the stats JSON).
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct StageTimes {
@@ -112,7 +112,7 @@ impl RenderStats {
                 self.nodes_per_ray()
             ),
             format!(
-                "Stages (CPU-s over all threads): {}",
+                "Stages (thread-seconds, summed over worker threads): {}",
                 s.list().iter().map(|(n, t)| format!("{n} {t:.4}")).collect::<Vec<_>>().join(", ")
             ),
             format!("Invalid (NaN/Inf) samples dropped: {}", self.invalid_samples),

@@ -10,7 +10,8 @@
 //! is cut into small waves (a few thousand paths, so a wave's queues stay in the L2 cache);
 //! rayon hands whole waves to worker threads, and each thread runs all stages of its wave
 //! itself on queues it reuses from wave to wave. There is no barrier per stage and no
-//! allocation per wave. Stage times are summed over threads (CPU-seconds).
+//! allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
+//! machine they include time the thread waited for a core).
 //!
 //! The kernels are specialised once per render for the [`Effects`] the scene needs (the
 //! [`Features`] type parameter): a stage that is off does not run and reports no time.
