@@ -1,9 +1,14 @@
 //! Which effects a scene calls for under given settings, and why.
 //!
-//! Derived once before rendering; a stage or kernel for an effect that is off never runs,
-//! and the log and stats list the effects that are on with their reasons.
+//! Derived once before rendering. The wavefront integrator reads the flags once per render
+//! to pick a kernel specialised (monomorphised) for exactly these effects: a stage whose
+//! effect is off is not run (its time is absent from the stats), a branch whose effect is
+//! off is not compiled into the kernel. The log and stats list the effects that are on,
+//! each with its reason. `--all-effects` forces every flag on (for benchmarks): the image
+//! stays the same, because every kernel part is exact when its effect is not needed (it
+//! adds zero, finds no light, or stops no path).
 
-use crate::scene::{Bsdf, Light, Scene};
+use crate::scene::{Bsdf, Environment, Light, Scene};
 use crate::settings::{Settings, Shading};
 
 /// One effect that is on, and the reason it is on.
@@ -13,57 +18,149 @@ pub struct Effect {
     pub reason: String,
 }
 
+/// The effects a render uses: one flag per stage or kernel feature, plus the list (with
+/// reasons) that the log, `wavepath info` and the stats show.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 pub struct Effects {
+    /// `--shading normals`: the debug view, no light transport at all.
+    pub normal_shading: bool,
+    /// Analytic spheres are part of the scene (the accelerator tests them).
+    pub spheres: bool,
+    /// Emission is seen directly by the camera (emissive materials, counted at depth 0).
+    pub emission: bool,
+    /// Camera rays that miss see a constant environment.
+    pub environment: bool,
+    /// Area lights (or emissive triangles standing in for them) are sampled.
+    pub area_lights: bool,
+    /// Point, directional or spot lights are sampled (one shadow ray each).
+    pub delta_lights: bool,
+    /// Light from infinity (hemisphere light, constant environment) is sampled.
+    pub infinite_light: bool,
+    /// Direct light is estimated at path vertices: the shadow stage runs.
+    pub direct: bool,
+    /// Paths continue past their first hit: the bounce (continuation) kernel runs.
+    pub indirect: bool,
+    /// Russian roulette can stop paths: the roulette kernel runs.
+    pub russian_roulette: bool,
+    /// Adaptive sampling: per-pixel convergence bookkeeping between frames.
+    pub adaptive: bool,
+    /// Every flag was forced on by `--all-effects`.
+    pub forced: bool,
+    /// The effects that are on, in a fixed order, with their reasons.
     pub on: Vec<Effect>,
 }
 
 impl Effects {
     pub fn of(scene: &Scene, settings: &Settings) -> Effects {
-        let mut on = Vec::new();
-        let mut add = |name: &'static str, reason: String| on.push(Effect { name, reason });
+        let mut e = Effects::default();
         let count = |k: &str| scene.lights.iter().filter(|l| l.kind() == k).count();
-        let lit = settings.shading != Shading::Normals && settings.max_depth >= 1;
-        if settings.shading == Shading::Normals {
-            add("normal-shading", "--shading normals".into());
+        let normals = settings.shading == Shading::Normals;
+        let depth = if settings.shading == Shading::Direct { settings.max_depth.min(1) } else { settings.max_depth };
+        let lit = !normals && depth >= 1;
+        let force = settings.all_effects;
+        let forced = |why: Option<String>| why.or_else(|| force.then(|| "forced on by --all-effects".to_string()));
+        let mut f = [false; 11];
+        // Not forceable: it chooses a different renderer, not a kernel feature.
+        if normals {
+            f[0] = true;
+            e.on.push(Effect { name: "normal-shading", reason: "--shading normals".into() });
         }
-        if !scene.spheres.is_empty() {
-            add("spheres", format!("{} analytic sphere(s)", scene.spheres.len()));
-        }
+        let mut add = |flag: &mut bool, name: &'static str, why: Option<String>| {
+            if let Some(reason) = forced(why) {
+                *flag = true;
+                e.on.push(Effect { name, reason });
+            }
+        };
+
+        let ns = scene.spheres.len();
+        add(&mut f[1], "spheres", (ns > 0).then(|| format!("{ns} analytic sphere(s)")));
+        let sees_emission = !normals && (settings.accumulate || depth == 0);
         let emissive_tris =
             scene.mesh.material_ids.iter().filter(|&&m| scene.materials[m as usize].is_emissive()).count();
-        if settings.shading != Shading::Normals && emissive_tris > 0 {
-            add("emission", format!("{emissive_tris} emissive triangle(s)"));
-        }
-        if lit {
-            if count("area") > 0 {
-                add(
-                    "area-lights",
-                    format!("{} area light(s), {} sample(s) each", count("area"), settings.light_samples),
-                );
-            }
-            let delta = scene.lights.iter().filter(|l| l.is_delta()).count();
-            if delta > 0 {
-                add("delta-lights", format!("{delta} point/directional/spot light(s)"));
-            }
-            if scene.lights.iter().any(|l| matches!(l, Light::Hemisphere { .. })) {
-                add("hemisphere-light", "ambient light in the scene".into());
-            }
-        }
-        if settings.shading == Shading::Global && settings.max_depth > 1 {
-            add("indirect", format!("-m {} > 1", settings.max_depth));
-            if settings.max_depth > 2 && settings.rr_continue < 1.0 {
-                add("russian-roulette", format!("-m {} > 2 and --rr {} < 1", settings.max_depth, settings.rr_continue));
-            }
-        }
-        if let Some((b, t)) = settings.adaptive {
-            add("adaptive-sampling", format!("-a {b} {t}"));
-        }
+        let emissive_spheres =
+            scene.spheres.iter().filter(|s| scene.materials[s.material as usize].is_emissive()).count();
+        add(
+            &mut f[2],
+            "emission",
+            (sees_emission && emissive_tris + emissive_spheres > 0)
+                .then(|| format!("{emissive_tris} emissive triangle(s), {emissive_spheres} emissive sphere(s)")),
+        );
+        let env = match scene.env {
+            Environment::Constant(c) if c != glam::Vec3::ZERO => Some(c),
+            _ => None,
+        };
+        add(
+            &mut f[3],
+            "environment",
+            env.filter(|_| sees_emission).map(|c| format!("constant environment {c} seen by camera misses")),
+        );
+        let areas = count("area");
+        let area_reason = if areas > 0 {
+            Some(format!("{areas} area light(s), {} sample(s) each", settings.light_samples))
+        } else if emissive_tris > 0 {
+            Some(format!("{emissive_tris} emissive triangle(s) sampled by area, {} sample(s)", settings.light_samples))
+        } else {
+            None
+        };
+        add(&mut f[4], "area-lights", area_reason.filter(|_| lit && !settings.hemisphere));
+        let delta = scene.lights.iter().filter(|l| l.is_delta()).count();
+        add(
+            &mut f[5],
+            "delta-lights",
+            (lit && !settings.hemisphere && delta > 0)
+                .then(|| format!("{delta} point/directional/spot light(s), one shadow ray each")),
+        );
+        let hemi_light = scene.lights.iter().any(|l| matches!(l, Light::Hemisphere { .. }));
+        add(
+            &mut f[6],
+            "infinite-light",
+            (lit && !settings.hemisphere && (hemi_light || env.is_some()))
+                .then(|| "hemisphere light or constant environment sampled".into()),
+        );
+        let direct_reason = if !lit {
+            None
+        } else if settings.hemisphere {
+            Some("-H: uniform hemisphere probes".to_string())
+        } else if f[4] || f[5] || f[6] {
+            Some("light sampling: the scene has lights".to_string())
+        } else {
+            None
+        };
+        add(&mut f[7], "direct-light", direct_reason);
+        add(
+            &mut f[8],
+            "indirect",
+            (!normals && settings.shading == Shading::Global && depth > 1).then(|| format!("-m {depth} > 1")),
+        );
+        add(
+            &mut f[9],
+            "russian-roulette",
+            (!normals && settings.shading == Shading::Global && depth > 2 && settings.rr_continue < 1.0)
+                .then(|| format!("-m {depth} > 2 and --rr {} < 1", settings.rr_continue)),
+        );
+        add(&mut f[10], "adaptive-sampling", settings.adaptive.map(|(b, t)| format!("-a {b} {t}")));
         let specular = scene.materials.iter().filter(|m| !matches!(m.bsdf, Bsdf::Diffuse { .. })).count();
         if specular > 0 {
-            add("non-diffuse-materials", format!("{specular} material(s) parsed; rendered as diffuse for now"));
+            e.on.push(Effect {
+                name: "non-diffuse-materials",
+                reason: format!("{specular} material(s) parsed; rendered as diffuse for now"),
+            });
         }
-        Effects { on }
+        [
+            e.normal_shading,
+            e.spheres,
+            e.emission,
+            e.environment,
+            e.area_lights,
+            e.delta_lights,
+            e.infinite_light,
+            e.direct,
+            e.indirect,
+            e.russian_roulette,
+            e.adaptive,
+        ] = f;
+        e.forced = force;
+        e
     }
 
     pub fn names(&self) -> Vec<&'static str> {

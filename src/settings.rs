@@ -60,6 +60,9 @@ pub struct Settings {
     /// Render only camera samples with these indices, `[first, end)`, of the `spp` per
     /// pixel (a `--split samples` part); `None`: all of them.
     pub sample_range: Option<(u32, u32)>,
+    /// Run every stage and kernel feature even when the scene does not need it
+    /// (`--all-effects`, for benchmarking what [`crate::effects::Effects`] saves).
+    pub all_effects: bool,
 }
 
 impl Default for Settings {
@@ -81,6 +84,7 @@ impl Default for Settings {
             cell: None,
             integrator: IntegratorKind::Wavefront,
             sample_range: None,
+            all_effects: false,
         }
     }
 }

@@ -46,6 +46,13 @@ pub trait Intersector: Sync + Send {
             *h = self.closest_hit(r, counters);
         }
     }
+
+    /// Any-hit for a whole queue of shadow rays (`occluded[i]`: ray i hits something).
+    fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
+        for (r, o) in rays.iter().zip(occluded.iter_mut()) {
+            *o = self.any_hit(r, counters);
+        }
+    }
 }
 
 /// How the acceleration structure turned out (zeros for brute force).

@@ -140,6 +140,10 @@ pub struct RenderArgs {
     /// COLLADA camera framing: cs184 (the reference renderer's placement) or the file's camera.
     #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
     pub camera: CameraMode,
+    /// Force every effect (stage and kernel feature) on, even those the scene does not need;
+    /// the image is the same, only slower: for measuring what specialisation saves.
+    #[arg(long)]
+    pub all_effects: bool,
     /// Write machine-readable statistics (JSON) to FILE.
     #[arg(long, value_name = "FILE")]
     pub stats: Option<PathBuf>,

@@ -56,6 +56,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.use_bvh = !a.no_bvh;
     s.seed = a.seed;
     s.integrator = a.integrator;
+    s.all_effects = a.all_effects;
     s.shading = a.shading.unwrap_or(if s.max_depth > 1 { Shading::Global } else { Shading::Direct });
     if let Some(p) = &a.cell {
         for (name, v) in ["X", "Y", "DX", "DY"].iter().zip(p) {

@@ -37,6 +37,9 @@ pub struct Transport<'a> {
     pub seed: u64,
     /// Shadow (or hemisphere probe) rays one vertex casts at most.
     pub direct_per_vertex: u32,
+    /// tan(hfov / 2), tan(vfov / 2): the pinhole camera's image-plane half extents, computed
+    /// once instead of per camera ray (the same values `Camera::generate_ray` computes).
+    tan_half_fov: (f32, f32),
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -81,6 +84,10 @@ impl<'a> Transport<'a> {
             rr_continue: s.rr_continue.clamp(1e-3, 1.0),
             seed: s.seed,
             direct_per_vertex,
+            tan_half_fov: (
+                (scene.camera.hfov_deg.to_radians() * 0.5).tan(),
+                (scene.camera.vfov_deg.to_radians() * 0.5).tan(),
+            ),
         }
     }
 
@@ -118,6 +125,19 @@ impl<'a> Transport<'a> {
     #[inline]
     pub fn sampler(&self, pixel: u32, sample: u32, depth: u32) -> Sampler {
         Sampler::for_bounce(self.seed, pixel as u64, sample as u64, depth + 1)
+    }
+
+    /// The key of path (pixel, sample)'s random streams (see [`Sampler::path_key`]).
+    #[inline]
+    pub fn path_key(&self, pixel: u32, sample: u32) -> u64 {
+        Sampler::path_key(self.seed, pixel as u64, sample as u64)
+    }
+
+    /// The stream of the vertex at `depth` of the path with key `key`; the same numbers as
+    /// [`sampler`](Self::sampler).
+    #[inline]
+    pub fn vertex_sampler(&self, key: u64, depth: u32) -> Sampler {
+        Sampler::for_vertex(key, depth + 1)
     }
 
     /// Direct-light rays of vertex `v` (throughput not applied), handed to `out`.
@@ -220,8 +240,14 @@ impl<'a> Transport<'a> {
     /// lens when the camera has an aperture.
     #[inline]
     pub fn camera_ray(&self, x: u32, y: u32, width: usize, height: usize, sample: u32, spp: u32) -> Ray {
-        let pixel = y * width as u32 + x;
-        let mut rng = Sampler::for_bounce(self.seed, pixel as u64, sample as u64, 0);
+        let key = self.path_key(y * width as u32 + x, sample);
+        self.camera_ray_keyed(x, y, width, height, key, spp)
+    }
+
+    /// [`camera_ray`](Self::camera_ray) for the path with key `key`.
+    #[inline]
+    pub fn camera_ray_keyed(&self, x: u32, y: u32, width: usize, height: usize, key: u64, spp: u32) -> Ray {
+        let mut rng = Sampler::for_vertex(key, 0);
         let (jx, jy) = if spp <= 1 { (0.5, 0.5) } else { rng.next_2d() };
         let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
         let cam = &self.scene.camera;
@@ -230,7 +256,10 @@ impl<'a> Transport<'a> {
             let (a, b) = lr.next_2d();
             cam.generate_lens_ray(px, py, warp::concentric_disk(a, b))
         } else {
-            cam.generate_ray(px, py)
+            // `Camera::generate_ray` with the field of view's tangents precomputed.
+            let (tw, th) = self.tan_half_fov;
+            let d = Vec3::new((px - 0.5) * 2.0 * tw, (py - 0.5) * 2.0 * th, -1.0);
+            Ray { origin: cam.position, dir: (cam.c2w * d).normalize(), tmin: cam.nclip, tmax: cam.fclip }
         }
     }
 }

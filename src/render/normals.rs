@@ -53,7 +53,7 @@ pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Setting
     }
     stats.camera_rays = stats.counters.rays;
     stats.render_s = start.elapsed().as_secs_f64();
-    stats.stages.traverse = stats.render_s;
+    stats.stages.traverse = Some(stats.render_s);
     stats.samples_per_pixel = vec![spp; region.w * region.h];
     (film, stats)
 }

@@ -22,10 +22,23 @@ impl Sampler {
     /// numbers it uses do not depend on how many earlier vertices consumed.
     #[inline]
     pub fn for_bounce(seed: u64, pixel: u64, sample: u64, bounce: u32) -> Self {
+        Self::for_vertex(Self::path_key(seed, pixel, sample), bounce)
+    }
+
+    /// The part of a stream's key that depends only on the path (seed, pixel, sample): a
+    /// wavefront path stores it once so each vertex costs one hash, not four.
+    #[inline]
+    pub fn path_key(seed: u64, pixel: u64, sample: u64) -> u64 {
         let k = splitmix64(seed ^ 0xA076_1D64_78BD_642F);
         let k = splitmix64(k ^ pixel);
-        let k = splitmix64(k ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB));
-        let key = splitmix64(k ^ (bounce as u64).wrapping_mul(0x8EBC_6AF0_9C88_C6E3));
+        splitmix64(k ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB))
+    }
+
+    /// Stream `bounce` of the path whose [`path_key`](Self::path_key) is `key`; the same
+    /// numbers as [`for_bounce`](Self::for_bounce).
+    #[inline]
+    pub fn for_vertex(key: u64, bounce: u32) -> Self {
+        let key = splitmix64(key ^ (bounce as u64).wrapping_mul(0x8EBC_6AF0_9C88_C6E3));
         Sampler { key, dim: 0 }
     }
 
@@ -92,5 +105,7 @@ mod tests {
         let mut s = Sampler::for_sample(3, 4, 5);
         s.next_u32();
         assert_eq!(s.next_u32(), Sampler::for_sample(3, 4, 5).at(1).next_u32());
+        let key = Sampler::path_key(3, 4, 5);
+        assert_eq!(Sampler::for_vertex(key, 2), Sampler::for_bounce(3, 4, 5, 2));
     }
 }

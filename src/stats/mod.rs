@@ -3,19 +3,52 @@
 use crate::accel::TraceCounters;
 use serde::Serialize;
 
-/// Seconds spent in each wavefront stage.
+/// Seconds spent in each wavefront stage, summed over worker threads (thread-seconds); `None`
+/// for a stage that did not run (it is then absent from the stats JSON).
 #[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
 pub struct StageTimes {
-    pub generate: f64,
-    pub traverse: f64,
-    pub shade: f64,
-    pub shadow: f64,
-    pub compact: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub generate: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub traverse: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shade: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub shadow: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub compact: Option<f64>,
 }
 
 impl StageTimes {
     pub fn total(&self) -> f64 {
-        self.generate + self.traverse + self.shade + self.shadow + self.compact
+        self.list().iter().map(|(_, t)| t).sum()
+    }
+
+    /// The stages that ran, in pipeline order, with their seconds.
+    pub fn list(&self) -> Vec<(&'static str, f64)> {
+        [
+            ("generate", self.generate),
+            ("traverse", self.traverse),
+            ("shade", self.shade),
+            ("shadow", self.shadow),
+            ("compact", self.compact),
+        ]
+        .into_iter()
+        .filter_map(|(n, t)| t.map(|t| (n, t)))
+        .collect()
+    }
+
+    /// Adds `o`'s times; a stage ran if it ran in either.
+    pub fn add(&mut self, o: &StageTimes) {
+        let sum = |a: Option<f64>, b: Option<f64>| match (a, b) {
+            (None, None) => None,
+            (a, b) => Some(a.unwrap_or(0.0) + b.unwrap_or(0.0)),
+        };
+        self.generate = sum(self.generate, o.generate);
+        self.traverse = sum(self.traverse, o.traverse);
+        self.shade = sum(self.shade, o.shade);
+        self.shadow = sum(self.shadow, o.shadow);
+        self.compact = sum(self.compact, o.compact);
     }
 }
 
@@ -79,8 +112,8 @@ impl RenderStats {
                 self.nodes_per_ray()
             ),
             format!(
-                "Stages (s): generate {:.4}, traverse {:.4}, shade {:.4}, shadow {:.4}, compact {:.4}",
-                s.generate, s.traverse, s.shade, s.shadow, s.compact
+                "Stages (thread-seconds, summed over worker threads): {}",
+                s.list().iter().map(|(n, t)| format!("{n} {t:.4}")).collect::<Vec<_>>().join(", ")
             ),
             format!("Invalid (NaN/Inf) samples dropped: {}", self.invalid_samples),
         ]

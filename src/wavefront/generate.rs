@@ -1,9 +1,7 @@
-//! Stage 1: camera rays for every (active pixel, sample) of a wave.
+//! Stage 1: camera rays for every (pixel, sample) slot of a wave.
 
-use super::CHUNK;
 use super::queues::PathQueue;
 use crate::integrator::Transport;
-use rayon::prelude::*;
 
 /// Which samples of which pixels a wave takes: slot s is sample `base + s % batch` of pixel
 /// `pixels[s / batch]`.
@@ -29,25 +27,13 @@ impl Wave<'_> {
     }
 }
 
-/// Fills the path queue with the wave's camera rays.
+/// Fills the path queue with the wave's camera rays, in slot order.
 pub fn generate(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
-    let n = wave.len();
-    q.ensure(n);
-    q.len = n;
-    q.chunks(n, CHUNK).into_par_iter().for_each(|c| {
-        for k in 0..c.slot.len() {
-            let slot = (c.start + k) as u32;
-            let (pixel, sample) = wave.pixel_sample(slot);
-            let (x, y) = (pixel % width as u32, pixel / width as u32);
-            let r = t.camera_ray(x, y, width, height, sample, spp);
-            (c.ox[k], c.oy[k], c.oz[k]) = (r.origin.x, r.origin.y, r.origin.z);
-            (c.dx[k], c.dy[k], c.dz[k]) = (r.dir.x, r.dir.y, r.dir.z);
-            (c.tmin[k], c.tmax[k]) = (r.tmin, r.tmax);
-            c.slot[k] = slot;
-            (c.tr[k], c.tg[k], c.tb[k]) = (1.0, 1.0, 1.0);
-            (c.lr[k], c.lg[k], c.lb[k]) = (0.0, 0.0, 0.0);
-            c.depth[k] = 0;
-            c.alive[k] = 0;
-        }
-    });
+    q.clear();
+    for slot in 0..wave.len() as u32 {
+        let (pixel, sample) = wave.pixel_sample(slot);
+        let (x, y) = (pixel % width as u32, pixel / width as u32);
+        let key = t.path_key(pixel, sample);
+        q.push_camera(t.camera_ray_keyed(x, y, width, height, key, spp), key, slot);
+    }
 }

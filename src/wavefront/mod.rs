@@ -1,15 +1,22 @@
 //! The wavefront integrator: paths live in structure-of-arrays queues and move through
-//! five stages, each one module with one entry point, parallel over chunks and timed:
+//! five stages, each one module with one entry point:
 //!
 //! ```text
 //! generate -> (traverse -> shade -> shadow -> compact)* until no path is left
 //! ```
 //!
 //! A frame takes one batch of samples for every active pixel (with adaptive sampling a
-//! batch is the `-a` batch size and converged pixels leave before the next frame); a frame
-//! is processed in waves of at most 2^16 paths so memory stays bounded. Results do not depend
-//! on the thread count: every random number comes from (seed, pixel, sample, depth), every
-//! sum runs in slot order.
+//! batch is the `-a` batch size and converged pixels leave before the next frame). A frame
+//! is cut into small waves (a few thousand paths, so a wave's queues stay in the L2 cache);
+//! rayon hands whole waves to worker threads, and each thread runs all stages of its wave
+//! itself on queues it reuses from wave to wave. There is no barrier per stage and no
+//! allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
+//! machine they include time the thread waited for a core).
+//!
+//! The kernels are specialised once per render for the [`Effects`] the scene needs (the
+//! [`Features`] type parameter): a stage that is off does not run and reports no time.
+//! Results do not depend on the thread count: every random number comes from (seed, pixel,
+//! sample, depth), every sum runs in slot order.
 
 pub mod compact;
 pub mod generate;
@@ -18,35 +25,89 @@ pub mod shade;
 pub mod shadow;
 pub mod traverse;
 
-use crate::accel::Intersector;
+use crate::accel::{Intersector, TraceCounters};
+use crate::effects::Effects;
 use crate::film::{Accumulator, PixelSums};
 use crate::integrator::Transport;
+use crate::ray::Hit;
 use crate::scene::Scene;
 use crate::settings::Settings;
-use crate::stats::RenderStats;
+use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
 use glam::Vec3;
-use queues::{HitQueue, PathQueue, ShadowQueue};
+use queues::{PathQueue, ShadowQueue};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// Queue entries one rayon task handles.
-pub const CHUNK: usize = 256;
-/// Most paths in flight at once: small enough that a wave's queues stay near the L2/L3
-/// caches (2^20 was no faster and needs ~200 MB), large enough to amortise stage dispatch.
-pub const MAX_WAVE_PATHS: usize = 1 << 16;
-/// Most shadow-queue entries at once (each path reserves `direct_per_vertex`).
-pub const MAX_SHADOW_RAYS: usize = 1 << 18;
+/// Paths one wave holds at most: its queues (~300 bytes per path with a few shadow rays)
+/// stay in a core's L2 cache, and there are enough waves per frame to balance threads.
+pub const WAVE_PATHS: usize = 4096;
+/// Batch size of the adaptive bookkeeping when `--all-effects` forces it on without `-a`.
+const FORCED_ADAPTIVE_BATCH: u32 = 8;
 
-/// Every buffer a render needs, allocated once and reused by every wave and frame.
+/// Which optional parts a kernel contains; one zero-sized type per combination, so each
+/// combination is compiled separately and an off part costs nothing.
+pub trait Features {
+    /// Emission seen by camera rays.
+    const EMISSION: bool;
+    /// The environment seen by camera rays that miss.
+    const ENVIRONMENT: bool;
+    /// Direct-light rays and the shadow stage.
+    const DIRECT: bool;
+    /// Continuation rays and the bounce (compact) stage.
+    const INDIRECT: bool;
+    /// Russian roulette in the bounce stage.
+    const ROULETTE: bool;
+}
+
+/// The [`Features`] with these flags.
+pub struct Kernel<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool>;
+
+impl<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool> Features for Kernel<E, V, D, I, R> {
+    const EMISSION: bool = E;
+    const ENVIRONMENT: bool = V;
+    const DIRECT: bool = D;
+    const INDIRECT: bool = I;
+    const ROULETTE: bool = R;
+}
+
+/// A worker thread's queues, reused by every wave it runs.
 #[derive(Default)]
-pub struct Queues {
+pub struct Local {
     pub paths: PathQueue,
-    pub next: PathQueue,
-    pub hits: HitQueue,
+    pub hits: Vec<Option<Hit>>,
     pub shadow: ShadowQueue,
+    occluded: Vec<bool>,
     slot_radiance: Vec<Vec3>,
-    partial: Vec<PixelSums>,
+}
+
+/// What one wave (or a sum of waves) traced and how long each stage took.
+#[derive(Clone, Copy, Default)]
+struct WaveStats {
+    counters: TraceCounters,
+    camera: u64,
+    extension: u64,
+    shadow: u64,
+    stages: StageTimes,
+}
+
+impl WaveStats {
+    fn sum(mut self, o: WaveStats) -> WaveStats {
+        self.counters.add(&o.counters);
+        self.camera += o.camera;
+        self.extension += o.extension;
+        self.shadow += o.shadow;
+        self.stages.add(&o.stages);
+        self
+    }
+}
+
+struct Ctx<'a, 's> {
+    t: Transport<'s>,
+    accel: &'a dyn Intersector,
+    s: &'a Settings,
+    effects: Effects,
+    progress: &'a (dyn Fn(u64) + Sync),
 }
 
 /// Renders with the wavefront integrator; `progress` is told how many samples finished.
@@ -56,109 +117,145 @@ pub fn render_wavefront(
     s: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
+    let effects = Effects::of(scene, s);
+    let flags = [effects.emission, effects.environment, effects.direct, effects.indirect, effects.russian_roulette];
+    let c = Ctx { t: Transport::new(scene, s), accel, s, effects, progress };
+    pick_e(flags, &c)
+}
+
+// One flag per function: 2^5 monomorphised kernels, chosen once per render.
+fn pick_e(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+    if f[0] { pick_v::<true>(f, c) } else { pick_v::<false>(f, c) }
+}
+fn pick_v<const E: bool>(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+    if f[1] { pick_d::<E, true>(f, c) } else { pick_d::<E, false>(f, c) }
+}
+fn pick_d<const E: bool, const V: bool>(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+    if f[2] { pick_i::<E, V, true>(f, c) } else { pick_i::<E, V, false>(f, c) }
+}
+fn pick_i<const E: bool, const V: bool, const D: bool>(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+    if f[3] { pick_r::<E, V, D, true>(f, c) } else { pick_r::<E, V, D, false>(f, c) }
+}
+fn pick_r<const E: bool, const V: bool, const D: bool, const I: bool>(
+    f: [bool; 5],
+    c: &Ctx,
+) -> (Accumulator, RenderStats) {
+    if f[4] { render_frames::<Kernel<E, V, D, I, true>>(c) } else { render_frames::<Kernel<E, V, D, I, false>>(c) }
+}
+
+fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
     let start = Instant::now();
-    let t = Transport::new(scene, s);
+    let s = c.s;
     let (w, h) = (s.width, s.height);
     let region = s.region();
     let mut acc = Accumulator::new(w, h);
-    let mut stats = RenderStats::default();
-    let mut q = Queues::default();
-    let per = t.direct_per_vertex.max(1) as usize;
-    let cap = MAX_WAVE_PATHS.min((MAX_SHADOW_RAYS / per).max(CHUNK * 16));
+    let mut total = WaveStats::default();
     let mut active: Vec<u32> = (region.y..region.y + region.h)
         .flat_map(|y| (region.x..region.x + region.w).map(move |x| (y * w + x) as u32))
         .collect();
+    // Forced on without -a, the bookkeeping runs with a tolerance no pixel meets.
+    let adaptive = match s.adaptive {
+        Some(a) => Some(a),
+        None if c.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
+        None => None,
+    };
+    let mut partial: Vec<PixelSums> = Vec::new();
     let (first, end) = s.sample_span();
     let mut n = first;
     while n < end && !active.is_empty() {
-        let check = match s.adaptive {
+        let check = match adaptive {
             Some((b, _)) => (n / b + 1) * b,
             None => end,
         }
         .min(end);
-        let batch = (check - n).min(cap as u32);
-        let per_wave = (cap / batch as usize).max(1);
-        for pixels in active.chunks(per_wave) {
-            let wave = Wave { pixels, base: n, batch };
-            run_wave(&t, accel, &wave, &mut q, &mut acc, &mut stats, s);
-            progress(wave.len() as u64);
+        let batch = (check - n).min(WAVE_PATHS as u32);
+        let per_wave = (WAVE_PATHS / batch as usize).max(1);
+        partial.clear();
+        partial.resize(active.len(), PixelSums::default());
+        let frame = partial
+            .par_chunks_mut(per_wave)
+            .zip(active.par_chunks(per_wave))
+            .map_init(Local::default, |local, (out, pixels)| {
+                let wave = Wave { pixels, base: n, batch };
+                let st = run_wave::<F>(c, &wave, local, out);
+                (c.progress)(wave.len() as u64);
+                st
+            })
+            .reduce(WaveStats::default, WaveStats::sum);
+        total = total.sum(frame);
+        for (&p, sums) in active.iter().zip(&partial) {
+            acc.pixels[p as usize].merge(sums);
         }
         n += batch;
-        if let Some((b, tol)) = s.adaptive
+        if let Some((b, tol)) = adaptive
             && n.is_multiple_of(b)
             && n < end
         {
             active.retain(|&p| !acc.pixels[p as usize].converged(tol));
         }
     }
+    let mut stats = RenderStats {
+        camera_rays: total.camera,
+        extension_rays: total.extension,
+        shadow_rays: total.shadow,
+        counters: total.counters,
+        stages: total.stages,
+        ..RenderStats::default()
+    };
     stats.render_s = start.elapsed().as_secs_f64();
     stats.invalid_samples = acc.invalid_samples();
     stats.samples_per_pixel = crate::integrator::recursive::region_samples(&acc, s);
     (acc, stats)
 }
 
-/// One wave: generate, then the bounce loop until every path has finished, then each
-/// sample's radiance goes into its pixel's sums.
-fn run_wave(
-    t: &Transport,
-    accel: &dyn Intersector,
-    wave: &Wave,
-    q: &mut Queues,
-    acc: &mut Accumulator,
-    stats: &mut RenderStats,
-    s: &Settings,
-) {
+/// One wave on one thread: generate, then the bounce loop until every path has finished,
+/// then each pixel's samples (in slot order) into `out`.
+fn run_wave<F: Features>(c: &Ctx, wave: &Wave, l: &mut Local, out: &mut [PixelSums]) -> WaveStats {
+    let (t, accel, s) = (&c.t, c.accel, c.s);
+    let mut st = WaveStats::default();
     let n = wave.len();
     let clock = Instant::now();
-    generate::generate(t, &mut q.paths, wave, s.width, s.height, s.spp.max(1));
-    if q.slot_radiance.len() < n {
-        q.slot_radiance.resize(n, Vec3::ZERO);
-    }
-    stats.stages.generate += clock.elapsed().as_secs_f64();
-    stats.camera_rays += n as u64;
+    generate::generate(t, &mut l.paths, wave, s.width, s.height, s.spp.max(1));
+    st.camera = n as u64;
+    let mut clock = lap(clock, &mut st.stages.generate);
+    l.slot_radiance.clear();
+    l.slot_radiance.resize(n, Vec3::ZERO);
     let mut first = true;
-    while q.paths.len > 0 {
-        let clock = Instant::now();
-        let c = traverse::traverse(accel, &q.paths, &mut q.hits);
-        stats.counters.add(&c);
+    while !l.paths.is_empty() {
+        traverse::traverse(accel, &l.paths, &mut l.hits, &mut st.counters);
         if !first {
-            stats.extension_rays += q.paths.len as u64;
+            st.extension += l.paths.len() as u64;
         }
         first = false;
-        let clock = lap(clock, &mut stats.stages.traverse);
-        shade::shade(t, wave, &mut q.paths, &q.hits, &mut q.shadow);
-        let clock = lap(clock, &mut stats.stages.shade);
-        let (c, rays) = shadow::shadow(t, accel, &mut q.shadow);
-        stats.counters.add(&c);
-        stats.shadow_rays += rays;
-        let clock = lap(clock, &mut stats.stages.shadow);
-        compact::compact(t, wave, &mut q.paths, &mut q.next, &q.shadow, &mut q.slot_radiance);
-        std::mem::swap(&mut q.paths, &mut q.next);
-        lap(clock, &mut stats.stages.compact);
-    }
-    // Resolve: per wave pixel, its samples in slot order; then into the image's sums.
-    let clock = Instant::now();
-    let npix = wave.pixels.len();
-    let batch = wave.batch as usize;
-    if q.partial.len() < npix {
-        q.partial.resize(npix, PixelSums::default());
-    }
-    let radiance = &q.slot_radiance;
-    q.partial[..npix].par_iter_mut().enumerate().for_each(|(j, p)| {
-        *p = PixelSums::default();
-        for l in &radiance[j * batch..(j + 1) * batch] {
-            p.add(*l);
+        clock = lap(clock, &mut st.stages.traverse);
+        shade::shade::<F>(t, &mut l.paths, &l.hits, &mut l.shadow);
+        clock = lap(clock, &mut st.stages.shade);
+        if F::DIRECT {
+            shadow::shadow(t, accel, &l.shadow, &mut l.occluded, &mut l.paths.radiance, &mut st.counters);
+            st.shadow += l.shadow.len() as u64;
+            clock = lap(clock, &mut st.stages.shadow);
         }
-    });
-    for (j, &pixel) in wave.pixels.iter().enumerate() {
-        acc.pixels[pixel as usize].merge(&q.partial[j]);
+        if F::INDIRECT {
+            compact::compact::<F>(t, &mut l.paths, &mut l.slot_radiance);
+            clock = lap(clock, &mut st.stages.compact);
+        } else {
+            // Every path ended at its first hit, still in slot order.
+            std::mem::swap(&mut l.slot_radiance, &mut l.paths.radiance);
+            l.paths.clear();
+        }
     }
-    stats.stages.compact += clock.elapsed().as_secs_f64();
+    let batch = wave.batch as usize;
+    for (j, p) in out.iter_mut().enumerate() {
+        for r in &l.slot_radiance[j * batch..(j + 1) * batch] {
+            p.add(*r);
+        }
+    }
+    st
 }
 
 #[inline]
-fn lap(since: Instant, into: &mut f64) -> Instant {
+fn lap(since: Instant, into: &mut Option<f64>) -> Instant {
     let now = Instant::now();
-    *into += (now - since).as_secs_f64();
+    *into = Some(into.unwrap_or(0.0) + (now - since).as_secs_f64());
     now
 }

@@ -1,101 +1,108 @@
-//! The ray queues, structure of arrays. Each queue is declared once, field by field, and
-//! the macro makes the struct, its growth (only ever up, so queues are reused from wave to
-//! wave and frame to frame) and its splitting into disjoint chunks for rayon.
+//! The queues of one wave, structure of arrays: one `Vec` per field, grown once and then
+//! reused by every wave a worker thread runs (cleared, never freed), so the steady state
+//! allocates nothing. Rays are kept whole (`Ray`) because that is what the intersector's
+//! batch interface consumes.
 
-/// Declares an SoA queue: `Vec<T>` per field (T: `bytemuck::Pod`), plus a chunk type that
-/// borrows the same range of every field mutably.
-macro_rules! soa_queue {
-    ($(#[$m:meta])* $name:ident / $chunk:ident { $($(#[$fm:meta])* $f:ident : $t:ty),* $(,)? }) => {
-        $(#[$m])*
-        #[derive(Clone, Debug, Default)]
-        pub struct $name {
-            /// Entries in use (every field holds at least this many).
-            pub len: usize,
-            $($(#[$fm])* pub $f: Vec<$t>,)*
-        }
+use crate::ray::Ray;
+use glam::Vec3;
 
-        /// The same range of every field of the queue, borrowed mutably.
-        pub struct $chunk<'a> {
-            /// Index of the chunk's first entry in the queue.
-            pub start: usize,
-            $(pub $f: &'a mut [$t],)*
-        }
-
-        impl $name {
-            /// Makes room for `n` entries; never shrinks, so a reused queue does not allocate.
-            pub fn ensure(&mut self, n: usize) {
-                $(
-                    if self.$f.len() < n {
-                        self.$f.resize(n, <$t as bytemuck::Zeroable>::zeroed());
-                    }
-                )*
-            }
-
-            /// Splits the queue's first `sizes.iter().sum()` entries into consecutive pieces.
-            pub fn split_sizes(&mut self, sizes: &[usize]) -> Vec<$chunk<'_>> {
-                $(
-                    let mut $f = {
-                        let mut pieces = Vec::with_capacity(sizes.len());
-                        let mut rest = &mut self.$f[..];
-                        for &n in sizes {
-                            let (head, tail) = rest.split_at_mut(n);
-                            pieces.push(head);
-                            rest = tail;
-                        }
-                        pieces.into_iter()
-                    };
-                )*
-                let mut out = Vec::with_capacity(sizes.len());
-                let mut start = 0;
-                for &n in sizes {
-                    out.push($chunk { start, $($f: $f.next().expect("one piece per size"),)* });
-                    start += n;
-                }
-                out
-            }
-
-            /// Splits entries `0..len` into chunks of `size` (the last may be shorter).
-            pub fn chunks(&mut self, len: usize, size: usize) -> Vec<$chunk<'_>> {
-                let sizes: Vec<usize> = (0..len.div_ceil(size)).map(|c| size.min(len - c * size)).collect();
-                self.split_sizes(&sizes)
-            }
-        }
-    };
+/// Paths in flight: the ray each traces next and the path's state.
+#[derive(Clone, Debug, Default)]
+pub struct PathQueue {
+    pub ray: Vec<Ray>,
+    /// Key of the path's random streams ([`crate::sampling::Sampler::path_key`]): with
+    /// `depth` this is the path's whole RNG state.
+    pub key: Vec<u64>,
+    /// The path's sample slot in the wave (pixel = wave pixel `slot / batch`).
+    pub slot: Vec<u32>,
+    /// Product of BSDF weights so far.
+    pub throughput: Vec<Vec3>,
+    /// Radiance gathered so far.
+    pub radiance: Vec<Vec3>,
+    /// Depth of the vertex this ray will hit (0: camera ray).
+    pub depth: Vec<u32>,
+    /// Set by shade: the path has a continuation ray (before Russian roulette).
+    pub alive: Vec<bool>,
 }
 
-soa_queue! {
-    /// Paths in flight: the ray to trace next and the path's state.
-    PathQueue / PathChunk {
-        ox: f32, oy: f32, oz: f32,
-        dx: f32, dy: f32, dz: f32,
-        tmin: f32, tmax: f32,
-        /// The path's sample slot in the wave: pixel = wave pixel slot / batch, sample = base + slot % batch.
-        slot: u32,
-        /// Throughput (product of BSDF weights so far).
-        tr: f32, tg: f32, tb: f32,
-        /// Radiance gathered so far.
-        lr: f32, lg: f32, lb: f32,
-        /// Depth of the vertex this ray will hit (0: camera ray). The random stream of that
-        /// vertex is (seed, pixel, sample, depth): this is the path's whole RNG state.
-        depth: u32,
-        /// Set by shade: the path has a continuation ray (before Russian roulette).
-        alive: u32,
+impl PathQueue {
+    pub fn len(&self) -> usize {
+        self.ray.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ray.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        self.truncate(0);
+    }
+
+    pub fn truncate(&mut self, n: usize) {
+        self.ray.truncate(n);
+        self.key.truncate(n);
+        self.slot.truncate(n);
+        self.throughput.truncate(n);
+        self.radiance.truncate(n);
+        self.depth.truncate(n);
+        self.alive.truncate(n);
+    }
+
+    /// A new path at its camera ray.
+    #[inline]
+    pub fn push_camera(&mut self, ray: Ray, key: u64, slot: u32) {
+        self.ray.push(ray);
+        self.key.push(key);
+        self.slot.push(slot);
+        self.throughput.push(Vec3::ONE);
+        self.radiance.push(Vec3::ZERO);
+        self.depth.push(0);
+        self.alive.push(false);
+    }
+
+    /// Copies entry `from` over entry `to` (compaction, `to < from`).
+    #[inline]
+    pub fn move_entry(&mut self, from: usize, to: usize) {
+        self.ray[to] = self.ray[from];
+        self.key[to] = self.key[from];
+        self.slot[to] = self.slot[from];
+        self.throughput[to] = self.throughput[from];
+        self.radiance[to] = self.radiance[from];
+        self.depth[to] = self.depth[from];
+        self.alive[to] = self.alive[from];
     }
 }
 
-soa_queue! {
-    /// Closest hits of the path queue, entry for entry; `prim == u32::MAX` is a miss.
-    HitQueue / HitChunk { t: f32, prim: u32, u: f32, v: f32 }
+/// Shadow rays (or hemisphere probes) of one bounce, in the order shading wrote them.
+#[derive(Clone, Debug, Default)]
+pub struct ShadowQueue {
+    pub ray: Vec<Ray>,
+    /// Contribution if unoccluded (throughput applied); a probe's is multiplied by the
+    /// emission it sees.
+    pub weight: Vec<Vec3>,
+    /// Index of the path (in the path queue) the contribution goes to.
+    pub owner: Vec<u32>,
 }
 
-soa_queue! {
-    /// Shadow rays (or hemisphere probes): a fixed block of `direct_per_vertex` entries per
-    /// path; unused entries have `tmax < 0`. `w` is the contribution if unoccluded
-    /// (throughput applied); the shadow stage zeroes it when occluded.
-    ShadowQueue / ShadowChunk {
-        ox: f32, oy: f32, oz: f32,
-        dx: f32, dy: f32, dz: f32,
-        tmax: f32,
-        wr: f32, wg: f32, wb: f32,
+impl ShadowQueue {
+    pub fn len(&self) -> usize {
+        self.ray.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ray.is_empty()
+    }
+
+    pub fn clear(&mut self) {
+        self.ray.clear();
+        self.weight.clear();
+        self.owner.clear();
+    }
+
+    #[inline]
+    pub fn push(&mut self, ray: Ray, weight: Vec3, owner: u32) {
+        self.ray.push(ray);
+        self.weight.push(weight);
+        self.owner.push(owner);
     }
 }
