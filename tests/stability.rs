@@ -284,7 +284,6 @@ fn cornell_box_at_extreme_scales_renders_the_same() {
 /// points beside a sphere start their shadow rays inside it (region means 17% darker).
 /// With 2^-21 (4 ulps) this test and the scaled ones pass.
 #[test]
-#[ignore = "bug: src/integrator/offset.rs REL_OFFSET = 2^-18 is 0.38 at |p| = 1e5, larger than the features (shadow acne near spheres)"]
 fn cornell_box_far_from_the_origin_renders_the_same() {
     assert_transform_invariant(&[(1.0, Vec3::splat(1e5))]);
 }

@@ -32,7 +32,7 @@ impl PartStats {
         self.nodes += st.counters.nodes;
         let s = &st.stages;
         for (a, b) in self.stages.iter_mut().zip([s.generate, s.traverse, s.shade, s.shadow, s.compact]) {
-            *a += b;
+            *a += b.unwrap_or(0.0);
         }
         self.render_s += st.render_s;
     }
