@@ -83,7 +83,7 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     }
     let per_ray = |x: u64| x as f64 / counters.rays.max(1) as f64;
     let notes = format!(
-        "wavepath bvh8 (binned SAH, 16 bins x 3 axes, leaves <= 4, SoA child boxes), watertight triangle test; \
+        "wavepath bvh8 (binned SAH, 16 bins x 3 axes, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
          isa={}; nodes={} depth={} sah_cost={:.2}; {:.1} nodes and {:.1} prim tests per ray",
         bvh.isa().name(),
         info.nodes,
