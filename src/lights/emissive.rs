@@ -1,4 +1,4 @@
-use super::LightSample;
+use super::{LightSample, area_to_solid_angle};
 use crate::sampling::warp;
 use crate::scene::Scene;
 use glam::Vec3;
@@ -57,20 +57,9 @@ impl EmissiveTriangles {
         let [a, e1, e2] = self.corners[i];
         let (bu, bv) = warp::uniform_triangle(u[0], u[1]);
         let q = a + bu * e1 + bv * e2;
-        let cr = e1.cross(e2);
-        let n = cr.try_normalize()?;
-        let d = q - p;
-        let dist2 = d.length_squared();
-        let dist = dist2.sqrt();
-        if dist <= 0.0 || !dist.is_finite() {
-            return None;
-        }
-        let wi = d / dist;
-        let cos_l = wi.dot(n).abs();
-        if cos_l <= 0.0 {
-            return None;
-        }
-        // Area density 1/total, solid-angle density dist^2 / (total cos_l).
-        Some(LightSample { wi, target: Some(q), weight: self.emission[i] * (total * cos_l / dist2) })
+        let n = e1.cross(e2).try_normalize()?;
+        // Area density 1/total; emission is two-sided.
+        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, total, false)?;
+        Some(LightSample { wi, target: Some(q), weight: self.emission[i] * inv_pdf })
     }
 }

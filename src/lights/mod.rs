@@ -17,7 +17,6 @@ mod infinite;
 pub use emissive::EmissiveTriangles;
 pub use infinite::Infinite;
 
-use crate::sampling::warp;
 use crate::scene::{Environment, Light, Scene};
 use glam::Vec3;
 
@@ -93,37 +92,35 @@ impl SampledLight {
             }
             SampledLight::Area { position, normal, dim_x, dim_y, area, radiance } => {
                 let q = position + (u[0] - 0.5) * dim_x + (u[1] - 0.5) * dim_y;
-                let d = q - p;
-                let dist2 = d.length_squared();
-                let dist = dist2.sqrt();
-                if dist <= 0.0 || !dist.is_finite() {
-                    return None;
-                }
-                let wi = d / dist;
                 // One-sided: the light emits toward `normal`, so it must face the point.
-                let cos_l = -wi.dot(normal);
-                if cos_l <= 0.0 {
-                    return None;
-                }
-                // pdf (solid angle) = dist^2 / (area cos_l).
-                Some(LightSample { wi, target: Some(q), weight: radiance * (area * cos_l / dist2) })
+                let (wi, inv_pdf) = area_to_solid_angle(p, q, normal, area, true)?;
+                Some(LightSample { wi, target: Some(q), weight: radiance * inv_pdf })
             }
-            SampledLight::Infinite(ref inf) => {
-                let local = warp::cosine_hemisphere(u[0], u[1]);
-                let wi = crate::sampling::Frame::new(n).to_world(local);
-                let pdf = warp::cosine_hemisphere_pdf(local.z);
-                if pdf <= 0.0 {
-                    return None;
-                }
-                let l = inf.radiance(wi);
-                if l == Vec3::ZERO {
-                    return None;
-                }
-                Some(LightSample { wi, target: None, weight: l / pdf })
-            }
+            SampledLight::Infinite(ref inf) => inf.sample(n, [u[0], u[1]]),
             SampledLight::Emissive(ref e) => e.sample(p, u),
         }
     }
+}
+
+/// Turns a point `q` drawn uniformly on a light of area `area` with normal `nl` into a
+/// direction from `p`: the unit direction and 1 / its solid-angle density,
+/// `area |cos_l| / dist^2`. `one_sided`: the light emits only toward `nl` (CS184 area
+/// lights), so points behind it get nothing. `None` for coincident points or grazing angles.
+#[inline]
+pub fn area_to_solid_angle(p: Vec3, q: Vec3, nl: Vec3, area: f32, one_sided: bool) -> Option<(Vec3, f32)> {
+    let d = q - p;
+    let dist2 = d.length_squared();
+    let dist = dist2.sqrt();
+    if dist <= 0.0 || !dist.is_finite() {
+        return None;
+    }
+    let wi = d / dist;
+    let c = -wi.dot(nl);
+    let cos_l = if one_sided { c } else { c.abs() };
+    if cos_l <= 0.0 {
+        return None;
+    }
+    Some((wi, area * cos_l / dist2))
 }
 
 /// All lights of a scene plus what rays that leave the scene see.
