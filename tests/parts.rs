@@ -297,3 +297,38 @@ fn killed_parts_leave_no_file_and_reruns_replace_atomically() {
     names.sort();
     assert!(names.iter().all(|n| !n.starts_with('.') && !n.contains("partial")), "left behind: {names:?}");
 }
+
+/// The merged stats list exactly the stages the single process lists: with direct light
+/// only (`-m 1`) there is no bounce stage, and merging must not invent one.
+#[test]
+fn merged_stats_keep_absent_stages_absent() {
+    let dir = tempdir("stages");
+    let stage_keys = |p: &Path| -> Vec<String> {
+        let v: serde_json::Value = serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap();
+        let mut k: Vec<String> = v["stages"].as_object().unwrap().keys().cloned().collect();
+        k.sort();
+        k
+    };
+    for m in ["1", "3"] {
+        let single_stats = dir.join(format!("single-{m}.json"));
+        let base = ["-s", "2", "-m", m, "-r", "32", "24"];
+        let single_img = dir.join("single.exr");
+        let mut a = base.to_vec();
+        a.extend(["-f", s(&single_img), "--stats", s(&single_stats)]);
+        ok(&a);
+        let mut parts = Vec::new();
+        for i in 0..2 {
+            let p = dir.join(format!("p{m}-{i}.exr"));
+            let label = format!("{i}/2");
+            let mut a = base.to_vec();
+            a.extend(["--part", &label, "-f", s(&p)]);
+            ok(&a);
+            parts.push(p);
+        }
+        let merged_stats = dir.join(format!("merged-{m}.json"));
+        ok(&["merge", s(&parts[0]), s(&parts[1]), "-f", s(&dir.join("m.exr")), "--stats", s(&merged_stats)]);
+        let (single, merged) = (stage_keys(&single_stats), stage_keys(&merged_stats));
+        assert_eq!(single, merged, "-m {m}");
+        assert_eq!(single.iter().any(|k| k == "compact"), m != "1", "-m {m}: {single:?}");
+    }
+}

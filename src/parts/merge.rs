@@ -129,9 +129,7 @@ impl Merged {
             total.shadow_rays += s.shadow_rays;
             total.prim_tests += s.prim_tests;
             total.nodes += s.nodes;
-            for (a, b) in total.stages.iter_mut().zip(s.stages) {
-                *a += b;
-            }
+            total.stages.add(&s.stages);
             total.render_s += s.render_s;
             total.wall_s += s.wall_s;
             slowest_render = slowest_render.max(s.render_s);
@@ -142,7 +140,6 @@ impl Merged {
         let pixels = taken.len().max(1) as f64;
         let rays = total.rays();
         let traced = (rays).max(1) as f64;
-        let st = total.stages;
         json!({
             "scene": m.scene,
             "scene_hash": m.scene_hash,
@@ -165,7 +162,7 @@ impl Merged {
             "mrays_per_s": if slowest_render > 0.0 { rays as f64 / slowest_render / 1e6 } else { 0.0 },
             "intersection_tests_per_ray": total.prim_tests as f64 / traced,
             "nodes_visited_per_ray": total.nodes as f64 / traced,
-            "stages": { "generate": st[0], "traverse": st[1], "shade": st[2], "shadow": st[3], "compact": st[4] },
+            "stages": total.stages,
             "samples_per_pixel": {
                 "mean": taken.iter().map(|&t| t as f64).sum::<f64>() / pixels,
                 "min": taken.iter().copied().min().unwrap_or(0),

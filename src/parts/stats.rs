@@ -1,6 +1,6 @@
 //! A part's statistics, kept in its file, and the statistics of a merged render.
 
-use crate::stats::RenderStats;
+use crate::stats::{RenderStats, StageTimes};
 use serde::{Deserialize, Serialize};
 
 /// What one part did and how long it took.
@@ -12,8 +12,8 @@ pub struct PartStats {
     pub shadow_rays: u64,
     pub prim_tests: u64,
     pub nodes: u64,
-    /// Seconds per stage: generate, traverse, shade, shadow, compact.
-    pub stages: [f64; 5],
+    /// Thread-seconds per stage; a stage that did not run stays absent.
+    pub stages: StageTimes,
     /// Seconds in the integrator.
     pub render_s: f64,
     /// Seconds from the start of the process to the part file being complete (load, BVH
@@ -30,10 +30,7 @@ impl PartStats {
         self.shadow_rays += st.shadow_rays;
         self.prim_tests += st.counters.prim_tests;
         self.nodes += st.counters.nodes;
-        let s = &st.stages;
-        for (a, b) in self.stages.iter_mut().zip([s.generate, s.traverse, s.shade, s.shadow, s.compact]) {
-            *a += b.unwrap_or(0.0);
-        }
+        self.stages.add(&st.stages);
         self.render_s += st.render_s;
     }
 

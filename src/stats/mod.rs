@@ -1,11 +1,12 @@
 //! Render statistics: what was traced, how fast, and where the time went.
 
 use crate::accel::TraceCounters;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// Seconds spent in each wavefront stage, summed over worker threads (thread-seconds); `None`
 /// for a stage that did not run (it is then absent from the stats JSON).
-#[derive(Clone, Copy, Debug, Default, Serialize, PartialEq)]
+#[derive(Clone, Copy, Debug, Default, Serialize, Deserialize, PartialEq)]
+#[serde(default)]
 pub struct StageTimes {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub generate: Option<f64>,
