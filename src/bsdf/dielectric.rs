@@ -40,7 +40,7 @@ impl Dielectric {
     #[inline]
     pub fn sample(&self, wo: Vec3, u: f32) -> Option<BsdfSample> {
         let cos_i = wo.z;
-        if cos_i <= 0.0 || !(self.eta > 0.0) {
+        if cos_i <= 0.0 || self.eta.is_nan() || self.eta <= 0.0 {
             return None;
         }
         let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (self.eta * self.eta);

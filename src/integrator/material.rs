@@ -131,7 +131,7 @@ impl Transport<'_> {
             Kind::Glossy => !self.hemisphere,
             Kind::Delta => true,
         };
-        if !self.continues(depth) && !(mis && self.counts_direct(depth)) {
+        if !(self.continues(depth) || (mis && self.counts_direct(depth))) {
             return None;
         }
         let (a, b) = rng.at(0).next_2d();
