@@ -111,7 +111,7 @@ fn mirror_shows_the_mirrored_scene() {
                 intensity: Vec3::splat(3.0),
                 attenuation: [1.0, 0.0, 0.0],
             }],
-            camera: camera.clone(),
+            camera,
             ..Scene::default()
         }
     };
