@@ -68,8 +68,8 @@ fn non_delta_lobes_are_reciprocal() {
     let mut r = Sampler::for_sample(4, 0, 0);
     for (name, m) in glossy_models() {
         for _ in 0..2000 {
-            let a = wo_at(r.next_f32(), r.next_f32() * 6.283);
-            let b = wo_at(r.next_f32(), r.next_f32() * 6.283);
+            let a = wo_at(r.next_f32(), r.next_f32() * std::f32::consts::TAU);
+            let b = wo_at(r.next_f32(), r.next_f32() * std::f32::consts::TAU);
             let (f, g) = (m.eval(a, b), m.eval(b, a));
             assert!((f - g).abs().max_element() <= 1e-4 * f.max_element().max(1e-3), "{name}: {f} vs {g}");
         }
@@ -167,8 +167,8 @@ fn glass_chooses_reflection_with_fresnel_probability() {
     }
     // Delta lobes have no density and no value for any given pair of directions.
     let m = Model::Dielectric(g);
-    assert_eq!(m.eval(wo_at(0.5, 0.0), wo_at(0.5, 3.14)), Vec3::ZERO);
-    assert_eq!(m.pdf(wo_at(0.5, 0.0), wo_at(0.5, 3.14)), 0.0);
+    assert_eq!(m.eval(wo_at(0.5, 0.0), wo_at(0.5, 3.0)), Vec3::ZERO);
+    assert_eq!(m.pdf(wo_at(0.5, 0.0), wo_at(0.5, 3.0)), 0.0);
     let mirror = Model::Mirror(Mirror { reflectance: Vec3::new(0.9, 0.8, 0.7) });
     let s = mirror.sample(wo_at(0.3, 1.0), [0.5; 3]).unwrap();
     assert!(s.delta && s.weight == Vec3::new(0.9, 0.8, 0.7) && (s.wi.z - 0.3).abs() < 1e-6);
