@@ -8,7 +8,7 @@
 //! stays the same, because every kernel part is exact when its effect is not needed (it
 //! adds zero, finds no light, or stops no path).
 
-use crate::scene::{Bsdf, Environment, Light, Scene};
+use crate::scene::{Environment, Light, Scene};
 use crate::settings::{Settings, Shading};
 
 /// One effect that is on, and the reason it is on.
@@ -44,6 +44,14 @@ pub struct Effects {
     pub russian_roulette: bool,
     /// Adaptive sampling: per-pixel convergence bookkeeping between frames.
     pub adaptive: bool,
+    /// Mirror materials (delta reflection).
+    pub mirror: bool,
+    /// Glass or refraction materials (delta reflection and refraction).
+    pub glass: bool,
+    /// Rough conductors (microfacet), with MIS between light and BSDF sampling.
+    pub microfacet: bool,
+    /// Any of the three: the kernel shades through the BSDF models.
+    pub non_diffuse: bool,
     /// Every flag was forced on by `--all-effects`.
     pub forced: bool,
     /// The effects that are on, in a fixed order, with their reasons.
@@ -59,7 +67,7 @@ impl Effects {
         let lit = !normals && depth >= 1;
         let force = settings.all_effects;
         let forced = |why: Option<String>| why.or_else(|| force.then(|| "forced on by --all-effects".to_string()));
-        let mut f = [false; 11];
+        let mut f = [false; 15];
         // Not forceable: it chooses a different renderer, not a kernel feature.
         if normals {
             f[0] = true;
@@ -127,11 +135,35 @@ impl Effects {
             None
         };
         add(&mut f[7], "direct-light", direct_reason);
+        let n_of = |kinds: &[&str]| scene.materials.iter().filter(|m| kinds.contains(&m.bsdf.kind())).count();
+        let (mirrors, glasses, metals) = (n_of(&["mirror"]), n_of(&["glass", "refraction"]), n_of(&["microfacet"]));
         add(
-            &mut f[8],
-            "indirect",
-            (!normals && settings.shading == Shading::Global && depth > 1).then(|| format!("-m {depth} > 1")),
+            &mut f[11],
+            "mirror",
+            (lit && mirrors > 0).then(|| format!("{mirrors} mirror material(s): delta reflection, no shadow rays")),
         );
+        add(
+            &mut f[12],
+            "glass",
+            (lit && glasses > 0)
+                .then(|| format!("{glasses} glass/refraction material(s): Fresnel reflection and refraction")),
+        );
+        add(
+            &mut f[13],
+            "microfacet",
+            (lit && metals > 0)
+                .then(|| format!("{metals} rough conductor(s): Beckmann microfacets, MIS of light and BSDF samples")),
+        );
+        let any_material = f[11] || f[12] || f[13];
+        add(&mut f[14], "non-diffuse-shading", any_material.then(|| "BSDF models in the shade kernel".to_string()));
+        let indirect = if !normals && settings.shading == Shading::Global && depth > 1 {
+            Some(format!("-m {depth} > 1"))
+        } else if lit && mirrors + glasses + metals > 0 {
+            Some("light found by rays from mirror, glass or glossy surfaces".to_string())
+        } else {
+            None
+        };
+        add(&mut f[8], "indirect", indirect);
         add(
             &mut f[9],
             "russian-roulette",
@@ -139,13 +171,6 @@ impl Effects {
                 .then(|| format!("-m {depth} > 2 and --rr {} < 1", settings.rr_continue)),
         );
         add(&mut f[10], "adaptive-sampling", settings.adaptive.map(|(b, t)| format!("-a {b} {t}")));
-        let specular = scene.materials.iter().filter(|m| !matches!(m.bsdf, Bsdf::Diffuse { .. })).count();
-        if specular > 0 {
-            e.on.push(Effect {
-                name: "non-diffuse-materials",
-                reason: format!("{specular} material(s) parsed; rendered as diffuse for now"),
-            });
-        }
         [
             e.normal_shading,
             e.spheres,
@@ -158,6 +183,10 @@ impl Effects {
             e.indirect,
             e.russian_roulette,
             e.adaptive,
+            e.mirror,
+            e.glass,
+            e.microfacet,
+            e.non_diffuse,
         ] = f;
         e.forced = force;
         e

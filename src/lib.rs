@@ -4,6 +4,7 @@
 //! [`film`] + [`stats`]; see DESIGN.md in the shared folder for the full picture.
 
 pub mod accel;
+pub mod bsdf;
 pub mod cli;
 pub mod effects;
 pub mod film;

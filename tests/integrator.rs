@@ -12,6 +12,9 @@ use wavepath::settings::{Settings, Shading};
 use wavepath::stats::RenderStats;
 use wavepath::wavefront::render_wavefront;
 
+mod common;
+use common::agree::assert_agree;
+
 fn settings(max_depth: u32, spp: u32) -> Settings {
     Settings {
         width: 32,
@@ -30,53 +33,6 @@ fn wavefront(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
 
 fn recursive(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
     render_recursive(scene, &BruteForce::new(scene), s, &|_| {})
-}
-
-/// Compares 8x8-pixel region means channel by channel: |a - b| <= 5 sigma of the
-/// difference, sigma from the per-pixel variances of the means. Returns the largest |z|.
-fn assert_agree(a: &Accumulator, b: &Accumulator, what: &str) -> f64 {
-    const R: usize = 8;
-    let mut worst: f64 = 0.0;
-    let mut nonzero = 0;
-    for ry in 0..a.height / R {
-        for rx in 0..a.width / R {
-            let (mut ma, mut mb, mut va, mut vb) =
-                (glam::DVec3::ZERO, glam::DVec3::ZERO, glam::DVec3::ZERO, glam::DVec3::ZERO);
-            for y in ry * R..(ry + 1) * R {
-                for x in rx * R..(rx + 1) * R {
-                    let (pa, pb) = (&a.pixels[y * a.width + x], &b.pixels[y * b.width + x]);
-                    ma += pa.mean().as_dvec3();
-                    mb += pb.mean().as_dvec3();
-                    va += pa.variance_of_mean();
-                    vb += pb.variance_of_mean();
-                }
-            }
-            for c in 0..3 {
-                let d = (ma[c] - mb[c]).abs();
-                let sd = (va[c] + vb[c]).sqrt();
-                if sd == 0.0 {
-                    assert!(
-                        d <= 1e-6 * ma[c].abs().max(1.0),
-                        "{what}: region ({rx},{ry}) channel {c}: {} vs {} with zero variance",
-                        ma[c],
-                        mb[c]
-                    );
-                    continue;
-                }
-                nonzero += 1;
-                let z = d / sd;
-                worst = worst.max(z);
-                assert!(
-                    z < 5.0,
-                    "{what}: region ({rx},{ry}) channel {c}: {} vs {} (z = {z:.2})",
-                    ma[c] / 64.0,
-                    mb[c] / 64.0
-                );
-            }
-        }
-    }
-    assert!(nonzero > 0, "{what}: nothing to compare");
-    worst
 }
 
 fn compare(scene: &Scene, s: &Settings, what: &str) {
@@ -198,8 +154,6 @@ fn cell_renders_only_its_pixels() {
         }
     }
 }
-
-mod common;
 
 /// The CS184 scenes (loaded by the COLLADA loader) render with both integrators alike and
 /// without a single NaN or Inf sample.

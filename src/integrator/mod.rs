@@ -6,8 +6,11 @@
 //! stream (pixel, sample, depth), at fixed dimensions: 0-1 continuation direction, 2 Russian
 //! roulette, 3.. light or hemisphere samples.
 
+mod material;
 mod offset;
 pub mod recursive;
+
+pub use material::{Bounce, ShadingFrame};
 
 pub use offset::{offset_origin, shadow_tmax};
 
@@ -21,6 +24,9 @@ use std::f32::consts::FRAC_1_PI;
 
 /// First dimension of a vertex stream used by light or hemisphere samples.
 const DIM_DIRECT: u32 = 3;
+/// Dimension that chooses between a delta material's lobes (delta vertices take no direct
+/// samples, so it is free).
+const DIM_LOBE: u32 = DIM_DIRECT;
 
 /// Everything shading needs, precomputed once per render.
 pub struct Transport<'a> {
@@ -29,6 +35,10 @@ pub struct Transport<'a> {
     /// Per material: diffuse albedo and emitted radiance.
     pub albedo: Vec<Vec3>,
     pub emission: Vec<Vec3>,
+    /// Per material: its scattering model (used only when `non_diffuse`).
+    pub models: Vec<crate::bsdf::Model>,
+    /// Some material is not Lambertian: shading goes through [`ShadingFrame`].
+    pub non_diffuse: bool,
     pub max_depth: u32,
     pub accumulate: bool,
     pub hemisphere: bool,
@@ -50,6 +60,9 @@ pub struct Vertex {
     pub ns: Vec3,
     pub albedo: Vec3,
     pub emission: Vec3,
+    pub material: u32,
+    /// The ray hit the side the geometric normal points to (outside, for closed meshes).
+    pub front: bool,
 }
 
 /// A ray toward a light (`probe` false: any-hit, adds `weight` when unoccluded) or a
@@ -76,6 +89,11 @@ impl<'a> Transport<'a> {
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
+            models: scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect(),
+            non_diffuse: scene
+                .materials
+                .iter()
+                .any(|m| crate::bsdf::Model::new(&m.bsdf).kind() != crate::bsdf::Kind::Diffuse),
             lights,
             max_depth,
             accumulate: s.accumulate,
@@ -113,12 +131,21 @@ impl<'a> Transport<'a> {
     #[inline]
     pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
         let sp = self.scene.surface_point(ray, hit);
-        let flip = if sp.geometric_normal.dot(ray.dir) > 0.0 { -1.0 } else { 1.0 };
+        let front = sp.geometric_normal.dot(ray.dir) <= 0.0;
+        let flip = if front { 1.0 } else { -1.0 };
         let ng = sp.geometric_normal * flip;
         // The shading normal goes to the same side as the geometric one.
         let ns = if sp.shading_normal.dot(ng) < 0.0 { -sp.shading_normal } else { sp.shading_normal };
         let m = sp.material as usize;
-        Vertex { p: sp.position, ng, ns, albedo: self.albedo[m], emission: self.emission[m] }
+        Vertex {
+            p: sp.position,
+            ng,
+            ns,
+            albedo: self.albedo[m],
+            emission: self.emission[m],
+            material: sp.material,
+            front,
+        }
     }
 
     /// The stream of the vertex at `depth` of path (pixel, sample).

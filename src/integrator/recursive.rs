@@ -3,7 +3,7 @@
 //! = zero-bounce + at-least-one-bounce radiance) so the wavefront integrator can be checked
 //! against something obviously right.
 
-use super::{Transport, Vertex};
+use super::{Bounce, DirectRay, Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::{Accumulator, PixelSums};
 use crate::ray::Ray;
@@ -39,19 +39,20 @@ impl PathCtx<'_, '_> {
         let v = self.t.vertex(ray, &hit);
         let mut l = if self.t.counts_emission() { v.emission } else { Vec3::ZERO };
         if self.t.max_depth >= 1 {
-            l += self.at_least_one_bounce(&v, 0);
+            l += self.at_least_one_bounce(ray, &v, 0);
         }
         l
     }
 
-    fn at_least_one_bounce(&mut self, v: &Vertex, depth: u32) -> Vec3 {
+    fn at_least_one_bounce(&mut self, ray: &Ray, v: &Vertex, depth: u32) -> Vec3 {
         let rng = self.t.sampler(self.pixel, self.sample, depth);
         let mut l = Vec3::ZERO;
+        let sh = self.t.non_diffuse.then(|| self.t.shading(v, ray.dir));
         if self.t.counts_direct(depth) {
             let (t, accel) = (self.t, self.accel);
             let mut shadow = 0;
             let mut trace = self.st.trace;
-            t.direct_rays(v, rng, |d| {
+            let mut add = |d: DirectRay| {
                 shadow += 1;
                 if t.hemisphere {
                     let hit = accel.closest_hit(&d.ray, &mut trace);
@@ -59,15 +60,30 @@ impl PathCtx<'_, '_> {
                 } else if !accel.any_hit(&d.ray, &mut trace) {
                     l += d.weight;
                 }
-            });
+            };
+            match &sh {
+                Some(sh) => t.direct_rays_shaded(v, sh, rng, add),
+                None => t.direct_rays(v, rng, &mut add),
+            }
             self.st.trace = trace;
             self.st.shadow += shadow;
         }
-        if let Some((ray, w)) = self.t.continuation(v, depth, rng) {
+        let next = match &sh {
+            Some(sh) => self.t.continuation_shaded(v, sh, depth, rng),
+            None => self.t.continuation(v, depth, rng).map(|(r, w)| (r, w, Bounce::DIFFUSE)),
+        };
+        if let Some((ray, w, bounce)) = next {
             self.st.extension += 1;
-            if let Some(hit) = self.accel.closest_hit(&ray, &mut self.st.trace) {
-                let next = self.t.vertex(&ray, &hit);
-                l += w * self.at_least_one_bounce(&next, depth + 1);
+            match self.accel.closest_hit(&ray, &mut self.st.trace) {
+                Some(hit) => {
+                    let next = self.t.vertex(&ray, &hit);
+                    if self.t.non_diffuse {
+                        l += w * self.t.arrival(bounce, &ray, Some(&hit), next.emission, depth + 1);
+                    }
+                    l += w * self.at_least_one_bounce(&ray, &next, depth + 1);
+                }
+                None if self.t.non_diffuse => l += w * self.t.arrival(bounce, &ray, None, Vec3::ZERO, depth + 1),
+                None => {}
             }
         }
         l

@@ -51,6 +51,12 @@ impl EmissiveTriangles {
 
     #[inline]
     pub fn sample(&self, p: Vec3, u: [f32; 3]) -> Option<LightSample> {
+        self.sample_pdf(p, u).map(|(ls, _)| ls)
+    }
+
+    /// [`sample`](Self::sample) and the solid-angle density of the drawn direction.
+    #[inline]
+    pub fn sample_pdf(&self, p: Vec3, u: [f32; 3]) -> Option<(LightSample, f32)> {
         let total = self.total_area();
         let x = u[2] * total;
         let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1);
@@ -60,6 +66,6 @@ impl EmissiveTriangles {
         let n = e1.cross(e2).try_normalize()?;
         // Area density 1/total; emission is two-sided.
         let (wi, inv_pdf) = area_to_solid_angle(p, q, n, total, false)?;
-        Some(LightSample { wi, target: Some(q), weight: self.emission[i] * inv_pdf })
+        Some((LightSample { wi, target: Some(q), weight: self.emission[i] * inv_pdf }, 1.0 / inv_pdf))
     }
 }

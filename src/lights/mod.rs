@@ -102,6 +102,87 @@ impl SampledLight {
     }
 }
 
+/// What a ray from a shading point found, for asking a light how likely its light sampling
+/// was to pick the ray's direction ([`SampledLight::radiance_pdf`]).
+#[derive(Clone, Copy, Debug)]
+pub enum Seen {
+    /// The ray left the scene.
+    Miss,
+    /// The ray's closest hit at distance `t`; `emitter`: the hit is an emissive triangle,
+    /// with its emission and geometric normal.
+    Hit { t: f32, emitter: Option<(Vec3, Vec3)> },
+}
+
+impl SampledLight {
+    /// [`sample`](Self::sample) plus the solid-angle density of the drawn direction
+    /// (infinite for delta lights, which only light sampling can find).
+    #[inline]
+    pub fn sample_pdf(&self, p: Vec3, n: Vec3, u: [f32; 3]) -> Option<(LightSample, f32)> {
+        match *self {
+            SampledLight::Area { normal, area, .. } => {
+                let ls = self.sample(p, n, u)?;
+                let dist2 = (ls.target? - p).length_squared();
+                Some((ls, dist2 / (-ls.wi.dot(normal) * area)))
+            }
+            SampledLight::Infinite(ref inf) => {
+                let ls = inf.sample(n, [u[0], u[1]])?;
+                Some((ls, inf.pdf(n, ls.wi)))
+            }
+            SampledLight::Emissive(ref e) => e.sample_pdf(p, u),
+            _ => self.sample(p, n, u).map(|ls| (ls, f32::INFINITY)),
+        }
+    }
+
+    /// The radiance this light sends back along a ray from `p` (shading normal `n`) in
+    /// direction `wi` that found `seen`, and the solid-angle density with which
+    /// [`sample`](Self::sample) draws `wi` from `p`; `None` when the ray does not reach the
+    /// light (delta lights never are reached). An area light is reached when the ray meets
+    /// its parallelogram from the front no farther than a shadow ray toward that point
+    /// would be unoccluded.
+    #[inline]
+    pub fn radiance_pdf(&self, p: Vec3, n: Vec3, wi: Vec3, seen: Seen) -> Option<(Vec3, f32)> {
+        match *self {
+            SampledLight::Area { position, normal, dim_x, dim_y, area, radiance } => {
+                let cos_l = -wi.dot(normal);
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                let t = (position - p).dot(normal) / -cos_l;
+                if !(t > 0.0 && t.is_finite()) {
+                    return None;
+                }
+                let q = p + t * wi;
+                let d = q - position;
+                if d.dot(dim_x).abs() > 0.5 * dim_x.length_squared()
+                    || d.dot(dim_y).abs() > 0.5 * dim_y.length_squared()
+                {
+                    return None;
+                }
+                if let Seen::Hit { t: th, .. } = seen
+                    && th < crate::integrator::shadow_tmax(p, q)
+                {
+                    return None;
+                }
+                let pdf = t * t / (cos_l * area);
+                pdf.is_finite().then_some((radiance, pdf))
+            }
+            SampledLight::Infinite(ref inf) => match seen {
+                Seen::Miss => Some((inf.radiance(wi), inf.pdf(n, wi))),
+                Seen::Hit { .. } => None,
+            },
+            SampledLight::Emissive(ref e) => match seen {
+                Seen::Hit { t, emitter: Some((emission, ng)) } => {
+                    let cos = wi.dot(ng).abs();
+                    let pdf = t * t / (cos * e.total_area());
+                    (cos > 0.0 && pdf.is_finite()).then_some((emission, pdf))
+                }
+                _ => None,
+            },
+            _ => None,
+        }
+    }
+}
+
 /// Turns a point `q` drawn uniformly on a light of area `area` with normal `nl` into a
 /// direction from `p`: the unit direction and 1 / its solid-angle density,
 /// `area |cos_l| / dist^2`. `one_sided`: the light emits only toward `nl` (CS184 area

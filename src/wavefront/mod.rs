@@ -58,17 +58,23 @@ pub trait Features {
     const INDIRECT: bool;
     /// Russian roulette in the bounce stage.
     const ROULETTE: bool;
+    /// Materials other than Lambertian: shading goes through the BSDF models, and a path's
+    /// ray can find light (after a mirror, glass or glossy bounce).
+    const NON_DIFFUSE: bool;
 }
 
 /// The [`Features`] with these flags.
-pub struct Kernel<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool>;
+pub struct Kernel<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool, const N: bool>;
 
-impl<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool> Features for Kernel<E, V, D, I, R> {
+impl<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool, const N: bool> Features
+    for Kernel<E, V, D, I, R, N>
+{
     const EMISSION: bool = E;
     const ENVIRONMENT: bool = V;
     const DIRECT: bool = D;
     const INDIRECT: bool = I;
     const ROULETTE: bool = R;
+    const NON_DIFFUSE: bool = N;
 }
 
 /// A worker thread's queues, reused by every wave it runs.
@@ -118,29 +124,46 @@ pub fn render_wavefront(
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
     let effects = Effects::of(scene, s);
-    let flags = [effects.emission, effects.environment, effects.direct, effects.indirect, effects.russian_roulette];
+    let flags = [
+        effects.emission,
+        effects.environment,
+        effects.direct,
+        effects.indirect,
+        effects.russian_roulette,
+        effects.non_diffuse,
+    ];
     let c = Ctx { t: Transport::new(scene, s), accel, s, effects, progress };
     pick_e(flags, &c)
 }
 
-// One flag per function: 2^5 monomorphised kernels, chosen once per render.
-fn pick_e(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+// One flag per function: 2^6 monomorphised kernels, chosen once per render.
+fn pick_e(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
     if f[0] { pick_v::<true>(f, c) } else { pick_v::<false>(f, c) }
 }
-fn pick_v<const E: bool>(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+fn pick_v<const E: bool>(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
     if f[1] { pick_d::<E, true>(f, c) } else { pick_d::<E, false>(f, c) }
 }
-fn pick_d<const E: bool, const V: bool>(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+fn pick_d<const E: bool, const V: bool>(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
     if f[2] { pick_i::<E, V, true>(f, c) } else { pick_i::<E, V, false>(f, c) }
 }
-fn pick_i<const E: bool, const V: bool, const D: bool>(f: [bool; 5], c: &Ctx) -> (Accumulator, RenderStats) {
+fn pick_i<const E: bool, const V: bool, const D: bool>(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
     if f[3] { pick_r::<E, V, D, true>(f, c) } else { pick_r::<E, V, D, false>(f, c) }
 }
 fn pick_r<const E: bool, const V: bool, const D: bool, const I: bool>(
-    f: [bool; 5],
+    f: [bool; 6],
     c: &Ctx,
 ) -> (Accumulator, RenderStats) {
-    if f[4] { render_frames::<Kernel<E, V, D, I, true>>(c) } else { render_frames::<Kernel<E, V, D, I, false>>(c) }
+    if f[4] { pick_n::<E, V, D, I, true>(f, c) } else { pick_n::<E, V, D, I, false>(f, c) }
+}
+fn pick_n<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool>(
+    f: [bool; 6],
+    c: &Ctx,
+) -> (Accumulator, RenderStats) {
+    if f[5] {
+        render_frames::<Kernel<E, V, D, I, R, true>>(c)
+    } else {
+        render_frames::<Kernel<E, V, D, I, R, false>>(c)
+    }
 }
 
 fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {

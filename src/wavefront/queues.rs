@@ -3,6 +3,7 @@
 //! allocates nothing. Rays are kept whole (`Ray`) because that is what the intersector's
 //! batch interface consumes.
 
+use crate::integrator::Bounce;
 use crate::ray::Ray;
 use glam::Vec3;
 
@@ -23,6 +24,9 @@ pub struct PathQueue {
     pub depth: Vec<u32>,
     /// Set by shade: the path has a continuation ray (before Russian roulette).
     pub alive: Vec<bool>,
+    /// What the vertex that sampled `ray` means for the light the ray finds (read only by
+    /// kernels with non-diffuse materials).
+    pub bounce: Vec<Bounce>,
 }
 
 impl PathQueue {
@@ -46,6 +50,7 @@ impl PathQueue {
         self.radiance.truncate(n);
         self.depth.truncate(n);
         self.alive.truncate(n);
+        self.bounce.truncate(n);
     }
 
     /// A new path at its camera ray.
@@ -58,6 +63,7 @@ impl PathQueue {
         self.radiance.push(Vec3::ZERO);
         self.depth.push(0);
         self.alive.push(false);
+        self.bounce.push(Bounce::DELTA);
     }
 
     /// Copies entry `from` over entry `to` (compaction, `to < from`).
@@ -70,6 +76,7 @@ impl PathQueue {
         self.radiance[to] = self.radiance[from];
         self.depth[to] = self.depth[from];
         self.alive[to] = self.alive[from];
+        self.bounce[to] = self.bounce[from];
     }
 }
 

@@ -4,6 +4,7 @@ use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::integrator::Transport;
 use crate::ray::Hit;
+use glam::Vec3;
 
 /// Shades every path against its hit: adds emission (and the environment) seen by camera
 /// rays, appends the path's shadow rays (throughput applied), and replaces the path's ray by
@@ -18,16 +19,39 @@ pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>]
             if F::ENVIRONMENT && depth == 0 && sees_emission {
                 q.radiance[i] += q.throughput[i] * t.lights.background;
             }
+            if F::NON_DIFFUSE && depth > 0 {
+                q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
+            }
             continue;
         };
         let v = t.vertex(&q.ray[i], &hit);
         if F::EMISSION && depth == 0 && sees_emission {
             q.radiance[i] += v.emission;
         }
+        if F::NON_DIFFUSE && depth > 0 {
+            q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
+        }
         if !F::DIRECT && !F::INDIRECT {
             continue;
         }
         let rng = t.vertex_sampler(q.key[i], depth);
+        if F::NON_DIFFUSE {
+            let sh = t.shading(&v, q.ray[i].dir);
+            if F::DIRECT && t.counts_direct(depth) {
+                let tp = q.throughput[i];
+                t.direct_rays_shaded(&v, &sh, rng, |d| shadow.push(d.ray, d.weight * tp, i as u32));
+            }
+            if F::INDIRECT
+                && let Some((next, w, bounce)) = t.scatter_shaded(&v, &sh, depth, rng)
+            {
+                q.ray[i] = next;
+                q.throughput[i] *= w;
+                q.depth[i] = depth + 1;
+                q.alive[i] = true;
+                q.bounce[i] = bounce;
+            }
+            continue;
+        }
         if F::DIRECT && t.counts_direct(depth) {
             let tp = q.throughput[i];
             t.direct_rays(&v, rng, |d| shadow.push(d.ray, d.weight * tp, i as u32));

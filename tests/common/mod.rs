@@ -1,6 +1,9 @@
 //! Shared helpers for integration tests.
 #![allow(dead_code)]
 
+pub mod agree;
+pub mod chi2;
+
 use std::path::PathBuf;
 
 /// The shared scenes folder: `WAVEPATH_SCENES`, else `../shared/scenes` beside the repo.

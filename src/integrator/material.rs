@@ -1,0 +1,206 @@
+//! Shading of materials that are not Lambertian (mirror, glass, rough conductors), shared
+//! by both integrators and used only when the scene has such a material.
+//!
+//! Light is counted exactly once per path:
+//! - Lambertian vertices: light sampling only (as in the diffuse fast path).
+//! - Glossy vertices: light sampling and BSDF sampling, each weighted by the power
+//!   heuristic against the other (the light strategy counted `-l` times), so a small bright
+//!   light in a rough metal converges without fireflies. The BSDF-sampled ray counts what
+//!   light sampling can find: area lights it reaches, emissive triangles (when they stand
+//!   in for area lights) and light from infinity.
+//! - Delta vertices (mirror, glass): no light sampling; the ray they send on counts the
+//!   emission of the surface it hits, as a camera ray does, or the light from infinity.
+//!
+//! Either kind of arrival is direct light of the vertex that sampled the ray, so it counts
+//! when that vertex's direct light would, and a vertex at the last depth still sends a ray
+//! (which only collects this light).
+
+use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin, shadow_tmax};
+use crate::bsdf::{Kind, Lambert, Model, power_heuristic, to_local};
+use crate::lights::Seen;
+use crate::ray::{Hit, Ray};
+use crate::sampling::{Frame, Sampler, warp};
+use glam::Vec3;
+
+/// What the vertex that sampled a path's ray means for the light that ray finds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Bounce {
+    /// Shading normal of that vertex (the infinite light's sampling density depends on it).
+    pub n: Vec3,
+    /// Solid-angle density of the BSDF sample: 0 for Lambertian vertices (nothing is
+    /// counted), infinite after a delta bounce (emission counts fully).
+    pub pdf: f32,
+}
+
+impl Bounce {
+    pub const DIFFUSE: Bounce = Bounce { n: Vec3::ZERO, pdf: 0.0 };
+    pub const DELTA: Bounce = Bounce { n: Vec3::ZERO, pdf: f32::INFINITY };
+}
+
+impl Default for Bounce {
+    fn default() -> Self {
+        Bounce::DIFFUSE
+    }
+}
+
+/// A vertex's scattering model in its local frame.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingFrame {
+    pub frame: Frame,
+    /// Direction toward where the path came from, local.
+    pub wo: Vec3,
+    pub model: Model,
+    pub kind: Kind,
+}
+
+impl Transport<'_> {
+    /// The model of `v`'s material (a Lambertian one takes the vertex's albedo) for a ray
+    /// arriving along `dir`.
+    #[inline]
+    pub fn shading(&self, v: &Vertex, dir: Vec3) -> ShadingFrame {
+        let model = match self.models[v.material as usize].oriented(v.front) {
+            Model::Lambert(_) => Model::Lambert(Lambert { albedo: v.albedo }),
+            m => m,
+        };
+        let frame = Frame::new(v.ns);
+        ShadingFrame { frame, wo: to_local(&frame, -dir), kind: model.kind(), model }
+    }
+
+    /// [`direct_rays`](Self::direct_rays) for any material: none for delta materials,
+    /// light samples weighted by MIS (or hemisphere probes) for glossy ones.
+    #[inline]
+    pub fn direct_rays_shaded(&self, v: &Vertex, sh: &ShadingFrame, rng: Sampler, mut out: impl FnMut(DirectRay)) {
+        match sh.kind {
+            Kind::Diffuse => return self.direct_rays(v, rng, out),
+            Kind::Delta => return,
+            Kind::Glossy => {}
+        }
+        let mut rng = rng.at(DIM_DIRECT);
+        if self.hemisphere {
+            let n = self.direct_per_vertex;
+            for _ in 0..n {
+                let (a, b) = rng.next_2d();
+                let local = warp::uniform_hemisphere(a, b);
+                let f = sh.model.eval(sh.wo, local);
+                if f == Vec3::ZERO {
+                    continue;
+                }
+                let wi = sh.frame.to_world(local);
+                let ray = Ray { origin: offset_origin(v.p, v.ng, wi), dir: wi, tmin: 0.0, tmax: f32::INFINITY };
+                out(DirectRay { ray, weight: f * (local.z / (warp::UNIFORM_HEMISPHERE_PDF * n as f32)) });
+            }
+            return;
+        }
+        for (i, light) in self.lights.lights.iter().enumerate() {
+            let ns = self.lights.samples_for(i, self.light_samples);
+            for _ in 0..ns {
+                let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+                let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
+                let wi = to_local(&sh.frame, ls.wi);
+                let f = sh.model.eval(sh.wo, wi);
+                if f == Vec3::ZERO {
+                    continue;
+                }
+                let w = power_heuristic(ns as f32 * pdf_l, sh.model.pdf(sh.wo, wi));
+                let origin = offset_origin(v.p, v.ng, ls.wi);
+                let tmax = match ls.target {
+                    Some(q) => shadow_tmax(origin, q),
+                    None => f32::INFINITY,
+                };
+                if tmax <= 0.0 || w <= 0.0 {
+                    continue;
+                }
+                let ray = Ray { origin, dir: ls.wi, tmin: 0.0, tmax };
+                out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
+            }
+        }
+    }
+
+    /// [`scatter`](Self::scatter) for any material, with what the sampled ray's arrival
+    /// means ([`Bounce`]).
+    #[inline]
+    pub fn scatter_shaded(
+        &self,
+        v: &Vertex,
+        sh: &ShadingFrame,
+        depth: u32,
+        rng: Sampler,
+    ) -> Option<(Ray, Vec3, Bounce)> {
+        let mis = match sh.kind {
+            Kind::Diffuse => return self.scatter(v, depth, rng).map(|(r, w)| (r, w, Bounce::DIFFUSE)),
+            Kind::Glossy => !self.hemisphere,
+            Kind::Delta => true,
+        };
+        if !(self.continues(depth) || (mis && self.counts_direct(depth))) {
+            return None;
+        }
+        let (a, b) = rng.at(0).next_2d();
+        let c = rng.at(DIM_LOBE).next_f32();
+        let s = sh.model.sample(sh.wo, [a, b, c])?;
+        if s.weight == Vec3::ZERO {
+            return None;
+        }
+        let wi = sh.frame.to_world(s.wi);
+        let bounce = if s.delta {
+            Bounce::DELTA
+        } else if mis {
+            Bounce { n: v.ns, pdf: s.pdf }
+        } else {
+            Bounce::DIFFUSE
+        };
+        let origin = offset_origin(v.p, v.ng, wi);
+        Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, s.weight, bounce))
+    }
+
+    /// [`scatter_shaded`](Self::scatter_shaded) followed by [`roulette`](Self::roulette).
+    #[inline]
+    pub fn continuation_shaded(
+        &self,
+        v: &Vertex,
+        sh: &ShadingFrame,
+        depth: u32,
+        rng: Sampler,
+    ) -> Option<(Ray, Vec3, Bounce)> {
+        let (ray, w, b) = self.scatter_shaded(v, sh, depth, rng)?;
+        let k = self.roulette(depth, rng)?;
+        Some((ray, w * k, b))
+    }
+
+    /// Light a path's ray (sampled at a vertex described by `prev`) finds at the vertex of
+    /// `depth` it reaches (`hit`, whose surface emits `emission`) or, `hit` = `None`, at
+    /// infinity; throughput not applied.
+    #[inline]
+    pub fn arrival(&self, prev: Bounce, ray: &Ray, hit: Option<&Hit>, emission: Vec3, depth: u32) -> Vec3 {
+        if prev.pdf == 0.0 || !(self.accumulate || depth == self.max_depth) {
+            return Vec3::ZERO;
+        }
+        if prev.pdf == f32::INFINITY {
+            return match hit {
+                Some(_) => emission,
+                None => self.lights.infinite.radiance(ray.dir),
+            };
+        }
+        let seen = match hit {
+            None => Seen::Miss,
+            Some(h) => Seen::Hit { t: h.t, emitter: self.emitter(h, emission) },
+        };
+        let mut l = Vec3::ZERO;
+        for (i, light) in self.lights.lights.iter().enumerate() {
+            if let Some((le, pdf_l)) = light.radiance_pdf(ray.origin, prev.n, ray.dir, seen) {
+                let ns = self.lights.samples_for(i, self.light_samples) as f32;
+                l += le * power_heuristic(prev.pdf, ns * pdf_l);
+            }
+        }
+        l
+    }
+
+    /// An emissive triangle's emission and geometric normal.
+    #[inline]
+    fn emitter(&self, h: &Hit, emission: Vec3) -> Option<(Vec3, Vec3)> {
+        if emission == Vec3::ZERO || h.prim as usize >= self.scene.mesh.triangles.len() {
+            return None;
+        }
+        let [a, b, c] = self.scene.mesh.corners(h.prim as usize);
+        Some((emission, (b - a).cross(c - a).try_normalize()?))
+    }
+}
