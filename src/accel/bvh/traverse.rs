@@ -159,53 +159,76 @@ fn sphere_hit(ray: &Ray, tmax: f32, p: &[glam::Vec3; 3]) -> Option<(f32, f32, f3
 
 #[inline(always)]
 pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
+    if bvh.stack_need <= FIXED_STACK {
+        let mut fixed = [0u32; FIXED_STACK];
+        any_hit_with(bvh, isa, ray, c, &mut fixed)
+    } else {
+        any_hit_with(bvh, isa, ray, c, &mut vec![0u32; bvh.stack_need])
+    }
+}
+
+/// Any hit with a caller-provided stack of at least `bvh.stack_need` entries.
+///
+/// Leaf children of a node are tested as soon as the node is (before any inner child is
+/// entered): a shadow ray ends at its first hit, and a leaf costs one filter while an inner
+/// child costs at least another node. Only inner children go on the stack, in no order.
+#[inline(always)]
+pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters, stack: &mut [u32]) -> bool {
     c.rays += 1;
     if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
         return false;
     }
     let mut sr = None;
     let br = BoxRay::new(ray);
-    let mut fixed = [0u32; FIXED_STACK];
-    let mut heap;
-    let stack: &mut [u32] = if bvh.stack_need <= FIXED_STACK {
-        &mut fixed
-    } else {
-        heap = vec![0u32; bvh.stack_need];
-        &mut heap
-    };
-    stack[0] = 0;
-    let mut sp = 1usize;
+    let mut sp = 0usize;
+    let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
-    while sp > 0 {
-        sp -= 1;
-        let cur = stack[sp];
-        if cur & LEAF_BIT == 0 {
-            c.nodes += 1;
-            let node = &bvh.nodes[cur as usize];
-            let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
-            while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                stack[sp] = node.child[i];
+    let (mut visited, mut tests) = (0u64, 0u64);
+    let hit = 'trace: loop {
+        visited += 1;
+        let node = &bvh.nodes[cur as usize];
+        let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let child = node.child[i];
+            if child & LEAF_BIT == 0 {
+                stack[sp] = child;
                 sp += 1;
+                continue;
             }
-        } else {
-            c.prim_tests += leaf_range(cur).1 as u64;
+            tests += leaf_range(child).1 as u64;
             let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
-            let (first, mut cand) = leaf_candidates(bvh, isa, cur, sr, ray.tmin, ray.tmax);
-            while cand != 0 {
-                let j = first + cand.trailing_zeros() as usize;
-                cand &= cand - 1;
-                let (p, id) = (&bvh.prims[j], bvh.ids[j]);
-                let hit = if id < bvh.tri_count {
-                    intersect_sheared(sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
-                } else {
-                    sphere_hit(ray, ray.tmax, p).is_some()
-                };
-                if hit {
-                    return true;
-                }
+            if leaf_any(bvh, isa, child, sr, ray) {
+                break 'trace true;
             }
+        }
+        if sp == 0 {
+            break false;
+        }
+        sp -= 1;
+        cur = stack[sp];
+    };
+    c.nodes += visited;
+    c.prim_tests += tests;
+    hit
+}
+
+/// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
+#[inline(always)]
+fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
+    let (first, mut cand) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax);
+    while cand != 0 {
+        let j = first + cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        let (p, id) = (&bvh.prims[j], bvh.ids[j]);
+        let hit = if id < bvh.tri_count {
+            intersect_sheared(sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
+        } else {
+            sphere_hit(ray, ray.tmax, p).is_some()
+        };
+        if hit {
+            return true;
         }
     }
     false
