@@ -81,13 +81,13 @@ impl Isa {
 pub struct Bvh {
     nodes: Vec<Node8>,
     /// Leaf-ordered primitive data: triangle corners, or (centre, (radius, 0, 0), 0); every
-    /// leaf starts at a multiple of [`leaf::LANES`] (padding slots are never read).
+    /// leaf starts at a multiple of [`leaf::LANES`] (padding slots are never read). Traversal
+    /// reads triangle corners from `blocks` and only spheres from here.
     prims: Vec<[Vec3; 3]>,
     /// Scene primitive id of each leaf slot (triangles first, then spheres).
     ids: Vec<u32>,
     /// The triangles of leaf `first / LANES`, lane by lane, for the SIMD filter.
     blocks: Vec<leaf::Tri4>,
-    tri_count: u32,
     stack_need: usize,
     isa: Isa,
     /// Trace batches in [`order::coherent`] order (else queue order).
@@ -162,7 +162,6 @@ impl Bvh {
             prims: leaves.prims,
             ids: leaves.ids,
             blocks: leaves.blocks,
-            tri_count: tri_count as u32,
             stack_need: WIDTH_STACK * (depth + 1),
             isa: Isa::from_env().effective(),
             info,
