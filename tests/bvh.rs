@@ -105,6 +105,44 @@ fn every_isa_gives_identical_hits() {
 }
 
 #[test]
+fn batches_in_any_order_and_isa_match_single_rays() {
+    let scene = scene_of(icosphere(16), vec![Sphere { center: Vec3::new(0.0, 1.2, 0.0), radius: 0.4, material: 0 }]);
+    let reference = Bvh::build(&scene).with_isa(Isa::Scalar).with_sorted_batches(false);
+    let mut s = Sampler::for_sample(11, 2, 0);
+    let mut rays: Vec<Ray> = (0..5000).map(|_| random_ray(&mut s, 1.0)).collect();
+    // Shadow-like rays that stop short of what they would hit.
+    let mut c = TraceCounters::default();
+    for k in 0..rays.len() / 2 {
+        if let Some(h) = reference.closest_hit(&rays[k], &mut c) {
+            rays[k].tmax = h.t * 0.999;
+        }
+    }
+    let want_hit: Vec<_> = rays.iter().map(|r| reference.closest_hit(r, &mut c)).collect();
+    let want_any: Vec<_> = rays.iter().map(|r| reference.any_hit(r, &mut c)).collect();
+    let occluded = want_any.iter().filter(|&&o| o).count();
+    assert!(occluded > 200 && rays.len() - occluded > 200, "{occluded} of {} rays occluded", rays.len());
+    for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512] {
+        for sorted in [false, true] {
+            let bvh = Bvh::build(&scene).with_isa(isa).with_sorted_batches(sorted);
+            let (mut hits, mut occluded) = (vec![None; rays.len()], vec![false; rays.len()]);
+            let (mut c1, mut c2) = (TraceCounters::default(), TraceCounters::default());
+            bvh.closest_hits(&rays, &mut hits, &mut c1);
+            bvh.any_hits(&rays, &mut occluded, &mut c2);
+            for i in 0..rays.len() {
+                assert!(
+                    same(hits[i], want_hit[i]),
+                    "{isa:?} sorted={sorted} ray {i}: {:?} vs {:?}",
+                    hits[i],
+                    want_hit[i]
+                );
+                assert_eq!(occluded[i], want_any[i], "{isa:?} sorted={sorted} any-hit ray {i}");
+            }
+            assert_eq!((c1.rays, c2.rays), (rays.len() as u64, rays.len() as u64));
+        }
+    }
+}
+
+#[test]
 fn accel_build_switches_between_bvh_and_brute_force() {
     let scene = scene_of(icosphere(4), vec![]);
     let (bvh, info) = build(&scene, true);

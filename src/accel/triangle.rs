@@ -68,9 +68,10 @@ pub fn intersect_sheared(
     p1: Vec3,
     p2: Vec3,
 ) -> Option<(f32, f32, f32)> {
-    let a = p0 - r.org;
-    let b = p1 - r.org;
-    let c = p2 - r.org;
+    // Arrays, not `Vec3`: indexing a `Vec3` by a run-time axis is a three-way branch.
+    let a = (p0 - r.org).to_array();
+    let b = (p1 - r.org).to_array();
+    let c = (p2 - r.org).to_array();
     let (kx, ky, kz) = (r.kx, r.ky, r.kz);
     let ax = a[kx] - r.sx * a[kz];
     let ay = a[ky] - r.sy * a[kz];

@@ -53,6 +53,14 @@ pub trait BoxTest: Copy {
     /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
 
+    /// Asks the cache for the memory of `x` (a node or leaf block the traversal will read
+    /// soon), so several misses overlap instead of following one another. No effect on
+    /// results; the reference path does nothing.
+    #[inline(always)]
+    fn prefetch<T>(self, x: &T) {
+        let _ = x;
+    }
+
     /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in
     /// `[tmin, tmax]`: a cleared bit is a certain miss. The reference keeps every lane.
     #[inline(always)]

@@ -4,6 +4,7 @@
 mod boxtest;
 mod build;
 mod leaf;
+mod order;
 mod simd;
 mod traverse;
 mod wide;
@@ -80,16 +81,28 @@ impl Isa {
 pub struct Bvh {
     nodes: Vec<Node8>,
     /// Leaf-ordered primitive data: triangle corners, or (centre, (radius, 0, 0), 0); every
-    /// leaf starts at a multiple of [`leaf::LANES`] (padding slots are never read).
+    /// leaf starts at a multiple of [`leaf::LANES`] (padding slots are never read). Traversal
+    /// reads triangle corners from `blocks` and only spheres from here.
     prims: Vec<[Vec3; 3]>,
     /// Scene primitive id of each leaf slot (triangles first, then spheres).
     ids: Vec<u32>,
     /// The triangles of leaf `first / LANES`, lane by lane, for the SIMD filter.
     blocks: Vec<leaf::Tri4>,
-    tri_count: u32,
     stack_need: usize,
     isa: Isa,
+    /// Trace batches in [`order::coherent`] order (else queue order).
+    sort_batches: bool,
+    /// Bounds of everything in the tree (the grid of the ray-order key).
+    lo: Vec3,
+    hi: Vec3,
     info: BuildInfo,
+}
+
+/// `WAVEPATH_RAY_ORDER=sorted` traces batches in [`order::coherent`] order. Off by default:
+/// measured on CBbunny and CBlucy (BENCHMARKS.md) it cost more than it saved, as this
+/// machine's caches hold those trees whatever the order.
+fn ray_order_from_env() -> bool {
+    std::env::var("WAVEPATH_RAY_ORDER").is_ok_and(|v| v.trim() == "sorted")
 }
 
 impl Bvh {
@@ -134,12 +147,21 @@ impl Bvh {
         let mut nodes = nodes;
         let leaves = leaf::pad_leaves(&mut nodes, &prims, &ids, tri_count as u32);
         let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), nodes: nodes.len(), depth, sah_cost };
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        if let Some(root) = nodes.first() {
+            for i in 0..wide::WIDTH {
+                lo = lo.min(Vec3::new(root.b[0][i], root.b[2][i], root.b[4][i]));
+                hi = hi.max(Vec3::new(root.b[1][i], root.b[3][i], root.b[5][i]));
+            }
+        }
         Bvh {
+            sort_batches: ray_order_from_env(),
+            lo,
+            hi,
             nodes,
             prims: leaves.prims,
             ids: leaves.ids,
             blocks: leaves.blocks,
-            tri_count: tri_count as u32,
             stack_need: WIDTH_STACK * (depth + 1),
             isa: Isa::from_env().effective(),
             info,
@@ -150,6 +172,17 @@ impl Bvh {
     pub fn with_isa(mut self, isa: Isa) -> Bvh {
         self.isa = isa.effective();
         self
+    }
+
+    /// The same tree tracing batches in sorted (`true`) or queue order.
+    pub fn with_sorted_batches(mut self, sorted: bool) -> Bvh {
+        self.sort_batches = sorted;
+        self
+    }
+
+    /// The batch order, when batches are sorted and this one is big enough to pay.
+    fn batch_order(&self, rays: &[Ray]) -> Option<Vec<u32>> {
+        (self.sort_batches && rays.len() >= order::MIN_RAYS).then(|| order::coherent(rays, self.lo, self.hi))
     }
 
     pub fn isa(&self) -> Isa {
@@ -218,24 +251,61 @@ impl Intersector for Bvh {
         }
         // One dispatch and one stack for the whole batch, so the loop runs inside the AVX2
         // context and no stack is cleared per ray.
+        let order = self.batch_order(rays);
         let mut stack = vec![traverse::Entry::default(); self.stack_need];
-        let run = |hits: &mut [Option<Hit>], c: &mut TraceCounters, stack: &mut [traverse::Entry]| match self.tokens() {
-            (_, Some(avx)) => simd::with_avx2(avx, |t| {
-                for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                    *h = traverse::closest_hit_with(self, t, r, c, stack);
+        macro_rules! run {
+            ($isa:expr) => {
+                match &order {
+                    Some(order) => {
+                        for &i in order {
+                            let i = i as usize;
+                            hits[i] = traverse::closest_hit_with(self, $isa, &rays[i], c, &mut stack);
+                        }
+                    }
+                    None => {
+                        for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                            *h = traverse::closest_hit_with(self, $isa, r, c, &mut stack);
+                        }
+                    }
                 }
-            }),
-            (Some(sse), None) => {
-                for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                    *h = traverse::closest_hit_with(self, sse, r, c, stack);
+            };
+        }
+        match self.tokens() {
+            (_, Some(avx)) => simd::with_avx2(avx, |t| run!(t)),
+            (Some(sse), None) => run!(sse),
+            _ => run!(Scalar),
+        }
+    }
+
+    fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+        if self.nodes.is_empty() {
+            c.rays += rays.len() as u64;
+            occluded.iter_mut().for_each(|o| *o = false);
+            return;
+        }
+        let order = self.batch_order(rays);
+        let mut stack = vec![0u32; self.stack_need];
+        macro_rules! run {
+            ($isa:expr) => {
+                match &order {
+                    Some(order) => {
+                        for &i in order {
+                            let i = i as usize;
+                            occluded[i] = traverse::any_hit_with(self, $isa, &rays[i], c, &mut stack);
+                        }
+                    }
+                    None => {
+                        for (r, o) in rays.iter().zip(occluded.iter_mut()) {
+                            *o = traverse::any_hit_with(self, $isa, r, c, &mut stack);
+                        }
+                    }
                 }
-            }
-            _ => {
-                for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                    *h = traverse::closest_hit_with(self, Scalar, r, c, stack);
-                }
-            }
-        };
-        run(hits, c, &mut stack);
+            };
+        }
+        match self.tokens() {
+            (_, Some(avx)) => simd::with_avx2(avx, |t| run!(t)),
+            (Some(sse), None) => run!(sse),
+            _ => run!(Scalar),
+        }
     }
 }

@@ -38,6 +38,11 @@ impl Avx2 {
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Sse {
     #[inline(always)]
+    fn prefetch<T>(self, x: &T) {
+        prefetch_lines(x);
+    }
+
+    #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected; loads/stores are unaligned ones on
         // in-bounds arrays of 8 f32 at offsets 0 and 4 (`BoxRay` plane indices are < 6).
@@ -77,6 +82,11 @@ impl BoxTest for Sse {
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Avx2 {
     #[inline(always)]
+    fn prefetch<T>(self, x: &T) {
+        prefetch_lines(x);
+    }
+
+    #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; loads/stores are unaligned
         // ones on in-bounds arrays of exactly 8 f32 (`BoxRay` plane indices are < 6).
@@ -105,6 +115,20 @@ impl BoxTest for Avx2 {
     fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
         unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
+    }
+}
+
+/// Prefetches every cache line of `x` into all cache levels.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn prefetch_lines<T>(x: &T) {
+    let p = (x as *const T).cast::<i8>();
+    let mut off = 0;
+    while off < std::mem::size_of::<T>() {
+        // SAFETY: a prefetch is a hint that never faults; the address is inside `x`, and
+        // SSE (which has the instruction) is part of x86-64.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
+        off += 64;
     }
 }
 

@@ -2,11 +2,12 @@
 //! the scalar and SIMD paths share every other line (and therefore every decision).
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest};
-use super::leaf::LANES;
+use super::leaf::{LANES, Tri4};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
 use crate::accel::{TraceCounters, sphere};
 use crate::ray::{Hit, Ray};
+use glam::Vec3;
 
 /// Stack entries for trees up to this depth live in a fixed array; deeper trees (only
 /// possible for adversarial inputs) use a heap stack.
@@ -75,11 +76,13 @@ pub fn closest_hit_with<B: BoxTest>(
                 // Several: push them all, kept sorted by entry distance with the nearest on
                 // top (insertion; most nodes have two or three hit children), then pop it.
                 let base = sp;
+                prefetch_child(bvh, isa, node.child[i]);
                 stack[sp] = Entry { node: node.child[i], t: tnear[i] };
                 sp += 1;
                 while mask != 0 {
                     let i = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
+                    prefetch_child(bvh, isa, node.child[i]);
                     let e = Entry { node: node.child[i], t: tnear[i] };
                     let mut j = sp;
                     while j > base && stack[j - 1].t < e.t {
@@ -111,14 +114,53 @@ pub fn closest_hit_with<B: BoxTest>(
     }
 }
 
-/// Lanes of leaf `r` that need the scalar test: the SIMD kernels drop certain misses.
+/// Starts loading the node or leaf block behind child reference `r`.
 #[inline(always)]
-fn leaf_candidates<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, tmin: f32, tmax: f32) -> (usize, u32) {
+fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
+    if r & LEAF_BIT == 0 {
+        if let Some(n) = bvh.nodes.get(r as usize) {
+            isa.prefetch(n);
+        }
+    } else if let Some(b) = bvh.blocks.get(leaf_range(r).0 / LANES) {
+        isa.prefetch(b);
+    }
+}
+
+/// Lanes of leaf `r` that need the scalar test (the SIMD kernels drop certain misses), with
+/// the leaf's first slot and block.
+#[inline(always)]
+fn leaf_candidates<'a, B: BoxTest>(
+    bvh: &'a Bvh,
+    isa: B,
+    r: u32,
+    sr: &ShearedRay,
+    tmin: f32,
+    tmax: f32,
+) -> (usize, u32, &'a Tri4) {
     let (first, count) = leaf_range(r);
-    let block = first / LANES;
     let all = (1u32 << count) - 1;
-    let blk = &bvh.blocks[block];
-    (first, isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes))
+    let blk = &bvh.blocks[first / LANES];
+    (first, isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes), blk)
+}
+
+/// The exact test of lane `lane` of a leaf. Triangle corners come from the block the filter
+/// just read (the same values as `prims`, already in cache); only spheres read `prims`.
+#[inline(always)]
+fn lane_hit(
+    bvh: &Bvh,
+    blk: &Tri4,
+    first: usize,
+    lane: usize,
+    sr: &ShearedRay,
+    ray: &Ray,
+    tmax: f32,
+) -> Option<(f32, f32, f32)> {
+    if blk.tri_lanes >> lane & 1 != 0 {
+        let corner = |k: usize| Vec3::new(blk.c[k][0][lane], blk.c[k][1][lane], blk.c[k][2][lane]);
+        intersect_sheared(sr, ray.tmin, tmax, corner(0), corner(1), corner(2))
+    } else {
+        sphere_hit(ray, tmax, &bvh.prims[first + lane])
+    }
 }
 
 #[inline(always)]
@@ -132,80 +174,99 @@ fn leaf_closest<B: BoxTest>(
     c: &mut TraceCounters,
 ) {
     c.prim_tests += leaf_range(r).1 as u64;
-    let (first, mut cand) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
+    let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
     while cand != 0 {
-        let j = first + cand.trailing_zeros() as usize;
+        let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;
-        let (p, id) = (&bvh.prims[j], bvh.ids[j]);
-        let hit = if id < bvh.tri_count {
-            intersect_sheared(sr, ray.tmin, best.t, p[0], p[1], p[2])
-        } else {
-            sphere_hit(ray, best.t, p)
-        };
-        if let Some((t, u, v)) = hit
-            && (!best.found || t < best.t || (t == best.t && id < best.prim))
-        {
-            *best = Best { t, prim: id, u, v, found: true };
+        if let Some((t, u, v)) = lane_hit(bvh, blk, first, lane, sr, ray, best.t) {
+            let id = bvh.ids[first + lane];
+            if !best.found || t < best.t || (t == best.t && id < best.prim) {
+                *best = Best { t, prim: id, u, v, found: true };
+            }
         }
     }
 }
 
 /// Spheres are stored in the leaf arrays as (centre, (radius, 0, 0), unused).
 #[inline(always)]
-fn sphere_hit(ray: &Ray, tmax: f32, p: &[glam::Vec3; 3]) -> Option<(f32, f32, f32)> {
+fn sphere_hit(ray: &Ray, tmax: f32, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
     let r = Ray { tmax, ..*ray };
     sphere::intersect(&r, p[0], p[1].x).map(|t| (t, 0.0, 0.0))
 }
 
 #[inline(always)]
 pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
+    if bvh.stack_need <= FIXED_STACK {
+        let mut fixed = [0u32; FIXED_STACK];
+        any_hit_with(bvh, isa, ray, c, &mut fixed)
+    } else {
+        any_hit_with(bvh, isa, ray, c, &mut vec![0u32; bvh.stack_need])
+    }
+}
+
+/// Any hit with a caller-provided stack of at least `bvh.stack_need` entries.
+///
+/// Leaf children of a node are tested as soon as the node is (before any inner child is
+/// entered): a shadow ray ends at its first hit, and a leaf costs one filter while an inner
+/// child costs at least another node. Only inner children go on the stack, in no order.
+#[inline(always)]
+pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters, stack: &mut [u32]) -> bool {
     c.rays += 1;
     if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
         return false;
     }
     let mut sr = None;
     let br = BoxRay::new(ray);
-    let mut fixed = [0u32; FIXED_STACK];
-    let mut heap;
-    let stack: &mut [u32] = if bvh.stack_need <= FIXED_STACK {
-        &mut fixed
-    } else {
-        heap = vec![0u32; bvh.stack_need];
-        &mut heap
-    };
-    stack[0] = 0;
-    let mut sp = 1usize;
+    let mut sp = 0usize;
+    let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
-    while sp > 0 {
-        sp -= 1;
-        let cur = stack[sp];
-        if cur & LEAF_BIT == 0 {
-            c.nodes += 1;
-            let node = &bvh.nodes[cur as usize];
-            let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
-            while mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                stack[sp] = node.child[i];
+    let (mut visited, mut tests) = (0u64, 0u64);
+    let hit = 'trace: loop {
+        visited += 1;
+        let node = &bvh.nodes[cur as usize];
+        let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
+        if mask.count_ones() > 1 {
+            let mut m = mask;
+            while m != 0 {
+                prefetch_child(bvh, isa, node.child[m.trailing_zeros() as usize]);
+                m &= m - 1;
+            }
+        }
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            mask &= mask - 1;
+            let child = node.child[i];
+            if child & LEAF_BIT == 0 {
+                stack[sp] = child;
                 sp += 1;
+                continue;
             }
-        } else {
-            c.prim_tests += leaf_range(cur).1 as u64;
+            tests += leaf_range(child).1 as u64;
             let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
-            let (first, mut cand) = leaf_candidates(bvh, isa, cur, sr, ray.tmin, ray.tmax);
-            while cand != 0 {
-                let j = first + cand.trailing_zeros() as usize;
-                cand &= cand - 1;
-                let (p, id) = (&bvh.prims[j], bvh.ids[j]);
-                let hit = if id < bvh.tri_count {
-                    intersect_sheared(sr, ray.tmin, ray.tmax, p[0], p[1], p[2]).is_some()
-                } else {
-                    sphere_hit(ray, ray.tmax, p).is_some()
-                };
-                if hit {
-                    return true;
-                }
+            if leaf_any(bvh, isa, child, sr, ray) {
+                break 'trace true;
             }
+        }
+        if sp == 0 {
+            break false;
+        }
+        sp -= 1;
+        cur = stack[sp];
+    };
+    c.nodes += visited;
+    c.prim_tests += tests;
+    hit
+}
+
+/// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
+#[inline(always)]
+fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
+    let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax);
+    while cand != 0 {
+        let lane = cand.trailing_zeros() as usize;
+        cand &= cand - 1;
+        if lane_hit(bvh, blk, first, lane, sr, ray, ray.tmax).is_some() {
+            return true;
         }
     }
     false
