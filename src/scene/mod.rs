@@ -63,8 +63,9 @@ pub enum Environment {
     None,
     /// The same radiance from every direction.
     Constant(Vec3),
-    /// An equirectangular (lat-long) map, linear RGB, row 0 at the top (+Y).
-    Map { path: std::path::PathBuf },
+    /// An equirectangular (lat-long) map, linear RGB, row 0 at the top (+Y); loaded once
+    /// with its sampling distribution (orientation: see `lights::envmap`).
+    Map(std::sync::Arc<crate::lights::EnvMap>),
 }
 
 /// Everything needed to render: geometry, appearance, lights and the view.
