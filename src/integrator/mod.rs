@@ -14,7 +14,7 @@ pub use offset::{offset_origin, shadow_tmax};
 use crate::lights::LightSet;
 use crate::ray::{Hit, Ray};
 use crate::sampling::{Frame, Sampler, warp};
-use crate::scene::Scene;
+use crate::scene::{Scene, Textures};
 use crate::settings::{Settings, Shading};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -29,6 +29,8 @@ pub struct Transport<'a> {
     /// Per material: diffuse albedo and emitted radiance.
     pub albedo: Vec<Vec3>,
     pub emission: Vec<Vec3>,
+    /// Albedo textures per material (issue 7); empty lookups when the scene has none.
+    pub textures: Textures,
     pub max_depth: u32,
     pub accumulate: bool,
     pub hemisphere: bool,
@@ -76,6 +78,7 @@ impl<'a> Transport<'a> {
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
+            textures: Textures::new(scene),
             lights,
             max_depth,
             accumulate: s.accumulate,
@@ -118,7 +121,8 @@ impl<'a> Transport<'a> {
         // The shading normal goes to the same side as the geometric one.
         let ns = if sp.shading_normal.dot(ng) < 0.0 { -sp.shading_normal } else { sp.shading_normal };
         let m = sp.material as usize;
-        Vertex { p: sp.position, ng, ns, albedo: self.albedo[m], emission: self.emission[m] }
+        let albedo = self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]);
+        Vertex { p: sp.position, ng, ns, albedo, emission: self.emission[m] }
     }
 
     /// The stream of the vertex at `depth` of path (pixel, sample).

@@ -9,6 +9,7 @@ mod material;
 mod mesh;
 mod normals;
 mod surface;
+pub mod texture;
 
 pub use camera::Camera;
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
@@ -16,6 +17,7 @@ pub use material::{Bsdf, Material, Texture};
 pub use mesh::{Mesh, Sphere};
 pub use normals::area_weighted_vertex_normals;
 pub use surface::SurfacePoint;
+pub use texture::Textures;
 
 use glam::Vec3;
 
