@@ -1,5 +1,5 @@
-use glam::Vec3;
 pub use super::texture::Texture;
+use glam::Vec3;
 
 /// The scattering model of a surface, as the scene file states it.
 ///

@@ -93,14 +93,7 @@ pub struct Texture {
 impl Texture {
     /// An OBJ `map_Kd`: repeat, bilinear, v up, not yet decoded.
     pub fn obj(path: PathBuf) -> Texture {
-        Texture {
-            path,
-            image: None,
-            wrap: [Wrap::Repeat; 2],
-            filter: Filter::Linear,
-            flip_v: true,
-            factor: Vec3::ONE,
-        }
+        Texture { path, image: None, wrap: [Wrap::Repeat; 2], filter: Filter::Linear, flip_v: true, factor: Vec3::ONE }
     }
 
     /// Albedo at `uv`; `None` when the image is missing.
@@ -161,11 +154,8 @@ pub struct Textures {
 
 impl Textures {
     pub fn new(scene: &super::Scene) -> Textures {
-        let per_material: Vec<Option<Texture>> = scene
-            .materials
-            .iter()
-            .map(|m| m.albedo_texture.clone().filter(|t| t.image.is_some()))
-            .collect();
+        let per_material: Vec<Option<Texture>> =
+            scene.materials.iter().map(|m| m.albedo_texture.clone().filter(|t| t.image.is_some())).collect();
         let any = scene.mesh.uvs.is_some() && per_material.iter().any(Option::is_some);
         Textures { per_material, any }
     }
