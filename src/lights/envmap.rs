@@ -121,12 +121,19 @@ impl EnvMap {
     /// Draws a direction by luminance x sin(theta): (direction, solid-angle density).
     #[inline]
     pub fn sample_dir(&self, u: [f32; 2]) -> Option<(Vec3, f32)> {
-        let (uv, pdf_uv) = self.dist.sample(u);
+        self.sample_texel(u).map(|(d, pdf, _)| (d, pdf))
+    }
+
+    /// As [`sample_dir`](Self::sample_dir), plus the radiance of the texel drawn (no second
+    /// lookup by direction).
+    #[inline]
+    pub fn sample_texel(&self, u: [f32; 2]) -> Option<(Vec3, f32, Vec3)> {
+        let (uv, pdf_uv, (x, y)) = self.dist.sample_cell(u);
         let sin_theta = (uv[1] * PI).sin();
         if pdf_uv <= 0.0 || sin_theta <= 0.0 {
             return None;
         }
-        Some((Self::dir_of(uv), pdf_uv / (2.0 * PI * PI * sin_theta)))
+        Some((Self::dir_of(uv), pdf_uv / (2.0 * PI * PI * sin_theta), self.texels[y * self.width + x]))
     }
 
     /// Solid-angle density with which [`sample_dir`](Self::sample_dir) draws `d` (unit).
@@ -143,8 +150,8 @@ impl EnvMap {
     /// A sample toward the map alone: weight = radiance / density.
     #[inline]
     pub fn sample(&self, u: [f32; 2]) -> Option<LightSample> {
-        let (wi, pdf) = self.sample_dir(u)?;
-        Some(LightSample { wi, target: None, weight: self.radiance(wi) / pdf })
+        let (wi, pdf, l) = self.sample_texel(u)?;
+        Some(LightSample { wi, target: None, weight: l / pdf })
     }
 }
 

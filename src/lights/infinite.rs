@@ -53,6 +53,10 @@ impl Infinite {
             return Some(LightSample { wi, target: None, weight: l / pdf });
         };
         let f = self.map_fraction();
+        if f == 1.0 {
+            // The map alone: its own density and the texel drawn, no second lookup.
+            return map.sample(u);
+        }
         let wi = if u[0] < f {
             map.sample_dir([u[0] / f, u[1]])?.0
         } else {
