@@ -26,7 +26,8 @@ pub struct EnvMap {
     pub height: usize,
     /// Linear RGB, row-major, row 0 at the top (+Y).
     texels: Vec<Vec3>,
-    dist: Distribution2D,
+    /// Sampling by luminance x sin(theta); each cell carries its texel's radiance.
+    dist: Distribution2D<Vec3>,
 }
 
 impl std::fmt::Debug for EnvMap {
@@ -77,7 +78,7 @@ impl EnvMap {
                 crate::integrator::illuminance(*t) * theta.sin()
             })
             .collect();
-        let dist = Distribution2D::new(&weights, width, height);
+        let dist = Distribution2D::with_payload(&weights, &texels, width, height);
         Ok(EnvMap { path, width, height, texels, dist })
     }
 
@@ -128,12 +129,12 @@ impl EnvMap {
     /// lookup by direction).
     #[inline]
     pub fn sample_texel(&self, u: [f32; 2]) -> Option<(Vec3, f32, Vec3)> {
-        let (uv, pdf_uv, (x, y)) = self.dist.sample_cell(u);
+        let (uv, pdf_uv, l) = self.dist.sample_payload(u);
         let sin_theta = (uv[1] * PI).sin();
         if pdf_uv <= 0.0 || sin_theta <= 0.0 {
             return None;
         }
-        Some((Self::dir_of(uv), pdf_uv / (2.0 * PI * PI * sin_theta), self.texels[y * self.width + x]))
+        Some((Self::dir_of(uv), pdf_uv / (2.0 * PI * PI * sin_theta), l))
     }
 
     /// Solid-angle density with which [`sample_dir`](Self::sample_dir) draws `d` (unit).
@@ -202,12 +203,17 @@ mod tests {
         }
         assert!((sum - 1.0).abs() < 2e-3, "{sum}");
         let mut s = Sampler::for_sample(4, 0, 0);
+        let mut other_texel = 0;
         for _ in 0..1000 {
-            if let Some((d, p)) = m.sample_dir([s.next_f32(), s.next_f32()]) {
+            if let Some((d, p, l)) = m.sample_texel([s.next_f32(), s.next_f32()]) {
                 assert!((p - m.pdf(d)).abs() < 1e-3 * p, "{p} vs {}", m.pdf(d));
-                assert!(m.radiance(d).max_element() > 0.0, "sampled a black texel");
+                assert!(l.max_element() > 0.0, "sampled a black texel");
+                // The carried radiance is the texel the direction falls in (but for rounding
+                // right at a texel edge).
+                other_texel += (l != m.radiance(d)) as u32;
             }
         }
+        assert!(other_texel <= 3, "{other_texel} samples carried another texel's radiance");
     }
 
     #[test]

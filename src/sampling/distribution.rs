@@ -6,9 +6,13 @@
 /// with an alias table (Vose): one table entry, one cache line, per sample. A binary search
 /// over a cdf takes ~log2(n) dependent loads, each a cache miss on a large map, which made
 /// environment-map sampling memory-bound.
+///
+/// Each cell can carry a payload `P` (an environment map keeps its texel there), stored in
+/// the alias slot beside the alias's payload, so that drawing a cell and reading what it
+/// holds is a single cache line.
 #[derive(Clone, Debug)]
-pub struct Distribution1D {
-    cells: Vec<AliasCell>,
+pub struct Distribution1D<P: Copy = ()> {
+    cells: Vec<AliasCell<P>>,
     /// Sum of the weights divided by the cell count (the mean weight).
     integral: f32,
 }
@@ -16,28 +20,45 @@ pub struct Distribution1D {
 /// One alias-table slot: stay in this cell with probability `stay`, else go to `alias`;
 /// the densities of both cells are kept beside them so a sample touches one slot.
 #[derive(Clone, Copy, Debug)]
-struct AliasCell {
+struct AliasCell<P> {
     stay: f32,
     alias: u32,
     pdf: f32,
     alias_pdf: f32,
+    payload: P,
+    alias_payload: P,
 }
 
 impl Distribution1D {
     /// From cell weights; negative or non-finite weights count as zero. All-zero weights
     /// give the uniform distribution (so a black row can still be sampled consistently).
     pub fn new(weights: &[f32]) -> Self {
+        Distribution1D::with_payload(weights, &vec![(); weights.len().max(1)])
+    }
+}
+
+impl<P: Copy + Default> Distribution1D<P> {
+    /// As [`new`](Distribution1D::new), cell `i` carrying `payload[i]` (missing: default).
+    pub fn with_payload(weights: &[f32], payload: &[P]) -> Self {
         let n = weights.len().max(1);
+        let pay = |i: usize| payload.get(i).copied().unwrap_or_default();
         let func: Vec<f64> = (0..n)
             .map(|i| weights.get(i).copied().filter(|w| w.is_finite() && *w > 0.0).unwrap_or(0.0) as f64)
             .collect();
         let total: f64 = func.iter().sum();
         // Cell probabilities scaled so that the mean is 1 (this is also the density).
         let scaled: Vec<f64> = func.iter().map(|&w| if total > 0.0 { w * n as f64 / total } else { 1.0 }).collect();
-        let mut cells: Vec<AliasCell> = scaled
+        let mut cells: Vec<AliasCell<P>> = scaled
             .iter()
             .enumerate()
-            .map(|(i, &p)| AliasCell { stay: 1.0, alias: i as u32, pdf: p as f32, alias_pdf: p as f32 })
+            .map(|(i, &p)| AliasCell {
+                stay: 1.0,
+                alias: i as u32,
+                pdf: p as f32,
+                alias_pdf: p as f32,
+                payload: pay(i),
+                alias_payload: pay(i),
+            })
             .collect();
         let mut left = scaled.clone();
         let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&i| left[i] < 1.0);
@@ -46,6 +67,7 @@ impl Distribution1D {
             cells[s].stay = left[s] as f32;
             cells[s].alias = l as u32;
             cells[s].alias_pdf = scaled[l] as f32;
+            cells[s].alias_payload = pay(l);
             left[l] -= 1.0 - left[s];
             if left[l] < 1.0 {
                 large.pop();
@@ -57,6 +79,7 @@ impl Distribution1D {
             cells[i].stay = 1.0;
             cells[i].alias = i as u32;
             cells[i].alias_pdf = cells[i].pdf;
+            cells[i].alias_payload = cells[i].payload;
         }
         Distribution1D { cells, integral: (total / n as f64) as f32 }
     }
@@ -77,18 +100,25 @@ impl Distribution1D {
     /// Maps a uniform `u` to (x in [0,1), its density, its cell); x is uniform inside the cell.
     #[inline]
     pub fn sample(&self, u: f32) -> (f32, f32, usize) {
+        let (x, pdf, cell, _) = self.sample_payload(u);
+        (x, pdf, cell)
+    }
+
+    /// As [`sample`](Self::sample), plus the cell's payload.
+    #[inline]
+    pub fn sample_payload(&self, u: f32) -> (f32, f32, usize, P) {
         let n = self.cells.len();
         let scaled = u.clamp(0.0, 1.0) * n as f32;
         let i = (scaled as usize).min(n - 1);
         let frac = (scaled - i as f32).clamp(0.0, 1.0);
         let c = self.cells[i];
-        let (cell, pdf, t) = if frac < c.stay {
-            (i, c.pdf, frac / c.stay)
+        let (cell, pdf, t, p) = if frac < c.stay {
+            (i, c.pdf, frac / c.stay, c.payload)
         } else {
-            (c.alias as usize, c.alias_pdf, (frac - c.stay) / (1.0 - c.stay))
+            (c.alias as usize, c.alias_pdf, (frac - c.stay) / (1.0 - c.stay), c.alias_payload)
         };
         let x = ((cell as f32 + t.clamp(0.0, 1.0)) / n as f32).min(1.0 - f32::EPSILON);
-        (x, pdf, cell)
+        (x, pdf, cell, p)
     }
 
     /// Density of cell `i` (constant inside it).
@@ -107,17 +137,30 @@ impl Distribution1D {
 /// A 2D piecewise-constant density on [0,1)^2 over a `width` x `height` grid: the marginal
 /// over rows (v) and, per row, the conditional over columns (u).
 #[derive(Clone, Debug)]
-pub struct Distribution2D {
-    rows: Vec<Distribution1D>,
+pub struct Distribution2D<P: Copy = ()> {
+    rows: Vec<Distribution1D<P>>,
     marginal: Distribution1D,
 }
 
 impl Distribution2D {
     /// `weights` is row-major, `width * height` long.
     pub fn new(weights: &[f32], width: usize, height: usize) -> Self {
+        Distribution2D::with_payload(weights, &[], width, height)
+    }
+}
+
+impl<P: Copy + Default> Distribution2D<P> {
+    /// As [`new`](Distribution2D::new), cell (x, y) carrying `payload[y * width + x]`.
+    pub fn with_payload(weights: &[f32], payload: &[P], width: usize, height: usize) -> Self {
         let (w, h) = (width.max(1), height.max(1));
-        let rows: Vec<Distribution1D> =
-            (0..h).map(|y| Distribution1D::new(weights.get(y * w..(y + 1) * w).unwrap_or(&[]))).collect();
+        let rows: Vec<Distribution1D<P>> = (0..h)
+            .map(|y| {
+                Distribution1D::with_payload(
+                    weights.get(y * w..(y + 1) * w).unwrap_or(&[]),
+                    payload.get(y * w..(y + 1) * w).unwrap_or(&[]),
+                )
+            })
+            .collect();
         let marginal = Distribution1D::new(&rows.iter().map(|r| r.integral()).collect::<Vec<_>>());
         Distribution2D { rows, marginal }
     }
@@ -125,16 +168,16 @@ impl Distribution2D {
     /// Maps two uniforms to ((u, v) in [0,1)^2, density with respect to du dv).
     #[inline]
     pub fn sample(&self, u: [f32; 2]) -> ([f32; 2], f32) {
-        let (uv, pdf, _) = self.sample_cell(u);
+        let (uv, pdf, _) = self.sample_payload(u);
         (uv, pdf)
     }
 
-    /// As [`sample`](Self::sample), plus the cell (column, row) the point is in.
+    /// As [`sample`](Self::sample), plus the cell's payload.
     #[inline]
-    pub fn sample_cell(&self, u: [f32; 2]) -> ([f32; 2], f32, (usize, usize)) {
+    pub fn sample_payload(&self, u: [f32; 2]) -> ([f32; 2], f32, P) {
         let (v, pv, row) = self.marginal.sample(u[1]);
-        let (x, pu, col) = self.rows[row].sample(u[0]);
-        ([x, v], pv * pu, (col, row))
+        let (x, pu, _, p) = self.rows[row].sample_payload(u[0]);
+        ([x, v], pv * pu, p)
     }
 
     /// Density at (u, v) with respect to du dv.
