@@ -148,7 +148,10 @@ fn white_plane_under_the_map_reflects_its_irradiance() {
     let map = uffizi();
     let expect = brute_force_irradiance(&map, glam::DVec3::Y, 2) / PI;
     let mut scene = white_plane();
+    assert!(!wavepath::effects::Effects::of(&scene, &Settings::default()).environment_map);
     scene.env = Environment::Map(map);
+    let e = wavepath::effects::Effects::of(&scene, &Settings::default());
+    assert!(e.environment_map && e.environment && e.infinite_light, "{:?}", e.names());
     let s = Settings {
         width: 16,
         height: 16,

@@ -89,3 +89,14 @@ fn points_off_the_focal_plane_blur_by_the_circle_of_confusion() {
         assert!((c - c0).length() < 0.1, "centroid {c} vs {c0}");
     }
 }
+
+/// `thin-lens` is an effect only when the camera has an aperture.
+#[test]
+fn thin_lens_effect_follows_the_aperture() {
+    let mut scene = wavepath::load::default_scene();
+    let s = Settings::default();
+    assert!(!wavepath::effects::Effects::of(&scene, &s).thin_lens);
+    scene.camera.lens_radius = 0.1;
+    let e = wavepath::effects::Effects::of(&scene, &s);
+    assert!(e.thin_lens && e.names().contains(&"thin-lens"));
+}

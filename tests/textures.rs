@@ -69,6 +69,8 @@ fn pixel_ray(scene: &Scene, x: usize, y: usize) -> wavepath::ray::Ray {
 fn tex_cube_shows_its_texture() {
     let path = common::scene("obj/tex_cube/tex_cube.obj").expect("WAVEPATH_SCENES must point at the scenes");
     let mut scene = load(&path, &LoadOptions::default()).unwrap();
+    assert!(wavepath::effects::Effects::of(&scene, &Settings::default()).textures);
+    assert!(!wavepath::effects::Effects::of(&wavepath::load::default_scene(), &Settings::default()).textures);
     let t = scene.materials[0].albedo_texture.as_ref().expect("map_Kd is loaded");
     assert_eq!((t.wrap, t.filter), ([Wrap::Repeat; 2], Filter::Linear));
     let png = image::open(path.with_file_name("tatsy_logo.png")).unwrap().into_rgb8();
