@@ -52,6 +52,14 @@ pub struct Effects {
     pub microfacet: bool,
     /// Any of the three: the kernel shades through the BSDF models.
     pub non_diffuse: bool,
+    // --- Environment map, textures, lens (issue 7) ---
+    /// An environment map lights the scene (importance-sampled) and camera misses see it.
+    pub environment_map: bool,
+    /// Some material takes its albedo from an image through the mesh's uv coordinates.
+    pub textures: bool,
+    /// The camera has an aperture (`-b R > 0`): camera rays start on the lens disk.
+    pub thin_lens: bool,
+    // --- end environment map, textures, lens ---
     /// Every flag was forced on by `--all-effects`.
     pub forced: bool,
     /// The effects that are on, in a fixed order, with their reasons.
@@ -93,14 +101,15 @@ impl Effects {
             (sees_emission && emissive_tris + emissive_spheres > 0)
                 .then(|| format!("{emissive_tris} emissive triangle(s), {emissive_spheres} emissive sphere(s)")),
         );
-        let env = match scene.env {
-            Environment::Constant(c) if c != glam::Vec3::ZERO => Some(c),
+        let env = match &scene.env {
+            Environment::Constant(c) if *c != glam::Vec3::ZERO => Some(format!("constant environment {c}")),
+            Environment::Map(m) => Some(format!("environment map {}", m.path.display())),
             _ => None,
         };
         add(
             &mut f[3],
             "environment",
-            env.filter(|_| sees_emission).map(|c| format!("constant environment {c} seen by camera misses")),
+            env.clone().filter(|_| sees_emission).map(|c| format!("{c} seen by camera misses")),
         );
         let areas = count("area");
         let area_reason = if areas > 0 {
@@ -123,7 +132,7 @@ impl Effects {
             &mut f[6],
             "infinite-light",
             (lit && !settings.hemisphere && (hemi_light || env.is_some()))
-                .then(|| "hemisphere light or constant environment sampled".into()),
+                .then(|| "hemisphere light or environment sampled".into()),
         );
         let direct_reason = if !lit {
             None
@@ -171,6 +180,39 @@ impl Effects {
                 .then(|| format!("-m {depth} > 2 and --rr {} < 1", settings.rr_continue)),
         );
         add(&mut f[10], "adaptive-sampling", settings.adaptive.map(|(b, t)| format!("-a {b} {t}")));
+        // --- Environment map, textures, lens (issue 7) ---
+        let mut g = [false; 3];
+        let mut add = |flag: &mut bool, name: &'static str, why: Option<String>| {
+            if let Some(reason) = forced(why) {
+                *flag = true;
+                e.on.push(Effect { name, reason });
+            }
+        };
+        add(
+            &mut g[0],
+            "environment-map",
+            match &scene.env {
+                Environment::Map(m) if !normals => {
+                    Some(format!("{} ({}x{}), importance-sampled by luminance", m.path.display(), m.width, m.height))
+                }
+                _ => None,
+            },
+        );
+        let textured = scene.materials.iter().filter(|m| m.albedo_texture.is_some()).count();
+        add(
+            &mut g[1],
+            "textures",
+            (!normals && textured > 0 && scene.mesh.uvs.is_some())
+                .then(|| format!("{textured} material(s) with an albedo texture")),
+        );
+        let r = scene.camera.lens_radius;
+        add(
+            &mut g[2],
+            "thin-lens",
+            (r > 0.0).then(|| format!("lens radius {r}, focal distance {}", scene.camera.focal_distance)),
+        );
+        [e.environment_map, e.textures, e.thin_lens] = g;
+        // --- end environment map, textures, lens ---
         [
             e.normal_shading,
             e.spheres,

@@ -388,15 +388,21 @@ fn gltf_emissive_strength_multiplies_the_emissive_factor() {
 }
 
 #[test]
-fn gltf_external_texture_is_recorded_and_embedded_is_not() {
+fn gltf_external_texture_is_recorded_and_embedded_is_decoded() {
     let d = temp_dir("gltf_tex");
     let extra = r#","materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
         "textures":[{"source":0}],"images":[{"uri":"albedo.png"}]"#;
     let text = tiny_gltf(r#"{"mesh":0}"#, extra).replace(r#""attributes""#, r#""material":0,"attributes""#);
     let s = load_ok(&write(&d, "tex.gltf", text));
-    assert_eq!(s.materials[0].albedo_texture.as_ref().unwrap().path, d.join("albedo.png"));
-    let Some(glb) = common::scene("gltf/BoxTextured.glb") else { return };
-    assert!(load_ok(&glb).materials.iter().all(|m| m.albedo_texture.is_none()));
+    let t = s.materials[0].albedo_texture.as_ref().unwrap();
+    // The file is missing: recorded (with a warning), nothing decoded.
+    assert_eq!((&t.path, t.image.is_none()), (&d.join("albedo.png"), true));
+    let glb = common::scene("gltf/BoxTextured.glb").expect("WAVEPATH_SCENES must point at the scenes");
+    let textured: Vec<_> = load_ok(&glb).materials.into_iter().filter_map(|m| m.albedo_texture).collect();
+    assert_eq!(textured.len(), 1);
+    // The embedded PNG (256x256 Cesium logo) is decoded from its buffer view.
+    let img = textured[0].image.as_ref().expect("embedded image decoded");
+    assert_eq!((img.width, img.height), (256, 256));
 }
 
 // ------------------------------------------------------------------ bad input

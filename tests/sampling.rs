@@ -76,7 +76,7 @@ fn cosine_hemisphere_matches_its_pdf() {
 #[test]
 fn infinite_light_sampling_matches_its_pdf() {
     let n = Vec3::new(0.3, -0.5, 0.8).normalize();
-    let light = SampledLight::Infinite(Infinite { upper: Vec3::ZERO, all: Vec3::splat(2.0) });
+    let light = SampledLight::Infinite(Infinite { upper: Vec3::ZERO, all: Vec3::splat(2.0), map: None });
     let nd = n.as_dvec3();
     chi_square(
         "infinite light (cosine about a tilted normal)",

@@ -28,7 +28,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
         scene.camera.focal_distance = d as f32;
     }
     if let Some(e) = &a.envmap {
-        bail!("{}: environment maps (-e) are not yet supported", e.display());
+        scene.env = crate::scene::Environment::Map(std::sync::Arc::new(crate::lights::EnvMap::load(e)?));
     }
     Ok(scene)
 }

@@ -17,7 +17,7 @@ pub use offset::{offset_origin, shadow_tmax};
 use crate::lights::LightSet;
 use crate::ray::{Hit, Ray};
 use crate::sampling::{Frame, Sampler, warp};
-use crate::scene::Scene;
+use crate::scene::{Scene, Textures};
 use crate::settings::{Settings, Shading};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -39,6 +39,8 @@ pub struct Transport<'a> {
     pub models: Vec<crate::bsdf::Model>,
     /// Some material is not Lambertian: shading goes through [`ShadingFrame`].
     pub non_diffuse: bool,
+    /// Albedo textures per material (issue 7); empty lookups when the scene has none.
+    pub textures: Textures,
     pub max_depth: u32,
     pub accumulate: bool,
     pub hemisphere: bool,
@@ -94,6 +96,7 @@ impl<'a> Transport<'a> {
                 .materials
                 .iter()
                 .any(|m| crate::bsdf::Model::new(&m.bsdf).kind() != crate::bsdf::Kind::Diffuse),
+            textures: Textures::new(scene),
             lights,
             max_depth,
             accumulate: s.accumulate,
@@ -141,7 +144,7 @@ impl<'a> Transport<'a> {
             p: sp.position,
             ng,
             ns,
-            albedo: self.albedo[m],
+            albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]),
             emission: self.emission[m],
             material: sp.material,
             front,

@@ -34,7 +34,7 @@ impl PathCtx<'_, '_> {
     fn radiance(&mut self, ray: &Ray) -> Vec3 {
         self.st.camera += 1;
         let Some(hit) = self.accel.closest_hit(ray, &mut self.st.trace) else {
-            return if self.t.counts_emission() { self.t.lights.background } else { Vec3::ZERO };
+            return if self.t.counts_emission() { self.t.lights.background_toward(ray.dir) } else { Vec3::ZERO };
         };
         let v = self.t.vertex(ray, &hit);
         let mut l = if self.t.counts_emission() { v.emission } else { Vec3::ZERO };

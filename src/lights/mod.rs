@@ -12,9 +12,11 @@
 //!   and hemisphere-sampling rays see; sampling both would count that light twice).
 
 mod emissive;
+pub mod envmap;
 mod infinite;
 
 pub use emissive::EmissiveTriangles;
+pub use envmap::EnvMap;
 pub use infinite::Infinite;
 
 use crate::scene::{Environment, Light, Scene};
@@ -47,7 +49,7 @@ pub enum SampledLight {
         area: f32,
         radiance: Vec3,
     },
-    /// Light from infinity (hemisphere light and constant environment), cosine-sampled.
+    /// Light from infinity (hemisphere light, constant environment, environment map).
     Infinite(Infinite),
     Emissive(EmissiveTriangles),
 }
@@ -211,8 +213,8 @@ pub struct LightSet {
     /// Radiance arriving from infinity (hemisphere light and constant environment): what a
     /// hemisphere-sampling ray that escapes the scene counts.
     pub infinite: Infinite,
-    /// What a camera ray that misses everything sees: the constant environment only (the
-    /// reference shows the ambient light's sky as black).
+    /// What a camera ray that misses everything sees, besides the map: the constant
+    /// environment only (the reference shows the ambient light's sky as black).
     pub background: Vec3,
 }
 
@@ -253,18 +255,31 @@ impl LightSet {
             }
         }
         let mut background = Vec3::ZERO;
-        if let Environment::Constant(c) = scene.env {
-            infinite.all += c;
-            background = c;
+        match &scene.env {
+            Environment::Constant(c) => {
+                infinite.all += *c;
+                background = *c;
+            }
+            Environment::Map(m) => infinite.map = Some(m.clone()),
+            Environment::None => {}
         }
-        if infinite.upper != Vec3::ZERO || infinite.all != Vec3::ZERO {
-            lights.push(SampledLight::Infinite(infinite));
+        if infinite.upper != Vec3::ZERO || infinite.all != Vec3::ZERO || infinite.map.is_some() {
+            lights.push(SampledLight::Infinite(infinite.clone()));
         }
         let has_area = scene.lights.iter().any(|l| matches!(l, Light::Area { .. }));
         if !has_area && let Some(e) = EmissiveTriangles::new(scene) {
             lights.push(SampledLight::Emissive(e));
         }
         LightSet { lights, infinite, background }
+    }
+
+    /// What a camera ray that misses everything sees looking toward `dir` (unit).
+    #[inline]
+    pub fn background_toward(&self, dir: Vec3) -> Vec3 {
+        match &self.infinite.map {
+            None => self.background,
+            Some(m) => self.background + m.radiance(dir),
+        }
     }
 
     /// Samples taken for light `i` at one shading point: one for delta lights, `-l` otherwise.
@@ -311,7 +326,7 @@ mod tests {
     /// A constant environment sampled cosine-weighted gives E = pi L with zero variance.
     #[test]
     fn constant_environment_irradiance() {
-        let light = SampledLight::Infinite(Infinite { upper: Vec3::ZERO, all: Vec3::splat(2.0) });
+        let light = SampledLight::Infinite(Infinite { upper: Vec3::ZERO, all: Vec3::splat(2.0), map: None });
         let n = Vec3::new(0.3, 0.4, -0.5).normalize();
         let mut s = Sampler::for_sample(2, 0, 0);
         for _ in 0..100 {

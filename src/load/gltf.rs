@@ -5,11 +5,14 @@
 //! Triangles is appended in that order. Skins and animations are ignored: a skinned mesh
 //! loads in its bind pose. The glTF y-up frame is used as it is.
 
+use crate::scene::texture::{Filter, TextureImage, Wrap};
 use crate::scene::{Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
 use anyhow::{Result, anyhow};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::khr_lights_punctual::Kind;
-use std::path::Path;
+use gltf::texture::{MagFilter, WrappingMode};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 pub fn load(path: &Path) -> Result<Scene> {
     let shown = path.display();
@@ -38,7 +41,8 @@ fn read(path: &Path) -> Result<Scene, String> {
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone()).map_err(|e| e.to_string())?;
     let doc = &gltf.document;
 
-    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, base)).collect();
+    let images = decode_images(doc, base, &buffers, path)?;
+    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images)).collect();
     let default_material = materials.len() as u32;
     materials.push(Material::default());
 
@@ -161,14 +165,37 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
     Ok(Mesh { positions, normals, uvs, triangles, material_ids })
 }
 
-fn material(m: &gltf::Material, base: &Path) -> Material {
+fn material(m: &gltf::Material, path: &Path, images: &[Option<Arc<TextureImage>>]) -> Material {
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let strength = m.emissive_strength().unwrap_or(1.0);
-    // Embedded images (buffer views, data URIs) have no path to record yet.
-    let albedo_texture = pbr.base_color_texture().and_then(|info| match info.texture().source().source() {
-        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => Some(Texture { path: base.join(uri) }),
-        _ => None,
+    let albedo_texture = pbr.base_color_texture().map(|info| {
+        let tex = info.texture();
+        let sampler = tex.sampler();
+        let wrap = |w: WrappingMode| match w {
+            WrappingMode::Repeat => Wrap::Repeat,
+            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+        };
+        let source = tex.source();
+        let path = match source.source() {
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+                path.parent().unwrap_or(Path::new(".")).join(uri)
+            }
+            _ => PathBuf::from(format!("{}#image{}", path.display(), source.index())),
+        };
+        Texture {
+            path,
+            image: images.get(source.index()).cloned().flatten(),
+            wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+            // No mipmaps: the magnification filter decides (glTF leaves it open when absent).
+            filter: match sampler.mag_filter() {
+                Some(MagFilter::Nearest) => Filter::Nearest,
+                _ => Filter::Linear,
+            },
+            flip_v: false,
+            factor: Vec3::new(r, g, b),
+        }
     });
     Material {
         name: m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string),
@@ -176,6 +203,52 @@ fn material(m: &gltf::Material, base: &Path) -> Material {
         emission: Vec3::from(m.emissive_factor()) * strength,
         albedo_texture,
     }
+}
+
+/// Decodes every image a base-colour texture uses (sRGB), once: from a buffer view (.glb,
+/// embedded) or a file beside the scene. A missing file is a warning (the material keeps its
+/// factor); an undecodable image is an error naming it.
+fn decode_images(
+    doc: &gltf::Document,
+    base: &Path,
+    buffers: &[gltf::buffer::Data],
+    path: &Path,
+) -> Result<Vec<Option<Arc<TextureImage>>>, String> {
+    let used: std::collections::HashSet<usize> = doc
+        .materials()
+        .filter_map(|m| m.pbr_metallic_roughness().base_color_texture().map(|i| i.texture().source().index()))
+        .collect();
+    let mut out = Vec::new();
+    for img in doc.images() {
+        if !used.contains(&img.index()) {
+            out.push(None);
+            continue;
+        }
+        let decoded = match img.source() {
+            gltf::image::Source::View { view, .. } => {
+                let bytes = buffers
+                    .get(view.buffer().index())
+                    .and_then(|b| b.0.get(view.offset()..view.offset() + view.length()))
+                    .ok_or(format!("image {}: buffer view outside its buffer", img.index()))?;
+                Some(TextureImage::decode_srgb(bytes).map_err(|e| format!("image {}: {e}", img.index()))?)
+            }
+            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
+                eprintln!("warning: {}: image {} is a data URI; not supported, ignored", path.display(), img.index());
+                None
+            }
+            gltf::image::Source::Uri { uri, .. } => {
+                let file = base.join(uri);
+                if file.is_file() {
+                    Some(TextureImage::open_srgb(&file).map_err(|e| e.to_string())?)
+                } else {
+                    eprintln!("warning: {}: texture {} not found", path.display(), file.display());
+                    None
+                }
+            }
+        };
+        out.push(decoded.map(Arc::new));
+    }
+    Ok(out)
 }
 
 /// Rotation part of a node's world matrix with scale and shear removed: columns right, up,

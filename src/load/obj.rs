@@ -73,12 +73,19 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut state = state.borrow_mut();
     match mtl::parse(&text, dir) {
-        Ok(mats) => {
-            for m in &mats {
-                if let Some(t) = &m.albedo_texture
-                    && !t.path.is_file()
-                {
+        Ok(mut mats) => {
+            for m in &mut mats {
+                let Some(t) = &mut m.albedo_texture else { continue };
+                if !t.path.is_file() {
                     eprintln!("warning: {}: texture {} not found", path.display(), t.path.display());
+                    continue;
+                }
+                match crate::scene::texture::TextureImage::open_srgb(&t.path) {
+                    Ok(img) => t.image = Some(std::sync::Arc::new(img)),
+                    Err(e) => {
+                        state.error.get_or_insert(e.to_string());
+                        return Err(tobj::LoadError::MaterialParseError);
+                    }
                 }
             }
             let names: Vec<tobj::Material> =
@@ -118,6 +125,9 @@ fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Materia
         }
         let id = match m.material_id {
             Some(i) if i < materials.len() => i as u32,
+            // Faces before any `usemtl` in a file whose library defines exactly one material
+            // take that material (tex_cube.obj relies on it, as its source renderer does).
+            None if materials.len() == 1 => 0,
             _ => *default_id.get_or_insert_with(|| {
                 materials.push(Material::default());
                 materials.len() as u32 - 1

@@ -3,6 +3,7 @@
 //! Every path draws its numbers from a generator keyed by (seed, pixel, sample, bounce), so
 //! an image does not depend on the thread count, the chunk size or the order of work.
 
+pub mod distribution;
 mod rng;
 mod splitmix;
 pub mod warp;

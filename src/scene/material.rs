@@ -1,5 +1,5 @@
+pub use super::texture::Texture;
 use glam::Vec3;
-use std::path::PathBuf;
 
 /// The scattering model of a surface, as the scene file states it.
 ///
@@ -37,12 +37,6 @@ impl Bsdf {
             Bsdf::Phong { diffuse, .. } => diffuse,
         }
     }
-}
-
-/// An albedo image looked up through the mesh's uv coordinates.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Texture {
-    pub path: PathBuf,
 }
 
 /// A surface's appearance: how it scatters and what it emits.

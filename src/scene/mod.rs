@@ -9,6 +9,7 @@ mod material;
 mod mesh;
 mod normals;
 mod surface;
+pub mod texture;
 
 pub use camera::Camera;
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
@@ -16,6 +17,7 @@ pub use material::{Bsdf, Material, Texture};
 pub use mesh::{Mesh, Sphere};
 pub use normals::area_weighted_vertex_normals;
 pub use surface::SurfacePoint;
+pub use texture::Textures;
 
 use glam::Vec3;
 
@@ -63,8 +65,9 @@ pub enum Environment {
     None,
     /// The same radiance from every direction.
     Constant(Vec3),
-    /// An equirectangular (lat-long) map, linear RGB, row 0 at the top (+Y).
-    Map { path: std::path::PathBuf },
+    /// An equirectangular (lat-long) map, linear RGB, row 0 at the top (+Y); loaded once
+    /// with its sampling distribution (orientation: see `lights::envmap`).
+    Map(std::sync::Arc<crate::lights::EnvMap>),
 }
 
 /// Everything needed to render: geometry, appearance, lights and the view.

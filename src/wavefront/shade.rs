@@ -17,7 +17,7 @@ pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>]
         q.alive[i] = false;
         let Some(hit) = *hit else {
             if F::ENVIRONMENT && depth == 0 && sees_emission {
-                q.radiance[i] += q.throughput[i] * t.lights.background;
+                q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
             }
             if F::NON_DIFFUSE && depth > 0 {
                 q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
