@@ -42,6 +42,18 @@ impl PathQueue {
         self.truncate(0);
     }
 
+    /// Room for `n` more paths in every field.
+    pub fn reserve(&mut self, n: usize) {
+        self.ray.reserve(n);
+        self.key.reserve(n);
+        self.slot.reserve(n);
+        self.throughput.reserve(n);
+        self.radiance.reserve(n);
+        self.depth.reserve(n);
+        self.alive.reserve(n);
+        self.bounce.reserve(n);
+    }
+
     pub fn truncate(&mut self, n: usize) {
         self.ray.truncate(n);
         self.key.truncate(n);
