@@ -33,15 +33,18 @@ impl Wave<'_> {
 /// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
 pub fn generate(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
     q.clear();
-    q.reserve(wave.len());
-    let mut slot = 0;
+    let n = wave.len();
+    q.ray.reserve(n);
+    q.key.reserve(n);
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
         let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
         for sample in wave.base..wave.base + wave.batch {
             let key = Sampler::sample_key(pixel_key, sample as u64);
-            q.push_camera(t.camera_ray_keyed(x, y, width, height, key, spp), key, slot);
-            slot += 1;
+            q.ray.push(t.camera_ray_keyed(x, y, width, height, key, spp));
+            q.key.push(key);
         }
     }
+    // The fields every camera path starts with are the same: filled field by field.
+    q.start_camera_paths(n);
 }
