@@ -29,9 +29,20 @@ impl Sampler {
     /// wavefront path stores it once so each vertex costs one hash, not four.
     #[inline]
     pub fn path_key(seed: u64, pixel: u64, sample: u64) -> u64 {
-        let k = splitmix64(seed ^ 0xA076_1D64_78BD_642F);
-        let k = splitmix64(k ^ pixel);
-        splitmix64(k ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB))
+        Self::sample_key(Self::pixel_key(seed, pixel), sample)
+    }
+
+    /// The part of [`path_key`](Self::path_key) that depends only on (seed, pixel): the
+    /// wavefront's generate stage takes it once per pixel instead of once per sample.
+    #[inline]
+    pub fn pixel_key(seed: u64, pixel: u64) -> u64 {
+        splitmix64(splitmix64(seed ^ 0xA076_1D64_78BD_642F) ^ pixel)
+    }
+
+    /// [`path_key`](Self::path_key) from the pixel's [`pixel_key`](Self::pixel_key).
+    #[inline]
+    pub fn sample_key(pixel_key: u64, sample: u64) -> u64 {
+        splitmix64(pixel_key ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB))
     }
 
     /// Stream `bounce` of the path whose [`path_key`](Self::path_key) is `key`; the same
@@ -107,5 +118,6 @@ mod tests {
         assert_eq!(s.next_u32(), Sampler::for_sample(3, 4, 5).at(1).next_u32());
         let key = Sampler::path_key(3, 4, 5);
         assert_eq!(Sampler::for_vertex(key, 2), Sampler::for_bounce(3, 4, 5, 2));
+        assert_eq!(Sampler::sample_key(Sampler::pixel_key(3, 4), 5), key);
     }
 }

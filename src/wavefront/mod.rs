@@ -56,7 +56,7 @@ pub trait Features {
     const DIRECT: bool;
     /// Continuation rays and the bounce (compact) stage.
     const INDIRECT: bool;
-    /// Russian roulette in the bounce stage.
+    /// Russian roulette (played in shade, where the vertex stream is at hand).
     const ROULETTE: bool;
     /// Materials other than Lambertian: shading goes through the BSDF models, and a path's
     /// ray can find light (after a mirror, glass or glossy bounce).
@@ -259,7 +259,7 @@ fn run_wave<F: Features>(c: &Ctx, wave: &Wave, l: &mut Local, out: &mut [PixelSu
             clock = lap(clock, &mut st.stages.shadow);
         }
         if F::INDIRECT {
-            compact::compact::<F>(t, &mut l.paths, &mut l.slot_radiance);
+            compact::compact(&mut l.paths, &mut l.slot_radiance);
             clock = lap(clock, &mut st.stages.compact);
         } else {
             // Every path ended at its first hit, still in slot order.

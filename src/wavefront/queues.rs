@@ -42,6 +42,24 @@ impl PathQueue {
         self.truncate(0);
     }
 
+    /// Gives the `n` camera rays (and keys) already in `ray` and `key` a fresh path state:
+    /// slots 0..n in order, unit throughput, no radiance, depth 0.
+    pub fn start_camera_paths(&mut self, n: usize) {
+        debug_assert!(self.ray.len() == n && self.key.len() == n);
+        self.slot.clear();
+        self.slot.extend(0..n as u32);
+        for (v, x) in [(&mut self.throughput, Vec3::ONE), (&mut self.radiance, Vec3::ZERO)] {
+            v.clear();
+            v.resize(n, x);
+        }
+        self.depth.clear();
+        self.depth.resize(n, 0);
+        self.alive.clear();
+        self.alive.resize(n, false);
+        self.bounce.clear();
+        self.bounce.resize(n, Bounce::DELTA);
+    }
+
     pub fn truncate(&mut self, n: usize) {
         self.ray.truncate(n);
         self.key.truncate(n);
@@ -75,7 +93,7 @@ impl PathQueue {
         self.throughput[to] = self.throughput[from];
         self.radiance[to] = self.radiance[from];
         self.depth[to] = self.depth[from];
-        self.alive[to] = self.alive[from];
+        // `alive` is not copied: shade sets it for every path before reading it.
         self.bounce[to] = self.bounce[from];
     }
 }

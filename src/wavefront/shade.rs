@@ -4,11 +4,12 @@ use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::integrator::Transport;
 use crate::ray::Hit;
+use crate::sampling::Sampler;
 use glam::Vec3;
 
 /// Shades every path against its hit: adds emission (and the environment) seen by camera
 /// rays, appends the path's shadow rays (throughput applied), and replaces the path's ray by
-/// its continuation (`alive`) or ends it. Parts whose effect `F` leaves out are not compiled in.
+/// its continuation (`alive`, after Russian roulette) or ends it. Parts whose effect `F` leaves out are not compiled in.
 pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
@@ -49,6 +50,7 @@ pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>]
                 q.depth[i] = depth + 1;
                 q.alive[i] = true;
                 q.bounce[i] = bounce;
+                roulette::<F>(t, q, i, depth, rng);
             }
             continue;
         }
@@ -63,6 +65,20 @@ pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>]
             q.throughput[i] *= w;
             q.depth[i] = depth + 1;
             q.alive[i] = true;
+            roulette::<F>(t, q, i, depth, rng);
+        }
+    }
+}
+
+/// Russian roulette for path `i`'s new continuation, here where the vertex's stream is at
+/// hand (the bounce stage would have to derive it again), applied after the BSDF weight as
+/// [`Transport::continuation`] does; the shadow rays already took the throughput before it.
+#[inline]
+fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
+    if F::ROULETTE {
+        match t.roulette(depth, rng) {
+            Some(f) => q.throughput[i] *= f,
+            None => q.alive[i] = false,
         }
     }
 }
