@@ -111,7 +111,31 @@ pub fn intersect_sheared(
     if !(t >= tmin && t <= tmax) {
         return None;
     }
+    // A hit this close could be the rounding of a plane behind the origin (a ray leaving
+    // the surface it starts on): reject t within the bound of its own rounding error
+    // (pbrt-v3 3.9.6). Ray origins are offset by the hit point's error bound, which puts
+    // their own surface strictly behind them, so this is what keeps them off it.
+    if t <= t_error_bound([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], inv, r.sz) {
+        return None;
+    }
     Some((t, v * inv, w * inv))
+}
+
+/// pbrt-v3's conservative bound on the rounding error of the `t` computed above from the
+/// sheared corners (x, y, z scaled by `sz`), the edge functions `e` and `1 / det`. The shear's
+/// error in x and y is bounded with the unscaled z (pbrt uses the scaled one, which for a
+/// direction far from unit length mixes units and rejects real hits: |sx|, |sy| <= 1).
+#[inline]
+fn t_error_bound(x: [f32; 3], y: [f32; 3], z: [f32; 3], e: [f32; 3], inv_det: f32, sz: f32) -> f32 {
+    use crate::scene::error_bound::gamma;
+    let amax = |a: [f32; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
+    let (max_x, max_y, max_z, max_e) = (amax(x), amax(y), amax(z), amax(e));
+    let delta_z = gamma(3) * max_z;
+    let max_z_world = max_z / sz.abs();
+    let delta_x = gamma(5) * (max_x + max_z_world);
+    let delta_y = gamma(5) * (max_y + max_z_world);
+    let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
+    3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
 }
 
 /// Watertight test of one triangle against a ray (convenience form; precompute

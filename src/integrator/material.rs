@@ -15,7 +15,7 @@
 //! when that vertex's direct light would, and a vertex at the last depth still sends a ray
 //! (which only collects this light).
 
-use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin, shadow_tmax};
+use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin, shadow_ray};
 use crate::bsdf::{Kind, Lambert, Model, power_heuristic, to_local};
 use crate::lights::Seen;
 use crate::ray::{Hit, Ray};
@@ -86,7 +86,8 @@ impl Transport<'_> {
                     continue;
                 }
                 let wi = sh.frame.to_world(local);
-                let ray = Ray { origin: offset_origin(v.p, v.ng, wi), dir: wi, tmin: 0.0, tmax: f32::INFINITY };
+                let ray =
+                    Ray { origin: offset_origin(v.p, v.p_error, v.ng, wi), dir: wi, tmin: 0.0, tmax: f32::INFINITY };
                 out(DirectRay { ray, weight: f * (local.z / (warp::UNIFORM_HEMISPHERE_PDF * n as f32)) });
             }
             return;
@@ -102,15 +103,12 @@ impl Transport<'_> {
                     continue;
                 }
                 let w = power_heuristic(ns as f32 * pdf_l, sh.model.pdf(sh.wo, wi));
-                let origin = offset_origin(v.p, v.ng, ls.wi);
-                let tmax = match ls.target {
-                    Some(q) => shadow_tmax(origin, q),
-                    None => f32::INFINITY,
-                };
-                if tmax <= 0.0 || w <= 0.0 {
+                let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
+                if w <= 0.0 {
                     continue;
                 }
-                let ray = Ray { origin, dir: ls.wi, tmin: 0.0, tmax };
+                let target = ls.target.map(|q| (q, light.point_error()));
+                let Some(ray) = shadow_ray(origin, ls.wi, target) else { continue };
                 out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
             }
         }
@@ -148,7 +146,7 @@ impl Transport<'_> {
         } else {
             Bounce::DIFFUSE
         };
-        let origin = offset_origin(v.p, v.ng, wi);
+        let origin = offset_origin(v.p, v.p_error, v.ng, wi);
         Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, s.weight, bounce))
     }
 

@@ -12,7 +12,7 @@ pub mod recursive;
 
 pub use material::{Bounce, ShadingFrame};
 
-pub use offset::{offset_origin, shadow_tmax};
+pub use offset::{offset_origin, shadow_ray, shadow_tmax};
 
 use crate::lights::LightSet;
 use crate::ray::{Hit, Ray};
@@ -58,6 +58,8 @@ pub struct Transport<'a> {
 #[derive(Clone, Copy, Debug)]
 pub struct Vertex {
     pub p: Vec3,
+    /// Rounding error bound of `p` (see [`SurfacePoint::p_error`](crate::scene::SurfacePoint)).
+    pub p_error: Vec3,
     pub ng: Vec3,
     pub ns: Vec3,
     pub albedo: Vec3,
@@ -142,6 +144,7 @@ impl<'a> Transport<'a> {
         let m = sp.material as usize;
         Vertex {
             p: sp.position,
+            p_error: sp.p_error,
             ng,
             ns,
             albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]),
@@ -186,7 +189,7 @@ impl<'a> Transport<'a> {
                 let (a, b) = rng.next_2d();
                 let local = warp::uniform_hemisphere(a, b);
                 let wi = frame.to_world(local);
-                let origin = offset_origin(v.p, v.ng, wi);
+                let origin = offset_origin(v.p, v.p_error, v.ng, wi);
                 let ray = Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY };
                 out(DirectRay { ray, weight: scale * local.z });
             }
@@ -202,15 +205,9 @@ impl<'a> Transport<'a> {
                 if cos <= 0.0 {
                     continue;
                 }
-                let origin = offset_origin(v.p, v.ng, ls.wi);
-                let tmax = match ls.target {
-                    Some(q) => shadow_tmax(origin, q),
-                    None => f32::INFINITY,
-                };
-                if tmax <= 0.0 {
-                    continue;
-                }
-                let ray = Ray { origin, dir: ls.wi, tmin: 0.0, tmax };
+                let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
+                let target = ls.target.map(|q| (q, light.point_error()));
+                let Some(ray) = shadow_ray(origin, ls.wi, target) else { continue };
                 out(DirectRay { ray, weight: inv * ls.weight * cos });
             }
         }
@@ -242,7 +239,7 @@ impl<'a> Transport<'a> {
         }
         let (a, b) = rng.at(0).next_2d();
         let wi = Frame::new(v.ns).to_world(warp::cosine_hemisphere(a, b));
-        let origin = offset_origin(v.p, v.ng, wi);
+        let origin = offset_origin(v.p, v.p_error, v.ng, wi);
         Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, v.albedo))
     }
 

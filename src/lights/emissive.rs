@@ -1,6 +1,7 @@
 use super::{LightSample, area_to_solid_angle};
 use crate::sampling::warp;
 use crate::scene::Scene;
+use crate::scene::error_bound::gamma;
 use glam::Vec3;
 
 /// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
@@ -12,6 +13,9 @@ pub struct EmissiveTriangles {
     emission: Vec<Vec3>,
     /// Running sum of areas (the last entry is the total).
     cdf: Vec<f32>,
+    /// Largest error bound of a sampled point over all triangles (see
+    /// [`point_error`](Self::point_error)).
+    max_error: Vec3,
 }
 
 impl EmissiveTriangles {
@@ -20,6 +24,7 @@ impl EmissiveTriangles {
         let mut emission = Vec::new();
         let mut cdf = Vec::new();
         let mut total = 0.0f32;
+        let mut max_error = Vec3::ZERO;
         for (i, &m) in scene.mesh.material_ids.iter().enumerate() {
             let mat = &scene.materials[m as usize];
             if !mat.is_emissive() {
@@ -29,12 +34,24 @@ impl EmissiveTriangles {
             let area = 0.5 * (b - a).cross(c - a).length();
             if area > 0.0 && area.is_finite() {
                 total += area;
-                corners.push([a, b - a, c - a]);
+                let (e1, e2) = (b - a, c - a);
+                // a + bu e1 + bv e2 with bu, bv in [0, 1]: two products and two sums, plus
+                // the rounding of the edges themselves (up to eps |e|, scaled by bu, bv <= 1).
+                max_error = max_error.max(gamma(4) * (a.abs() + e1.abs() + e2.abs()));
+                corners.push([a, e1, e2]);
                 emission.push(mat.emission);
                 cdf.push(total);
             }
         }
-        (total > 0.0).then_some(EmissiveTriangles { corners, emission, cdf })
+        (total > 0.0).then_some(EmissiveTriangles { corners, emission, cdf, max_error })
+    }
+
+    /// Per-component bound on the distance of any sampled point from its triangle: one
+    /// bound for all triangles (the largest), since a light sample does not say which
+    /// triangle it came from; it only shortens shadow rays by a few ulps of the largest
+    /// emitter's coordinates.
+    pub fn point_error(&self) -> Vec3 {
+        self.max_error
     }
 
     pub fn total_area(&self) -> f32 {

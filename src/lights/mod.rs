@@ -19,6 +19,7 @@ pub use emissive::EmissiveTriangles;
 pub use envmap::EnvMap;
 pub use infinite::Infinite;
 
+use crate::scene::error_bound::gamma;
 use crate::scene::{Environment, Light, Scene};
 use glam::Vec3;
 
@@ -104,6 +105,24 @@ impl SampledLight {
     }
 }
 
+impl SampledLight {
+    /// Per-component bound on the rounding error of any light point [`sample`](Self::sample)
+    /// returns (its `target`): a shadow ray toward it stops short by this much, so the
+    /// surface the point was sampled on never occludes it. Point and spot positions are
+    /// given, not computed, and have none.
+    #[inline]
+    pub fn point_error(&self) -> Vec3 {
+        match *self {
+            // position + s dim_x + t dim_y with |s|, |t| <= 1/2: two products and two sums.
+            SampledLight::Area { position, dim_x, dim_y, .. } => {
+                gamma(3) * (position.abs() + 0.5 * (dim_x.abs() + dim_y.abs()))
+            }
+            SampledLight::Emissive(ref e) => e.point_error(),
+            _ => Vec3::ZERO,
+        }
+    }
+}
+
 /// What a ray from a shading point found, for asking a light how likely its light sampling
 /// was to pick the ray's direction ([`SampledLight::radiance_pdf`]).
 #[derive(Clone, Copy, Debug)]
@@ -161,7 +180,7 @@ impl SampledLight {
                     return None;
                 }
                 if let Seen::Hit { t: th, .. } = seen
-                    && th < crate::integrator::shadow_tmax(p, q)
+                    && th < crate::integrator::shadow_tmax(p, q, self.point_error())
                 {
                     return None;
                 }
