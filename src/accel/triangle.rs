@@ -115,25 +115,26 @@ pub fn intersect_sheared(
     // the surface it starts on): reject t within the bound of its own rounding error
     // (pbrt-v3 3.9.6). Ray origins are offset by the hit point's error bound, which puts
     // their own surface strictly behind them, so this is what keeps them off it.
-    if t <= t_error_bound([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], inv, r.sz) {
+    if t <= t_error_bound([ax, bx, cx], [ay, by, cy], [az, bz, cz], [u, v, w], inv, r) {
         return None;
     }
     Some((t, v * inv, w * inv))
 }
 
 /// pbrt-v3's conservative bound on the rounding error of the `t` computed above from the
-/// sheared corners (x, y, z scaled by `sz`), the edge functions `e` and `1 / det`. The shear's
-/// error in x and y is bounded with the unscaled z (pbrt uses the scaled one, which for a
-/// direction far from unit length mixes units and rejects real hits: |sx|, |sy| <= 1).
+/// sheared corners (x, y, z scaled by `sz`), the edge functions `e` and `1 / det`. The shear
+/// x - sx z rounds with an error of a few ulps of |x| + |sx z|, with z in world units: pbrt
+/// uses the scaled z instead, which mixes units and, for directions far from unit length,
+/// rejects real hits (a 1e-4 mesh traced with unnormalised rays) or leaves too little margin.
 #[inline]
-fn t_error_bound(x: [f32; 3], y: [f32; 3], z: [f32; 3], e: [f32; 3], inv_det: f32, sz: f32) -> f32 {
+fn t_error_bound(x: [f32; 3], y: [f32; 3], z: [f32; 3], e: [f32; 3], inv_det: f32, r: &ShearedRay) -> f32 {
     use crate::scene::error_bound::gamma;
     let amax = |a: [f32; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
     let (max_x, max_y, max_z, max_e) = (amax(x), amax(y), amax(z), amax(e));
+    let max_z_world = max_z / r.sz.abs();
     let delta_z = gamma(3) * max_z;
-    let max_z_world = max_z / sz.abs();
-    let delta_x = gamma(5) * (max_x + max_z_world);
-    let delta_y = gamma(5) * (max_y + max_z_world);
+    let delta_x = gamma(5) * (max_x + r.sx.abs() * max_z_world);
+    let delta_y = gamma(5) * (max_y + r.sy.abs() * max_z_world);
     let delta_e = 2.0 * (gamma(2) * max_x * max_y + delta_y * max_x + delta_x * max_y);
     3.0 * (gamma(3) * max_e * max_z + delta_e * max_z + delta_z * max_e) * inv_det.abs()
 }
