@@ -3,11 +3,12 @@
 //! change the image (every kernel part is exact when its effect is not needed).
 
 mod common;
+use common::render::wavefront;
 
 use glam::Vec3;
 use wavepath::accel::{self, BruteForce};
 use wavepath::effects::Effects;
-use wavepath::film::Accumulator;
+
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
 use wavepath::settings::{Settings, Shading};
@@ -15,19 +16,7 @@ use wavepath::stats::RenderStats;
 use wavepath::wavefront::render_wavefront;
 
 fn settings(max_depth: u32, spp: u32) -> Settings {
-    Settings {
-        width: 24,
-        height: 18,
-        spp,
-        light_samples: 2,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
-}
-
-fn wavefront(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
-    render_wavefront(scene, &BruteForce::new(scene), s, &|_| {})
+    common::render::small_settings(24, 18, max_depth, spp)
 }
 
 fn stages_json(scene: &Scene, s: &Settings, st: &RenderStats) -> serde_json::Value {

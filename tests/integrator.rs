@@ -3,36 +3,17 @@
 //! confidence bounds computed from the per-pixel sample variances.
 
 use glam::Vec3;
-use wavepath::accel::BruteForce;
-use wavepath::film::Accumulator;
-use wavepath::integrator::recursive::render_recursive;
+
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
-use wavepath::settings::{Settings, Shading};
-use wavepath::stats::RenderStats;
-use wavepath::wavefront::render_wavefront;
+use wavepath::settings::Settings;
 
 mod common;
 use common::agree::assert_agree;
+use common::render::{recursive, wavefront};
 
 fn settings(max_depth: u32, spp: u32) -> Settings {
-    Settings {
-        width: 32,
-        height: 24,
-        spp,
-        light_samples: 2,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
-}
-
-fn wavefront(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
-    render_wavefront(scene, &BruteForce::new(scene), s, &|_| {})
-}
-
-fn recursive(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {
-    render_recursive(scene, &BruteForce::new(scene), s, &|_| {})
+    common::render::small_settings(32, 24, max_depth, spp)
 }
 
 fn compare(scene: &Scene, s: &Settings, what: &str) {

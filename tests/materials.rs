@@ -3,39 +3,30 @@
 //! the recursive reference for every material.
 
 use glam::{Vec3, vec3};
-use wavepath::accel::BruteForce;
+
 use wavepath::film::Accumulator;
-use wavepath::integrator::recursive::render_recursive;
+
 use wavepath::load::default_scene;
 use wavepath::scene::{Bsdf, Camera, Environment, Light, Material, Mesh, Scene, Sphere};
 use wavepath::settings::{Settings, Shading};
-use wavepath::wavefront::render_wavefront;
 
 mod common;
 use common::agree::assert_agree;
 
 fn wavefront(scene: &Scene, s: &Settings) -> Accumulator {
-    let (acc, st) = render_wavefront(scene, &BruteForce::new(scene), s, &|_| {});
+    let (acc, st) = common::render::wavefront(scene, s);
     assert_eq!(st.invalid_samples, 0);
     acc
 }
 
 fn recursive(scene: &Scene, s: &Settings) -> Accumulator {
-    let (acc, st) = render_recursive(scene, &BruteForce::new(scene), s, &|_| {});
+    let (acc, st) = common::render::recursive(scene, s);
     assert_eq!(st.invalid_samples, 0);
     acc
 }
 
 fn settings(w: usize, h: usize, spp: u32, max_depth: u32) -> Settings {
-    Settings {
-        width: w,
-        height: h,
-        spp,
-        light_samples: 2,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
+    common::render::small_settings(w, h, max_depth, spp)
 }
 
 fn glass(ior: f32) -> Bsdf {

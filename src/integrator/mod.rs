@@ -80,6 +80,9 @@ pub struct DirectRay {
 impl<'a> Transport<'a> {
     pub fn new(scene: &'a Scene, s: &Settings) -> Self {
         let lights = LightSet::new(scene);
+        let models: Vec<crate::bsdf::Model> =
+            scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect();
+        let non_diffuse = models.iter().any(|m| m.kind() != crate::bsdf::Kind::Diffuse);
         let max_depth = if s.shading == Shading::Direct { s.max_depth.min(1) } else { s.max_depth };
         let light_samples = s.light_samples.max(1);
         let direct_per_vertex = if s.hemisphere {
@@ -93,11 +96,8 @@ impl<'a> Transport<'a> {
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
-            models: scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect(),
-            non_diffuse: scene
-                .materials
-                .iter()
-                .any(|m| crate::bsdf::Model::new(&m.bsdf).kind() != crate::bsdf::Kind::Diffuse),
+            models,
+            non_diffuse,
             textures: Textures::new(scene),
             lights,
             max_depth,

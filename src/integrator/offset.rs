@@ -22,7 +22,7 @@ const ERROR_FLOOR: f32 = 7.888_609e-31;
 /// The origin of a ray that leaves the surface point `p` (error bound `p_error`, geometric
 /// normal `ng`, any orientation) in direction `dir`: on the side of the surface `dir` points
 /// to, outside `p`'s error box, so the ray cannot find its own surface again.
-#[inline]
+#[inline(always)]
 pub fn offset_origin(p: Vec3, p_error: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
     let d = ng.abs().dot(p_error) + ERROR_FLOOR;
     let offset = if ng.dot(dir) < 0.0 { -d * ng } else { d * ng };
@@ -33,7 +33,7 @@ pub fn offset_origin(p: Vec3, p_error: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
 }
 
 /// `x` moved one ulp toward the sign of `o` (unchanged when `o` is zero).
-#[inline]
+#[inline(always)]
 fn away(x: f32, o: f32) -> f32 {
     if o > 0.0 {
         x.next_up()

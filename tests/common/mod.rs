@@ -4,6 +4,8 @@
 pub mod agree;
 pub mod chi2;
 
+pub mod render;
+
 use std::path::PathBuf;
 
 /// The shared scenes folder: `WAVEPATH_SCENES`, else `../shared/scenes` beside the repo.
