@@ -233,3 +233,41 @@ fn bad_environment_map_is_a_one_line_error() {
     assert!(err.contains("/nonexistent/sky.exr"), "{err}");
     assert_eq!(err.trim().lines().count(), 1, "{err}");
 }
+
+/// `info -e` loads the map and reports its size (read from the file's own header) and the
+/// effect it turns on; a bad map is the same one-line error as for a render.
+#[test]
+fn info_reports_the_environment_map() {
+    let (Some(map), Some(scene)) =
+        (common::scene("envmaps/uffizi_1200x600.hdr"), common::scene("cs184/sky/CBspheres_lambertian.dae"))
+    else {
+        return;
+    };
+    let out = std::process::Command::new(common::wavepath_bin())
+        .arg("info")
+        .arg(&scene)
+        .arg("-e")
+        .arg(&map)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (w, h) = image::image_dimensions(&map).unwrap();
+    let env = v["environment"].as_str().unwrap();
+    assert!(env.contains(&format!("{w}x{h}")) && env.contains("uffizi"), "{env}");
+    assert!(v["effects"].as_array().unwrap().iter().any(|e| e == "environment-map"), "{v}");
+    // Without -e the same scene has no map.
+    let out =
+        std::process::Command::new(common::wavepath_bin()).arg("info").arg(&scene).arg("--json").output().unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(!v["effects"].as_array().unwrap().iter().any(|e| e == "environment-map"), "{v}");
+    let out = std::process::Command::new(common::wavepath_bin())
+        .arg("info")
+        .arg(&scene)
+        .args(["-e", "/nonexistent/sky.hdr"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("/nonexistent/sky.hdr") && err.trim().lines().count() == 1, "{err}");
+}

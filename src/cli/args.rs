@@ -63,6 +63,9 @@ pub struct InfoArgs {
     /// COLLADA camera framing.
     #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
     pub camera: CameraMode,
+    /// Environment map (as `render -e`): loaded, its size and effects reported.
+    #[arg(short = 'e', value_name = "FILE")]
+    pub envmap: Option<PathBuf>,
 }
 
 #[derive(Subcommand, Debug)]
@@ -107,7 +110,7 @@ pub struct RenderArgs {
     /// Camera settings file (the CS184 camera dump format).
     #[arg(short = 'c', value_name = "FILE")]
     pub camera_file: Option<PathBuf>,
-    /// Environment map (equirectangular .exr/.hdr). Not yet supported.
+    /// Environment map (equirectangular .exr/.hdr): lights the scene, camera misses see it.
     #[arg(short = 'e', value_name = "FILE")]
     pub envmap: Option<PathBuf>,
     /// Thin-lens aperture radius (0: pinhole).

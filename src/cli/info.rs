@@ -3,7 +3,7 @@
 use super::args::InfoArgs;
 use crate::effects::Effects;
 use crate::load::{LoadOptions, load};
-use crate::scene::Scene;
+use crate::scene::{Environment, Scene};
 use crate::settings::Settings;
 use anyhow::Result;
 use serde_json::json;
@@ -11,7 +11,10 @@ use std::time::Instant;
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
-    let scene = load(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
+    let mut scene = load(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
+    if let Some(e) = &a.envmap {
+        scene.env = Environment::Map(std::sync::Arc::new(crate::lights::EnvMap::load(e)?));
+    }
     let load_s = t0.elapsed().as_secs_f64();
     let effects = Effects::of(&scene, &Settings::default());
     let text =
@@ -26,6 +29,15 @@ pub fn run(a: &InfoArgs) -> Result<()> {
 
 fn v3(v: glam::Vec3) -> [f32; 3] {
     v.to_array()
+}
+
+/// What arrives from outside the scene, in words.
+fn environment(env: &Environment) -> String {
+    match env {
+        Environment::None => "none".into(),
+        Environment::Constant(c) => format!("constant {c}"),
+        Environment::Map(m) => format!("map {} ({}x{})", m.path.display(), m.width, m.height),
+    }
 }
 
 pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json::Value {
@@ -54,6 +66,7 @@ pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json
             "nclip": c.nclip,
             "fclip": c.fclip,
         },
+        "environment": environment(&scene.env),
         "bounds": scene.bounds().map(|(lo, hi)| json!({ "min": v3(lo), "max": v3(hi) })),
         "effects": effects.names(),
         "load_s": load_s,
@@ -81,6 +94,7 @@ fn text(scene: &Scene, effects: &Effects, load_s: f64) -> String {
     for l in &scene.lights {
         let _ = writeln!(o, "  {l:?}");
     }
+    let _ = writeln!(o, "environment: {}", environment(&scene.env));
     let _ = writeln!(o, "materials:  {}", scene.materials.len());
     for m in &scene.materials {
         let _ = writeln!(o, "  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
