@@ -32,6 +32,9 @@ pub struct BoxRay {
     pub(super) oi_far: [f32; 3],
     /// Whether every `oi` term is finite (else the kernels use the unfused form).
     pub(super) fma: bool,
+    /// Whether the ray can hit anything at all (finite origin, finite non-zero direction,
+    /// ordered non-NaN range).
+    pub(super) live: bool,
 }
 
 /// Safe reciprocal: `1 / d`, or `+-f32::MAX` with the sign of `d` where that is not finite.
@@ -56,6 +59,19 @@ fn fma_terms(o: f32, inv: f32) -> (f32, f32) {
 }
 
 impl BoxRay {
+    /// A ray that hits nothing (filler for set-up buffers).
+    pub const DEAD: BoxRay = BoxRay {
+        org: [0.0; 3],
+        inv: [0.0; 3],
+        near: [0, 2, 4],
+        far: [1, 3, 5],
+        tmin: 0.0,
+        oi_near: [0.0; 3],
+        oi_far: [0.0; 3],
+        fma: false,
+        live: false,
+    };
+
     #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin, ray.dir);
@@ -73,6 +89,7 @@ impl BoxRay {
             oi_near: [nx, ny, nz],
             oi_far: [fx, fy, fz],
             fma: (nx - fx + ny - fy + nz - fz).is_finite(),
+            live: ShearedRay::traceable(ray) && !ray.tmin.is_nan() && !ray.tmax.is_nan() && ray.tmin <= ray.tmax,
         }
     }
 }

@@ -12,7 +12,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
-use boxtest::Scalar;
+use boxtest::{BoxRay, Scalar};
 use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -215,6 +215,9 @@ impl Bvh {
     }
 }
 
+/// Rays set up at a time ahead of their traversal in a batch.
+const SETUP_GROUP: usize = 32;
+
 /// Stack entries needed per tree level (a node pushes at most all its children).
 const WIDTH_STACK: usize = wide::WIDTH;
 
@@ -261,13 +264,21 @@ impl Intersector for Bvh {
                 match &order {
                     Some(order) => {
                         for &i in order {
-                            let i = i as usize;
-                            hits[i] = traverse::closest_hit_with(self, $isa, &rays[i], c, &mut stack);
+                            let (i, isa) = (i as usize, $isa);
+                            let br = BoxRay::new(&rays[i]);
+                            hits[i] = traverse::closest_hit_with(self, isa, &rays[i], &br, c, &mut stack);
                         }
                     }
                     None => {
-                        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                            *h = traverse::closest_hit_with(self, $isa, r, c, &mut stack);
+                        // Ray set-up (three divisions) for a group ahead of its traversal.
+                        for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
+                            let mut prep = [BoxRay::DEAD; SETUP_GROUP];
+                            for (p, r) in prep.iter_mut().zip(rs) {
+                                *p = BoxRay::new(r);
+                            }
+                            for ((r, h), br) in rs.iter().zip(hs.iter_mut()).zip(prep.iter()) {
+                                *h = traverse::closest_hit_with(self, $isa, r, br, c, &mut stack);
+                            }
                         }
                     }
                 }
