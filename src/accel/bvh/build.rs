@@ -111,7 +111,9 @@ fn build_seq(refs: &mut [PrimRef], base: usize, depth: usize, out: &mut Vec<Node
 /// Chooses a split and partitions `refs` around it; None makes a leaf.
 fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: usize) -> Option<usize> {
     let n = refs.len();
-    if n <= 1 {
+    // A leaf of up to MAX_LEAF triangles is one SIMD block: testing it costs about what a
+    // single triangle does, and splitting it only adds nodes (and cache lines) to visit.
+    if n <= MAX_LEAF {
         return None;
     }
     let ext = chi - clo;
