@@ -37,7 +37,7 @@ impl ShearedRay {
 
     /// The shear of a [`traceable`](Self::traceable) ray (callers that test no triangle
     /// never pay for it).
-    #[inline]
+    #[inline(always)]
     pub fn of(ray: &Ray) -> Self {
         let d = ray.dir.to_array();
         let a = ray.dir.abs();
@@ -59,7 +59,10 @@ impl ShearedRay {
 
 /// Watertight test of one triangle; returns (t, u, v) with `t` in `[tmin, tmax]` and `u`, `v`
 /// the weights of corners 1 and 2. Degenerate (zero-area or edge-on) triangles never hit.
-#[inline]
+///
+/// Always inlined: the BVH calls it from inside its AVX2 context, and an out-of-line copy
+/// would be compiled for the baseline instruction set (and cost a call and a `vzeroupper`).
+#[inline(always)]
 pub fn intersect_sheared(
     r: &ShearedRay,
     tmin: f32,
@@ -126,7 +129,7 @@ pub fn intersect_sheared(
 /// x - sx z rounds with an error of a few ulps of |x| + |sx z|, with z in world units: pbrt
 /// uses the scaled z instead, which mixes units and, for directions far from unit length,
 /// rejects real hits (a 1e-4 mesh traced with unnormalised rays) or leaves too little margin.
-#[inline]
+#[inline(always)]
 fn t_error_bound(x: [f32; 3], y: [f32; 3], z: [f32; 3], e: [f32; 3], inv_det: f32, r: &ShearedRay) -> f32 {
     use crate::scene::error_bound::gamma;
     let amax = |a: [f32; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());

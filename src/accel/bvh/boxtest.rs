@@ -26,23 +26,70 @@ pub struct BoxRay {
     pub(super) near: [usize; 3],
     pub(super) far: [usize; 3],
     pub(super) tmin: f32,
+    /// `origin * inv` per axis, rounded up (near) and down (far) by more than its own rounding
+    /// error, for the fused form `fma(plane, inv, -oi)` of the slab distance (see [`fma_terms`]).
+    pub(super) oi_near: [f32; 3],
+    pub(super) oi_far: [f32; 3],
+    /// Whether every `oi` term is finite (else the kernels use the unfused form).
+    pub(super) fma: bool,
+    /// Whether the ray can hit anything at all (finite origin, finite non-zero direction,
+    /// ordered non-NaN range).
+    pub(super) live: bool,
+}
+
+/// Safe reciprocal: `1 / d`, or `+-f32::MAX` with the sign of `d` where that is not finite.
+#[inline(always)]
+fn safe_inv(d: f32) -> f32 {
+    let i = 1.0 / d;
+    if i.is_finite() { i } else { f32::MAX.copysign(d) }
+}
+
+/// The fused slab distance `fma(plane, inv, -oi)` rounds once, after subtracting a rounded
+/// `oi = origin * inv`; that product's error is absolute (a few ulps of |oi|), not relative to
+/// the distance, so the near term is moved up and the far term down by 2^-20 |oi| (16 ulps,
+/// which also covers the rounding of these sums) plus the smallest normal float (denormal
+/// products). Then the fused near distance is never above, and the far one never below, the
+/// unfused `(plane - origin) * inv` up to the final rounding, which [`EXIT_SCALE`] covers as
+/// it does for the unfused form (two roundings instead of three).
+#[inline(always)]
+fn fma_terms(o: f32, inv: f32) -> (f32, f32) {
+    let oi = o * inv;
+    let e = oi.abs() * (1.0 / 1048576.0) + f32::MIN_POSITIVE;
+    (oi + e, oi - e)
 }
 
 impl BoxRay {
-    #[inline]
+    /// A ray that hits nothing (filler for set-up buffers).
+    pub const DEAD: BoxRay = BoxRay {
+        org: [0.0; 3],
+        inv: [0.0; 3],
+        near: [0, 2, 4],
+        far: [1, 3, 5],
+        tmin: 0.0,
+        oi_near: [0.0; 3],
+        oi_far: [0.0; 3],
+        fma: false,
+        live: false,
+    };
+
+    #[inline(always)]
     pub fn new(ray: &Ray) -> Self {
-        let d = ray.dir.to_array();
-        let inv = d.map(|d| {
-            let i = 1.0 / d;
-            if i.is_finite() { i } else { f32::MAX.copysign(d) }
-        });
-        let neg = d.map(|d| d.is_sign_negative() as usize);
+        let (o, d) = (ray.origin, ray.dir);
+        let inv = [safe_inv(d.x), safe_inv(d.y), safe_inv(d.z)];
+        let neg = [d.x.is_sign_negative() as usize, d.y.is_sign_negative() as usize, d.z.is_sign_negative() as usize];
+        let (nx, fx) = fma_terms(o.x, inv[0]);
+        let (ny, fy) = fma_terms(o.y, inv[1]);
+        let (nz, fz) = fma_terms(o.z, inv[2]);
         BoxRay {
-            org: ray.origin.to_array(),
+            org: [o.x, o.y, o.z],
             inv,
             near: [neg[0], 2 + neg[1], 4 + neg[2]],
             far: [1 - neg[0], 3 - neg[1], 5 - neg[2]],
             tmin: ray.tmin,
+            oi_near: [nx, ny, nz],
+            oi_far: [fx, fy, fz],
+            fma: (nx - fx + ny - fy + nz - fz).is_finite(),
+            live: ShearedRay::traceable(ray) && !ray.tmin.is_nan() && !ray.tmax.is_nan() && ray.tmin <= ray.tmax,
         }
     }
 }

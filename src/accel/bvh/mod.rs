@@ -12,7 +12,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
-use boxtest::Scalar;
+use boxtest::{BoxRay, Scalar};
 use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -200,7 +200,11 @@ impl Bvh {
 
     fn dispatch_closest(&self, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
         match self.tokens() {
-            (_, Some(avx)) => simd::with_avx2(avx, |t| traverse::closest_hit(self, t, ray, c)),
+            (_, Some(avx)) => simd::with_avx2(
+                avx,
+                #[inline(always)]
+                |t| traverse::closest_hit(self, t, ray, c),
+            ),
             (Some(sse), None) => traverse::closest_hit(self, sse, ray, c),
             _ => traverse::closest_hit(self, Scalar, ray, c),
         }
@@ -214,6 +218,9 @@ impl Bvh {
         }
     }
 }
+
+/// Rays set up at a time ahead of their traversal in a batch.
+const SETUP_GROUP: usize = 32;
 
 /// Stack entries needed per tree level (a node pushes at most all its children).
 const WIDTH_STACK: usize = wide::WIDTH;
@@ -233,7 +240,11 @@ impl Intersector for Bvh {
             return false;
         }
         match self.tokens() {
-            (_, Some(avx)) => simd::with_avx2(avx, |t| traverse::any_hit(self, t, ray, c)),
+            (_, Some(avx)) => simd::with_avx2(
+                avx,
+                #[inline(always)]
+                |t| traverse::any_hit(self, t, ray, c),
+            ),
             (Some(sse), None) => traverse::any_hit(self, sse, ray, c),
             _ => traverse::any_hit(self, Scalar, ray, c),
         }
@@ -254,6 +265,9 @@ impl Intersector for Bvh {
         // The loop is spelled out in the macro (here and in `any_hits`) on purpose: moving it
         // into a helper taking a closure compiled it outside the AVX2 context and halved
         // traversal speed (measured: CBspheres_lambertian 1.2 s -> 2.6 s, one thread).
+        // Every closure given to `with_avx2` is `#[inline(always)]` for the same reason: a
+        // larger body (set-up of the shear added to this loop) was left out of line by the
+        // inliner, outside the AVX2 context, and ran six times slower.
         let order = self.batch_order(rays);
         let mut stack = vec![traverse::Entry::default(); self.stack_need];
         macro_rules! run {
@@ -261,20 +275,32 @@ impl Intersector for Bvh {
                 match &order {
                     Some(order) => {
                         for &i in order {
-                            let i = i as usize;
-                            hits[i] = traverse::closest_hit_with(self, $isa, &rays[i], c, &mut stack);
+                            let (i, isa) = (i as usize, $isa);
+                            let br = BoxRay::new(&rays[i]);
+                            hits[i] = traverse::closest_hit_with(self, isa, &rays[i], &br, c, &mut stack);
                         }
                     }
                     None => {
-                        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-                            *h = traverse::closest_hit_with(self, $isa, r, c, &mut stack);
+                        // Ray set-up (three divisions) for a group ahead of its traversal.
+                        for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
+                            let mut prep = [BoxRay::DEAD; SETUP_GROUP];
+                            for (p, r) in prep.iter_mut().zip(rs) {
+                                *p = BoxRay::new(r);
+                            }
+                            for ((r, h), br) in rs.iter().zip(hs.iter_mut()).zip(prep.iter()) {
+                                *h = traverse::closest_hit_with(self, $isa, r, br, c, &mut stack);
+                            }
                         }
                     }
                 }
             };
         }
         match self.tokens() {
-            (_, Some(avx)) => simd::with_avx2(avx, |t| run!(t)),
+            (_, Some(avx)) => simd::with_avx2(
+                avx,
+                #[inline(always)]
+                |t| run!(t),
+            ),
             (Some(sse), None) => run!(sse),
             _ => run!(Scalar),
         }
@@ -306,7 +332,11 @@ impl Intersector for Bvh {
             };
         }
         match self.tokens() {
-            (_, Some(avx)) => simd::with_avx2(avx, |t| run!(t)),
+            (_, Some(avx)) => simd::with_avx2(
+                avx,
+                #[inline(always)]
+                |t| run!(t),
+            ),
             (Some(sse), None) => run!(sse),
             _ => run!(Scalar),
         }

@@ -91,16 +91,30 @@ impl BoxTest for Avx2 {
         // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; loads/stores are unaligned
         // ones on in-bounds arrays of exactly 8 f32 (`BoxRay` plane indices are < 6).
         unsafe {
-            let lane = |plane: usize, axis: usize| {
-                let p = _mm256_loadu_ps(node.b.as_ptr().add(plane).cast::<f32>());
-                _mm256_mul_ps(_mm256_sub_ps(p, _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
-            };
-            let t0 = lane(r.near[0], 0);
-            let t1 = lane(r.near[1], 1);
-            let t2 = lane(r.near[2], 2);
-            let u0 = lane(r.far[0], 0);
-            let u1 = lane(r.far[1], 1);
-            let u2 = lane(r.far[2], 2);
+            let plane = |p: usize| _mm256_loadu_ps(node.b.as_ptr().add(p).cast::<f32>());
+            let (t0, t1, t2, u0, u1, u2);
+            if r.fma {
+                // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
+                let d = |p: usize, axis: usize, oi: &[f32; 3]| {
+                    _mm256_fmsub_ps(plane(p), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
+                };
+                t0 = d(r.near[0], 0, &r.oi_near);
+                t1 = d(r.near[1], 1, &r.oi_near);
+                t2 = d(r.near[2], 2, &r.oi_near);
+                u0 = d(r.far[0], 0, &r.oi_far);
+                u1 = d(r.far[1], 1, &r.oi_far);
+                u2 = d(r.far[2], 2, &r.oi_far);
+            } else {
+                let d = |p: usize, axis: usize| {
+                    _mm256_mul_ps(_mm256_sub_ps(plane(p), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
+                };
+                t0 = d(r.near[0], 0);
+                t1 = d(r.near[1], 1);
+                t2 = d(r.near[2], 2);
+                u0 = d(r.far[0], 0);
+                u1 = d(r.far[1], 1);
+                u2 = d(r.far[2], 2);
+            }
             let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
             let exit = _mm256_min_ps(
                 _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE)),

@@ -32,29 +32,31 @@ struct Best {
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
     if bvh.stack_need <= FIXED_STACK {
         let mut fixed = [Entry::default(); FIXED_STACK];
-        closest_hit_with(bvh, isa, ray, c, &mut fixed)
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut fixed)
     } else {
-        closest_hit_with(bvh, isa, ray, c, &mut vec![Entry::default(); bvh.stack_need])
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut vec![Entry::default(); bvh.stack_need])
     }
 }
 
-/// Closest hit with a caller-provided stack of at least `bvh.stack_need` entries (batches
-/// reuse one stack instead of clearing a fresh one per ray).
+/// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a caller-provided
+/// stack of at least `bvh.stack_need` entries (batches set up their rays ahead, so the
+/// divisions of one ray overlap the traversal of the one before, and reuse one stack instead
+/// of clearing a fresh one per ray).
 #[inline(always)]
 pub fn closest_hit_with<B: BoxTest>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
+    br: &BoxRay,
     c: &mut TraceCounters,
     stack: &mut [Entry],
 ) -> Option<Hit> {
     c.rays += 1;
-    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !br.live {
         return None;
     }
     // The shear is set up at the first leaf: many rays never reach one.
     let mut sr = None;
-    let br = BoxRay::new(ray);
     let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
     let mut sp = 0usize;
     let mut cur = 0u32;
@@ -64,7 +66,7 @@ pub fn closest_hit_with<B: BoxTest>(
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
-            let mut mask = isa.test(node, &br, best.t, &mut tnear);
+            let mut mask = isa.test(node, br, best.t, &mut tnear);
             if mask != 0 {
                 let i = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
