@@ -21,6 +21,13 @@ pub struct SurfacePoint {
 impl Scene {
     /// Reconstructs the surface point of `hit` on `ray`.
     pub fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
+        self.surface_point_with(ray, hit, true)
+    }
+
+    /// [`surface_point`](Self::surface_point); a sphere point's `uv` (an `atan2` and an `acos`)
+    /// only when `uv` is asked for (zero otherwise: untextured shading never reads it).
+    #[inline(always)]
+    pub fn surface_point_with(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfacePoint {
         let ntri = self.mesh.triangles.len();
         let prim = hit.prim as usize;
         if prim < ntri {
@@ -58,10 +65,14 @@ impl Scene {
             let local = n * s.radius;
             let position = s.center + local;
             let p_error = sphere_error(s.center, local);
-            let uv = Vec2::new(
-                0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
-                n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-            );
+            let uv = if uv {
+                Vec2::new(
+                    0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
+                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+                )
+            } else {
+                Vec2::ZERO
+            };
             SurfacePoint { position, p_error, geometric_normal: n, shading_normal: n, uv, material: s.material }
         }
     }
