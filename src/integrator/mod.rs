@@ -341,18 +341,38 @@ impl<'a> Transport<'a> {
     pub fn camera_ray_keyed(&self, x: u32, y: u32, width: usize, height: usize, key: u64, spp: u32) -> Ray {
         let mut rng = Sampler::for_vertex(key, 0);
         let (jx, jy) = if spp <= 1 { (0.5, 0.5) } else { rng.next_2d() };
-        let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
         let cam = &self.scene.camera;
         if cam.lens_radius > 0.0 {
+            let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
             let mut lr = rng.at(2);
             let (a, b) = lr.next_2d();
             cam.generate_lens_ray(px, py, warp::concentric_disk(a, b))
         } else {
-            // `Camera::generate_ray` with the field of view's tangents precomputed.
-            let (tw, th) = self.tan_half_fov;
-            let d = Vec3::new((px - 0.5) * 2.0 * tw, (py - 0.5) * 2.0 * th, -1.0);
-            Ray { origin: cam.position, dir: (cam.c2w * d).normalize(), tmin: cam.nclip, tmax: cam.fclip }
+            self.pinhole_ray(x, y, width, height, jx, jy)
         }
+    }
+
+    /// Whether camera rays are [`pinhole_ray`](Self::pinhole_ray)s (no aperture).
+    #[inline]
+    pub fn pinhole(&self) -> bool {
+        self.scene.camera.lens_radius <= 0.0
+    }
+
+    /// The jitter of the camera ray of the path with key `key` inside its pixel.
+    #[inline(always)]
+    pub fn pixel_jitter(key: u64, spp: u32) -> (f32, f32) {
+        if spp <= 1 { (0.5, 0.5) } else { Sampler::for_vertex(key, 0).next_2d() }
+    }
+
+    /// The pinhole camera's ray through (x + jx, y + jy): `Camera::generate_ray` with the
+    /// field of view's tangents precomputed. Branch-free, so a loop over lanes vectorises.
+    #[inline(always)]
+    pub fn pinhole_ray(&self, x: u32, y: u32, width: usize, height: usize, jx: f32, jy: f32) -> Ray {
+        let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
+        let cam = &self.scene.camera;
+        let (tw, th) = self.tan_half_fov;
+        let d = Vec3::new((px - 0.5) * 2.0 * tw, (py - 0.5) * 2.0 * th, -1.0);
+        Ray { origin: cam.position, dir: (cam.c2w * d).normalize(), tmin: cam.nclip, tmax: cam.fclip }
     }
 }
 
