@@ -84,6 +84,18 @@ impl Vertex {
     }
 }
 
+/// The normals turned toward the side a ray along `dir` arrives from, and whether that is
+/// the side the geometric normal points to.
+#[inline(always)]
+pub fn orient(geometric: Vec3, shading: Vec3, dir: Vec3) -> (Vec3, Vec3, bool) {
+    let front = geometric.dot(dir) <= 0.0;
+    let flip = if front { 1.0 } else { -1.0 };
+    let ng = geometric * flip;
+    // The shading normal goes to the same side as the geometric one.
+    let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
+    (ng, ns, front)
+}
+
 /// The uniform numbers one sample of `light` takes from `rng`: a 2-d pair (one hash) and a
 /// third number only for a light that reads it.
 #[inline]
@@ -174,11 +186,7 @@ impl<'a> Transport<'a> {
     #[inline(always)]
     pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
         let sp = self.scene.surface_point_with(ray, hit, self.textures.any());
-        let front = sp.geometric_normal.dot(ray.dir) <= 0.0;
-        let flip = if front { 1.0 } else { -1.0 };
-        let ng = sp.geometric_normal * flip;
-        // The shading normal goes to the same side as the geometric one.
-        let ns = if sp.shading_normal.dot(ng) < 0.0 { -sp.shading_normal } else { sp.shading_normal };
+        let (ng, ns, front) = orient(sp.geometric_normal, sp.shading_normal, ray.dir);
         let m = sp.material as usize;
         Vertex {
             p: sp.position,

@@ -14,10 +14,11 @@
 use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
-use crate::integrator::{DIM_DIRECT, Transport};
+use crate::integrator::{DIM_DIRECT, Transport, orient};
 use crate::lights::SampledLight;
 use crate::ray::{Hit, Ray};
 use crate::sampling::Sampler;
+use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -27,7 +28,7 @@ const L: usize = 8;
 /// Whether the lane kernel can shade this render's paths: no BSDF models, light sampling
 /// (not hemisphere probes) and nothing but area lights.
 pub fn applies<F: Features>(t: &Transport) -> bool {
-    !F::NON_DIFFUSE && !t.hemisphere && t.area_lights.iter().all(Option::is_some)
+    !F::NON_DIFFUSE && !t.hemisphere && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
 }
 
 /// [`super::shade::shade`] eight paths at a time when the CPU has AVX2 and FMA; `false` (and
@@ -77,6 +78,93 @@ impl Points {
     fn get(&self, j: usize) -> ShadingPoint {
         let v = |a: &[[f32; L]; 3]| Vec3::new(a[0][j], a[1][j], a[2][j]);
         ShadingPoint { p: v(&self.p), p_error: v(&self.e), ng: v(&self.ng), ns: v(&self.ns) }
+    }
+}
+
+/// What the surface points of a group are reconstructed from: a triangle's corners (and
+/// corner normals) and barycentrics, or a sphere and the ray's hit point on it.
+#[derive(Default)]
+struct Surfaces {
+    corner: [[[f32; L]; 3]; 3],
+    normal: [[[f32; L]; 3]; 3],
+    u: [f32; L],
+    v: [f32; L],
+    center: [[f32; L]; 3],
+    radius: [f32; L],
+    hit: [[f32; L]; 3],
+    dir: [[f32; L]; 3],
+    triangle: [bool; L],
+}
+
+#[inline(always)]
+fn put(a: &mut [[f32; L]; 3], j: usize, v: Vec3) {
+    a[0][j] = v.x;
+    a[1][j] = v.y;
+    a[2][j] = v.z;
+}
+
+#[inline(always)]
+fn get(a: &[[f32; L]; 3], j: usize) -> Vec3 {
+    Vec3::new(a[0][j], a[1][j], a[2][j])
+}
+
+impl Surfaces {
+    /// Gathers lane `j`'s hit (prim `prim`, on `ray`).
+    #[inline(always)]
+    fn set(&mut self, t: &Transport, j: usize, ray: &Ray, hit: &Hit) {
+        let mesh = &t.scene.mesh;
+        let prim = hit.prim as usize;
+        put(&mut self.dir, j, ray.dir);
+        self.triangle[j] = prim < mesh.triangles.len();
+        if self.triangle[j] {
+            let ids = mesh.triangles[prim];
+            for k in 0..3 {
+                put(&mut self.corner[k], j, mesh.positions[ids[k] as usize]);
+                if let Some(n) = &mesh.normals {
+                    put(&mut self.normal[k], j, n[ids[k] as usize]);
+                }
+            }
+            (self.u[j], self.v[j]) = (hit.u, hit.v);
+        } else {
+            let s = &t.scene.spheres[prim - mesh.triangles.len()];
+            put(&mut self.center, j, s.center);
+            self.radius[j] = s.radius;
+            put(&mut self.hit, j, ray.at(hit.t));
+        }
+    }
+
+    /// Lane `j`'s shading point: both reconstructions (the same functions as
+    /// `Scene::surface_point`), one kept, so all lanes run the same instructions.
+    #[inline(always)]
+    fn point(&self, j: usize, normals: bool) -> ShadingPoint {
+        let c = |k: usize| get(&self.corner[k], j);
+        let (u, v) = (self.u[j], self.v[j]);
+        let (tp, te, tn) = triangle_point(c(0), c(1), c(2), u, v);
+        let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
+        let tri = self.triangle[j];
+        let ts = if normals {
+            let n = |k: usize| get(&self.normal[k], j);
+            interpolated_normal([n(0), n(1), n(2)], u, v, tn)
+        } else {
+            tn
+        };
+        let (p, p_error, g, sh) = if tri { (tp, te, tn, ts) } else { (sp, se, sn, sn) };
+        let (ng, ns, _) = orient(g, sh, get(&self.dir, j));
+        ShadingPoint { p, p_error, ng, ns }
+    }
+}
+
+/// Reconstructs the shading points of all lanes (lane-parallel).
+#[inline(always)]
+fn surface_points(s: &Surfaces, normals: bool, out: &mut Points) {
+    if normals {
+        for j in 0..L {
+            out.set(j, &s.point(j, true));
+        }
+    } else {
+        for j in 0..L {
+            out.set(j, &s.point(j, false));
+        }
     }
 }
 
@@ -135,6 +223,8 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
     let n = q.len().min(hits.len());
     let mut pts = Points::default();
     let mut rays = Rays::default();
+    let mut surf = Surfaces::default();
+    let normals = t.scene.mesh.normals.is_some();
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
         let mut rng = [Sampler::default(); L];
@@ -152,20 +242,24 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                 }
                 continue;
             };
-            let v = t.vertex(&q.ray[i], &hit);
+            let m = t.material_of(hit.prim);
             if F::EMISSION && depth == 0 && sees_emission {
-                q.radiance[i] += v.emission;
+                q.radiance[i] += t.emission[m];
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;
             }
             rng[j] = t.vertex_sampler(q.key[i], depth);
-            pts.set(j, &v.shading_point());
-            albedo[j] = v.albedo;
+            surf.set(t, j, &q.ray[i], &hit);
+            albedo[j] = t.albedo[m];
             // As `Transport::direct_rays` and `Transport::scatter` decide.
-            direct[j] = F::DIRECT && t.counts_direct(depth) && v.albedo * FRAC_1_PI != Vec3::ZERO;
-            cont[j] = F::INDIRECT && t.continues(depth) && v.albedo != Vec3::ZERO;
+            direct[j] = F::DIRECT && t.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
+            cont[j] = F::INDIRECT && t.continues(depth) && albedo[j] != Vec3::ZERO;
         }
+        if !direct.iter().chain(&cont).any(|&b| b) {
+            continue;
+        }
+        surface_points(&surf, normals, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;
             for (li, light) in t.lights.lights.iter().enumerate() {
@@ -211,6 +305,82 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                     super::shade::roulette::<F>(t, q, i, depth, rng[j]);
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{BruteForce, Intersector, TraceCounters};
+    use crate::settings::{Settings, Shading};
+    use crate::wavefront::generate::{Wave, generate};
+    use crate::wavefront::{Kernel, compact, shade};
+
+    type K = Kernel<true, false, true, true, true, false>;
+
+    /// Each path's shadow rays (in the order they were made) and weights, by owner.
+    fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
+        let mut out = vec![Vec::new(); n];
+        for k in 0..s.len() {
+            out[s.owner[k] as usize].push((s.ray[k], s.weight[k]));
+        }
+        out
+    }
+
+    /// The lane kernel gives every path the same continuation, throughput, radiance and
+    /// shadow rays (bit for bit) as the one-path-at-a-time kernel, over five bounces, on
+    /// triangles with and without corner normals and on spheres.
+    #[test]
+    fn lanes_match_the_scalar_kernel() {
+        for with_normals in [false, true] {
+            let mut scene = crate::load::default_scene();
+            if with_normals {
+                let n = scene.mesh.positions.len();
+                // Unit normals tilted differently at every vertex.
+                let normals = (0..n)
+                    .map(|i| Vec3::new((i as f32 * 0.7).sin(), 1.0, (i as f32 * 1.3).cos()).normalize())
+                    .collect();
+                scene.mesh.normals = Some(normals);
+            }
+            let s = Settings {
+                width: 24,
+                height: 18,
+                spp: 8,
+                light_samples: 3,
+                max_depth: 5,
+                shading: Shading::Global,
+                ..Settings::default()
+            };
+            let t = Transport::new(&scene, &s);
+            assert!(applies::<K>(&t));
+            let accel = BruteForce::new(&scene);
+            let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
+            let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
+            let mut q = PathQueue::default();
+            generate(&t, &mut q, &wave, 24, 18, 8);
+            let (mut hits, mut sl, mut ss) = (Vec::new(), ShadowQueue::default(), ShadowQueue::default());
+            let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
+            let mut shadow_rays = 0;
+            while !q.is_empty() {
+                hits.clear();
+                hits.resize(q.len(), None);
+                accel.closest_hits(&q.ray, &mut hits, &mut TraceCounters::default());
+                let mut qs = q.clone();
+                if !shade_lanes::<K>(&t, &mut q, &hits, &mut sl) {
+                    return; // no AVX2 on this CPU: nothing to compare
+                }
+                shade::shade_scalar::<K>(&t, &mut qs, &hits, &mut ss);
+                assert_eq!(q.ray, qs.ray);
+                assert_eq!(q.throughput, qs.throughput);
+                assert_eq!(q.radiance, qs.radiance);
+                assert_eq!(q.alive, qs.alive);
+                assert_eq!(q.depth, qs.depth);
+                assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
+                shadow_rays += sl.len();
+                compact::compact(&mut q, &mut slot_radiance);
+            }
+            assert!(shadow_rays > 1000, "{shadow_rays}");
         }
     }
 }

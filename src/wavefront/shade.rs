@@ -14,6 +14,11 @@ pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>]
     if super::lanes::applies::<F>(t) && super::lanes::shade_lanes::<F>(t, q, hits, shadow) {
         return;
     }
+    shade_scalar::<F>(t, q, hits, shadow);
+}
+
+/// [`shade`] one path at a time (any features; the reference for the lane kernel).
+pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
     for (i, hit) in hits.iter().enumerate().take(q.len()) {
