@@ -3,6 +3,7 @@
 use super::queues::PathQueue;
 use crate::integrator::Transport;
 use crate::sampling::Sampler;
+use glam::Vec3;
 
 /// Which samples of which pixels a wave takes: slot s is sample `base + s % batch` of pixel
 /// `pixels[s / batch]`.
@@ -78,7 +79,10 @@ fn pinhole_avx2(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, hei
                 keys[j] = Sampler::sample_key(pixel_key, (sample + j as u32) as u64);
                 (jx[j], jy[j]) = Transport::pixel_jitter(keys[j], spp);
             }
-            let rays: [crate::ray::Ray; L] = std::array::from_fn(|j| t.pinhole_ray(x, y, width, height, jx[j], jy[j]));
+            let mut rays = [crate::ray::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
+            for j in 0..L {
+                rays[j] = t.pinhole_ray(x, y, width, height, jx[j], jy[j]);
+            }
             q.ray.extend_from_slice(&rays[..m]);
             q.key.extend_from_slice(&keys[..m]);
             sample += m as u32;

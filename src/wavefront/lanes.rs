@@ -76,8 +76,7 @@ impl Points {
 
     #[inline(always)]
     fn get(&self, j: usize) -> ShadingPoint {
-        let v = |a: &[[f32; L]; 3]| Vec3::new(a[0][j], a[1][j], a[2][j]);
-        ShadingPoint { p: v(&self.p), p_error: v(&self.e), ng: v(&self.ng), ns: v(&self.ns) }
+        ShadingPoint { p: get(&self.p, j), p_error: get(&self.e, j), ng: get(&self.ng, j), ns: get(&self.ns, j) }
     }
 }
 
@@ -137,14 +136,14 @@ impl Surfaces {
     /// `Scene::surface_point`), one kept, so all lanes run the same instructions.
     #[inline(always)]
     fn point(&self, j: usize, normals: bool) -> ShadingPoint {
-        let c = |k: usize| get(&self.corner[k], j);
         let (u, v) = (self.u[j], self.v[j]);
-        let (tp, te, tn) = triangle_point(c(0), c(1), c(2), u, v);
+        let c = &self.corner;
+        let (tp, te, tn) = triangle_point(get(&c[0], j), get(&c[1], j), get(&c[2], j), u, v);
         let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
         let tri = self.triangle[j];
         let ts = if normals {
-            let n = |k: usize| get(&self.normal[k], j);
-            interpolated_normal([n(0), n(1), n(2)], u, v, tn)
+            let n = &self.normal;
+            interpolated_normal([get(&n[0], j), get(&n[1], j), get(&n[2], j)], u, v, tn)
         } else {
             tn
         };
@@ -191,8 +190,7 @@ impl Rays {
 
     #[inline(always)]
     fn ray(&self, j: usize) -> Ray {
-        let v = |a: &[[f32; L]; 3]| Vec3::new(a[0][j], a[1][j], a[2][j]);
-        Ray { origin: v(&self.o), dir: v(&self.d), tmin: 0.0, tmax: self.tmax[j] }
+        Ray { origin: get(&self.o, j), dir: get(&self.d, j), tmin: 0.0, tmax: self.tmax[j] }
     }
 }
 
@@ -267,7 +265,10 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                     unreachable!("the lane kernel runs only with area lights")
                 };
                 let ns = t.lights.samples_for(li, t.light_samples);
-                let c: [Vec3; L] = std::array::from_fn(|j| albedo[j] * FRAC_1_PI / ns as f32 * *radiance);
+                let mut c = [Vec3::ZERO; L];
+                for j in 0..L {
+                    c[j] = albedo[j] * FRAC_1_PI / ns as f32 * *radiance;
+                }
                 for _ in 0..ns {
                     let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
                     for j in 0..m {
