@@ -15,7 +15,7 @@
 //! when that vertex's direct light would, and a vertex at the last depth still sends a ray
 //! (which only collects this light).
 
-use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin, shadow_ray};
+use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin};
 use crate::bsdf::{Kind, Lambert, Model, power_heuristic, to_local};
 use crate::lights::Seen;
 use crate::ray::{Hit, Ray};
@@ -95,7 +95,7 @@ impl Transport<'_> {
         for (i, light) in self.lights.lights.iter().enumerate() {
             let ns = self.lights.samples_for(i, self.light_samples);
             for _ in 0..ns {
-                let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+                let u = super::light_numbers(&mut rng, light);
                 let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
                 let wi = to_local(&sh.frame, ls.wi);
                 let f = sh.model.eval(sh.wo, wi);
@@ -107,8 +107,7 @@ impl Transport<'_> {
                 if w <= 0.0 {
                     continue;
                 }
-                let target = ls.target.map(|q| (q, light.point_error()));
-                let Some(ray) = shadow_ray(origin, ls.wi, target) else { continue };
+                let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
                 out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
             }
         }

@@ -3,18 +3,22 @@
 //!
 //! The wavefront integrator spreads this work over queues and stages; the recursive
 //! reference calls it one ray at a time. Each vertex draws its random numbers from its own
-//! stream (pixel, sample, depth), at fixed dimensions: 0-1 continuation direction, 2 Russian
-//! roulette, 3.. light or hemisphere samples.
+//! stream (pixel, sample, depth), at fixed dimensions: 0 continuation direction (two numbers
+//! from one hash), 2 Russian roulette, 3.. light or hemisphere samples (one dimension per
+//! 2-d sample, plus one for a light that needs a third number).
 
+pub mod area;
 mod material;
 mod offset;
 pub mod recursive;
 
 pub use material::{Bounce, ShadingFrame};
 
-pub use offset::{offset_origin, shadow_ray, shadow_tmax};
+pub use offset::{offset_origin, shadow_margin, shadow_ray, shadow_tmax};
 
-use crate::lights::LightSet;
+use area::{AreaLight, ShadingPoint};
+
+use crate::lights::{LightSet, SampledLight};
 use crate::ray::{Hit, Ray};
 use crate::sampling::{Frame, Sampler, warp};
 use crate::scene::{Scene, Textures};
@@ -23,7 +27,7 @@ use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
 /// First dimension of a vertex stream used by light or hemisphere samples.
-const DIM_DIRECT: u32 = 3;
+pub(crate) const DIM_DIRECT: u32 = 3;
 /// Dimension that chooses between a delta material's lobes (delta vertices take no direct
 /// samples, so it is free).
 const DIM_LOBE: u32 = DIM_DIRECT;
@@ -52,6 +56,10 @@ pub struct Transport<'a> {
     /// tan(hfov / 2), tan(vfov / 2): the pinhole camera's image-plane half extents, computed
     /// once instead of per camera ray (the same values `Camera::generate_ray` computes).
     tan_half_fov: (f32, f32),
+    /// Per light: its sampling data when it is an area light.
+    pub area_lights: Vec<Option<AreaLight>>,
+    /// Per light: [`shadow_margin`] of its points.
+    shadow_margins: Vec<f32>,
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -67,6 +75,34 @@ pub struct Vertex {
     pub material: u32,
     /// The ray hit the side the geometric normal points to (outside, for closed meshes).
     pub front: bool,
+}
+
+impl Vertex {
+    #[inline(always)]
+    pub fn shading_point(&self) -> ShadingPoint {
+        ShadingPoint { p: self.p, p_error: self.p_error, ng: self.ng, ns: self.ns }
+    }
+}
+
+/// The normals turned toward the side a ray along `dir` arrives from, and whether that is
+/// the side the geometric normal points to.
+#[inline(always)]
+pub fn orient(geometric: Vec3, shading: Vec3, dir: Vec3) -> (Vec3, Vec3, bool) {
+    let front = geometric.dot(dir) <= 0.0;
+    let flip = if front { 1.0 } else { -1.0 };
+    let ng = geometric * flip;
+    // The shading normal goes to the same side as the geometric one.
+    let ns = if shading.dot(ng) < 0.0 { -shading } else { shading };
+    (ng, ns, front)
+}
+
+/// The uniform numbers one sample of `light` takes from `rng`: a 2-d pair (one hash) and a
+/// third number only for a light that reads it.
+#[inline]
+pub fn light_numbers(rng: &mut Sampler, light: &SampledLight) -> [f32; 3] {
+    let (a, b) = rng.next_2d();
+    let c = if light.uses_third_number() { rng.next_f32() } else { 0.0 };
+    [a, b, c]
 }
 
 /// A ray toward a light (`probe` false: any-hit, adds `weight` when unoccluded) or a
@@ -92,7 +128,21 @@ impl<'a> Transport<'a> {
         } else {
             lights.samples_per_point(light_samples)
         };
+        let shadow_margins: Vec<f32> = lights.lights.iter().map(|l| shadow_margin(l.point_error())).collect();
+        let area_lights = lights
+            .lights
+            .iter()
+            .zip(&shadow_margins)
+            .map(|(l, &margin)| match *l {
+                SampledLight::Area { position, normal, dim_x, dim_y, area, .. } => {
+                    Some(AreaLight { position, normal, dim_x, dim_y, area, margin })
+                }
+                _ => None,
+            })
+            .collect();
         Transport {
+            area_lights,
+            shadow_margins,
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
@@ -133,14 +183,10 @@ impl<'a> Transport<'a> {
         depth + 1 < self.max_depth
     }
 
-    #[inline]
+    #[inline(always)]
     pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
-        let sp = self.scene.surface_point(ray, hit);
-        let front = sp.geometric_normal.dot(ray.dir) <= 0.0;
-        let flip = if front { 1.0 } else { -1.0 };
-        let ng = sp.geometric_normal * flip;
-        // The shading normal goes to the same side as the geometric one.
-        let ns = if sp.shading_normal.dot(ng) < 0.0 { -sp.shading_normal } else { sp.shading_normal };
+        let sp = self.scene.surface_point_with(ray, hit, self.textures.any());
+        let (ng, ns, front) = orient(sp.geometric_normal, sp.shading_normal, ray.dir);
         let m = sp.material as usize;
         Vertex {
             p: sp.position,
@@ -195,22 +241,51 @@ impl<'a> Transport<'a> {
             }
             return;
         }
+        let sp = v.shading_point();
         for (i, light) in self.lights.lights.iter().enumerate() {
             let ns = self.lights.samples_for(i, self.light_samples);
             let inv = f / ns as f32;
+            if let (Some(al), SampledLight::Area { radiance, .. }) = (&self.area_lights[i], light) {
+                let c = inv * *radiance;
+                for _ in 0..ns {
+                    let (a, b) = rng.next_2d();
+                    let r = area::area_ray(&sp, al, a, b);
+                    if r.valid {
+                        out(DirectRay { ray: r.ray, weight: c * r.g });
+                    }
+                }
+                continue;
+            }
             for _ in 0..ns {
-                let u = [rng.next_f32(), rng.next_f32(), rng.next_f32()];
+                let u = light_numbers(&mut rng, light);
                 let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
                 let cos = ls.wi.dot(v.ns);
                 if cos <= 0.0 {
                     continue;
                 }
                 let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
-                let target = ls.target.map(|q| (q, light.point_error()));
-                let Some(ray) = shadow_ray(origin, ls.wi, target) else { continue };
+                let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
                 out(DirectRay { ray, weight: inv * ls.weight * cos });
             }
         }
+    }
+
+    /// The shadow ray of light `i` from `origin` along `dir` or, for a light point `target`,
+    /// toward it ([`shadow_ray`] with the light's margin precomputed).
+    #[inline]
+    pub fn light_shadow_ray(&self, i: usize, origin: Vec3, dir: Vec3, target: Option<Vec3>) -> Option<Ray> {
+        let Some(q) = target else {
+            return Some(Ray { origin, dir, tmin: 0.0, tmax: f32::INFINITY });
+        };
+        let e = q - origin;
+        let len = e.length();
+        let rcp = 1.0 / len;
+        if !(rcp.is_finite() && rcp > 0.0) {
+            return None;
+        }
+        let dir = e * rcp;
+        let tmax = offset::shadow_tmax_at(len, self.shadow_margins[i]);
+        (tmax > 0.0).then_some(Ray { origin, dir, tmin: 0.0, tmax })
     }
 
     /// What a hemisphere probe ray sees: the emission it hits, or light from infinity.
@@ -238,9 +313,7 @@ impl<'a> Transport<'a> {
             return None;
         }
         let (a, b) = rng.at(0).next_2d();
-        let wi = Frame::new(v.ns).to_world(warp::cosine_hemisphere(a, b));
-        let origin = offset_origin(v.p, v.p_error, v.ng, wi);
-        Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, v.albedo))
+        Some((area::cosine_ray(&v.shading_point(), a, b), v.albedo))
     }
 
     /// Russian roulette for the continuation of a vertex at `depth`: `None` stops the path,
@@ -276,18 +349,38 @@ impl<'a> Transport<'a> {
     pub fn camera_ray_keyed(&self, x: u32, y: u32, width: usize, height: usize, key: u64, spp: u32) -> Ray {
         let mut rng = Sampler::for_vertex(key, 0);
         let (jx, jy) = if spp <= 1 { (0.5, 0.5) } else { rng.next_2d() };
-        let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
         let cam = &self.scene.camera;
         if cam.lens_radius > 0.0 {
+            let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
             let mut lr = rng.at(2);
             let (a, b) = lr.next_2d();
             cam.generate_lens_ray(px, py, warp::concentric_disk(a, b))
         } else {
-            // `Camera::generate_ray` with the field of view's tangents precomputed.
-            let (tw, th) = self.tan_half_fov;
-            let d = Vec3::new((px - 0.5) * 2.0 * tw, (py - 0.5) * 2.0 * th, -1.0);
-            Ray { origin: cam.position, dir: (cam.c2w * d).normalize(), tmin: cam.nclip, tmax: cam.fclip }
+            self.pinhole_ray(x, y, width, height, jx, jy)
         }
+    }
+
+    /// Whether camera rays are [`pinhole_ray`](Self::pinhole_ray)s (no aperture).
+    #[inline]
+    pub fn pinhole(&self) -> bool {
+        self.scene.camera.lens_radius <= 0.0
+    }
+
+    /// The jitter of the camera ray of the path with key `key` inside its pixel.
+    #[inline(always)]
+    pub fn pixel_jitter(key: u64, spp: u32) -> (f32, f32) {
+        if spp <= 1 { (0.5, 0.5) } else { Sampler::for_vertex(key, 0).next_2d() }
+    }
+
+    /// The pinhole camera's ray through (x + jx, y + jy): `Camera::generate_ray` with the
+    /// field of view's tangents precomputed. Branch-free, so a loop over lanes vectorises.
+    #[inline(always)]
+    pub fn pinhole_ray(&self, x: u32, y: u32, width: usize, height: usize, jx: f32, jy: f32) -> Ray {
+        let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
+        let cam = &self.scene.camera;
+        let (tw, th) = self.tan_half_fov;
+        let d = Vec3::new((px - 0.5) * 2.0 * tw, (py - 0.5) * 2.0 * th, -1.0);
+        Ray { origin: cam.position, dir: (cam.c2w * d).normalize(), tmin: cam.nclip, tmax: cam.fclip }
     }
 }
 

@@ -32,16 +32,18 @@ pub fn offset_origin(p: Vec3, p_error: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
     Vec3::new(away(po.x, offset.x), away(po.y, offset.y), away(po.z, offset.z))
 }
 
-/// `x` moved one ulp toward the sign of `o` (unchanged when `o` is zero).
+/// `x` moved one ulp toward the sign of `o` (unchanged when `o` is zero): `next_up` /
+/// `next_down` for finite `x`, done on the bits without branches (a finite float's bits
+/// ordered by magnitude: one more is one ulp farther from zero, one less one ulp nearer;
+/// from either zero the step is the smallest subnormal with `o`'s sign).
 #[inline(always)]
-fn away(x: f32, o: f32) -> f32 {
-    if o > 0.0 {
-        x.next_up()
-    } else if o < 0.0 {
-        x.next_down()
-    } else {
-        x
-    }
+pub(crate) fn away(x: f32, o: f32) -> f32 {
+    let (xb, ob) = (x.to_bits(), o.to_bits());
+    let from_zero = (ob & 0x8000_0000) | 1;
+    // Same sign: farther from zero (+1); opposite signs: nearer (-1).
+    let step = xb.wrapping_add(1).wrapping_sub(((xb ^ ob) >> 31) << 1);
+    let moved = if x == 0.0 { from_zero } else { step };
+    f32::from_bits(if o == 0.0 || !x.is_finite() { xb } else { moved })
 }
 
 /// Relative shortening of a shadow ray: its unit direction and length are each a few
@@ -56,10 +58,22 @@ const SHADOW_SHORTEN: f32 = 1e-5;
 /// the light point lies on does not occlude it.
 #[inline]
 pub fn shadow_tmax(origin: Vec3, target: Vec3, target_error: Vec3) -> f32 {
-    let d = (target - origin).length();
-    // Twice the error box's diagonal: the target may lie that far in front of the surface it
-    // was sampled on, and the surface's own hit point as far again.
-    d * (1.0 - SHADOW_SHORTEN) - 2.0 * (target_error.length() + ERROR_FLOOR)
+    shadow_tmax_at((target - origin).length(), shadow_margin(target_error))
+}
+
+/// What a shadow ray toward a light point with error bound `target_error` stops short of
+/// it by, besides the relative shortening: twice the error box's diagonal (the target may
+/// lie that far in front of the surface it was sampled on, and the surface's own hit point
+/// as far again). Constant per light: computed once per render.
+#[inline]
+pub fn shadow_margin(target_error: Vec3) -> f32 {
+    2.0 * (target_error.length() + ERROR_FLOOR)
+}
+
+/// [`shadow_tmax`] from the distance to the target and the light's [`shadow_margin`].
+#[inline(always)]
+pub fn shadow_tmax_at(dist: f32, margin: f32) -> f32 {
+    dist * (1.0 - SHADOW_SHORTEN) - margin
 }
 
 /// The shadow ray from `origin` (already offset) along `dir`, or, for a light point
@@ -75,4 +89,33 @@ pub fn shadow_ray(origin: Vec3, dir: Vec3, target: Option<(Vec3, Vec3)>) -> Opti
     let dir = (q - origin).try_normalize()?;
     let tmax = shadow_tmax(origin, q, q_error);
     (tmax > 0.0).then_some(Ray { origin, dir, tmin: 0.0, tmax })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::away;
+
+    /// The bit-level step is std's `next_up` / `next_down` on every finite value, including
+    /// zeros, subnormals and the largest finite numbers.
+    #[test]
+    fn away_matches_next_up_and_down() {
+        let mut xs = vec![0.0f32, -0.0, f32::MIN_POSITIVE, -f32::MIN_POSITIVE, f32::MAX, -f32::MAX, 1.0, -1.0];
+        xs.extend([f32::from_bits(1), f32::from_bits(0x8000_0001), 1e-40, -3e-39, 0.3, -552.25]);
+        let mut h = 0x1234_5678u32;
+        for _ in 0..10_000 {
+            h = h.wrapping_mul(747_796_405).wrapping_add(2_891_336_453);
+            let x = f32::from_bits(h);
+            if x.is_finite() {
+                xs.push(x);
+            }
+        }
+        for &x in &xs {
+            for o in [1e-30f32, 2.0, -1e-30, -0.5] {
+                let want = if o > 0.0 { x.next_up() } else { x.next_down() };
+                assert_eq!(away(x, o).to_bits(), want.to_bits(), "x {x:e} o {o}");
+            }
+            assert_eq!(away(x, 0.0).to_bits(), x.to_bits());
+            assert_eq!(away(x, -0.0).to_bits(), x.to_bits());
+        }
+    }
 }

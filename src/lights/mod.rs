@@ -68,6 +68,13 @@ pub struct LightSample {
 }
 
 impl SampledLight {
+    /// Whether [`sample`](Self::sample) reads its third number (only emissive triangles do:
+    /// they pick a triangle with it); the others take two.
+    #[inline]
+    pub fn uses_third_number(&self) -> bool {
+        matches!(self, SampledLight::Emissive(_))
+    }
+
     pub fn is_delta(&self) -> bool {
         matches!(self, SampledLight::Point { .. } | SampledLight::Directional { .. } | SampledLight::Spot { .. })
     }

@@ -9,7 +9,7 @@ pub mod error_bound;
 mod material;
 mod mesh;
 mod normals;
-mod surface;
+pub mod surface;
 pub mod texture;
 
 pub use camera::Camera;

@@ -21,6 +21,13 @@ pub struct SurfacePoint {
 impl Scene {
     /// Reconstructs the surface point of `hit` on `ray`.
     pub fn surface_point(&self, ray: &Ray, hit: &Hit) -> SurfacePoint {
+        self.surface_point_with(ray, hit, true)
+    }
+
+    /// [`surface_point`](Self::surface_point); a sphere point's `uv` (an `atan2` and an `acos`)
+    /// only when `uv` is asked for (zero otherwise: untextured shading never reads it).
+    #[inline(always)]
+    pub fn surface_point_with(&self, ray: &Ray, hit: &Hit, uv: bool) -> SurfacePoint {
         let ntri = self.mesh.triangles.len();
         let prim = hit.prim as usize;
         if prim < ntri {
@@ -28,14 +35,11 @@ impl Scene {
             let [a, b, c] = self.mesh.corners(prim);
             let (u, v) = (hit.u, hit.v);
             let w = 1.0 - u - v;
-            // Interpolating the corners is more accurate than o + t d far from the origin.
-            let position = w * a + u * b + v * c;
-            let p_error = triangle_error(a, b, c, u, v);
-            let geometric_normal = (b - a).cross(c - a).try_normalize().unwrap_or(Vec3::Y);
+            let (position, p_error, geometric_normal) = triangle_point(a, b, c, u, v);
             let shading_normal = match &self.mesh.normals {
-                Some(n) => (w * n[ia as usize] + u * n[ib as usize] + v * n[ic as usize])
-                    .try_normalize()
-                    .unwrap_or(geometric_normal),
+                Some(n) => {
+                    interpolated_normal([n[ia as usize], n[ib as usize], n[ic as usize]], u, v, geometric_normal)
+                }
                 None => geometric_normal,
             };
             let uv = match &self.mesh.uvs {
@@ -52,17 +56,50 @@ impl Scene {
             }
         } else {
             let s = &self.spheres[prim - ntri];
-            let p = ray.at(hit.t);
-            let n = (p - s.center).try_normalize().unwrap_or(Vec3::Y);
-            // Project onto the sphere so the point is as exact as the radius allows.
-            let local = n * s.radius;
-            let position = s.center + local;
-            let p_error = sphere_error(s.center, local);
-            let uv = Vec2::new(
-                0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
-                n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-            );
+            let (position, p_error, n) = sphere_point(s.center, s.radius, ray.at(hit.t));
+            let uv = if uv {
+                Vec2::new(
+                    0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
+                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+                )
+            } else {
+                Vec2::ZERO
+            };
             SurfacePoint { position, p_error, geometric_normal: n, shading_normal: n, uv, material: s.material }
         }
     }
+}
+
+/// `v` normalised, or `fallback` when it has no direction (what `try_normalize` does,
+/// written with selects so a loop over lanes vectorises).
+#[inline(always)]
+pub fn normalize_or(v: Vec3, fallback: Vec3) -> Vec3 {
+    let rcp = 1.0 / v.length();
+    if rcp.is_finite() && rcp > 0.0 { v * rcp } else { fallback }
+}
+
+/// The point of triangle (a, b, c) at barycentrics (u, v), its error bound and the unit
+/// normal of the triangle's plane. Interpolating the corners is more accurate than o + t d
+/// far from the origin.
+#[inline(always)]
+pub fn triangle_point(a: Vec3, b: Vec3, c: Vec3, u: f32, v: f32) -> (Vec3, Vec3, Vec3) {
+    let w = 1.0 - u - v;
+    let position = w * a + u * b + v * c;
+    (position, triangle_error(a, b, c, u, v), normalize_or((b - a).cross(c - a), Vec3::Y))
+}
+
+/// The corner normals `n` interpolated at (u, v) and normalised (`fallback` if degenerate).
+#[inline(always)]
+pub fn interpolated_normal(n: [Vec3; 3], u: f32, v: f32, fallback: Vec3) -> Vec3 {
+    let w = 1.0 - u - v;
+    normalize_or(w * n[0] + u * n[1] + v * n[2], fallback)
+}
+
+/// The point of a sphere nearest to `p` (a hit point on it): projected onto the sphere so
+/// it is as exact as the radius allows, with its error bound and the outward unit normal.
+#[inline(always)]
+pub fn sphere_point(center: Vec3, radius: f32, p: Vec3) -> (Vec3, Vec3, Vec3) {
+    let n = normalize_or(p - center, Vec3::Y);
+    let local = n * radius;
+    (center + local, sphere_error(center, local), n)
 }

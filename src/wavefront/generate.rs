@@ -3,6 +3,7 @@
 use super::queues::PathQueue;
 use crate::integrator::Transport;
 use crate::sampling::Sampler;
+use glam::Vec3;
 
 /// Which samples of which pixels a wave takes: slot s is sample `base + s % batch` of pixel
 /// `pixels[s / batch]`.
@@ -31,11 +32,20 @@ impl Wave<'_> {
 /// Fills the path queue with the wave's camera rays, in slot order. A pixel's samples are
 /// consecutive slots, so the pixel's coordinates and the pixel part of the path key
 /// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
+/// With a pinhole camera and AVX2, the rays of eight samples are set up lane-parallel
+/// (keys and jitters one by one, the directions' normalisations together).
 pub fn generate(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
     q.clear();
     let n = wave.len();
     q.ray.reserve(n);
     q.key.reserve(n);
+    #[cfg(target_arch = "x86_64")]
+    if t.pinhole() && is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        // SAFETY: AVX2 and FMA were detected on this CPU just above.
+        unsafe { pinhole_avx2(t, q, wave, width, height, spp) };
+        q.start_camera_paths(n);
+        return;
+    }
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
         let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
@@ -47,4 +57,66 @@ pub fn generate(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, hei
     }
     // The fields every camera path starts with are the same: filled field by field.
     q.start_camera_paths(n);
+}
+
+/// Lanes per group of camera rays.
+const L: usize = 8;
+
+/// The pinhole camera's rays of the wave, eight samples of a pixel at a time; the same rays
+/// as [`Transport::camera_ray_keyed`] (the same functions, per lane).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn pinhole_avx2(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+    for &pixel in wave.pixels {
+        let (x, y) = (pixel % width as u32, pixel / width as u32);
+        let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
+        let mut sample = wave.base;
+        let end = wave.base + wave.batch;
+        while sample < end {
+            let m = ((end - sample) as usize).min(L);
+            let (mut jx, mut jy, mut keys) = ([0.5f32; L], [0.5f32; L], [0u64; L]);
+            for j in 0..m {
+                keys[j] = Sampler::sample_key(pixel_key, (sample + j as u32) as u64);
+                (jx[j], jy[j]) = Transport::pixel_jitter(keys[j], spp);
+            }
+            let mut rays = [crate::ray::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
+            for j in 0..L {
+                rays[j] = t.pinhole_ray(x, y, width, height, jx[j], jy[j]);
+            }
+            q.ray.extend_from_slice(&rays[..m]);
+            q.key.extend_from_slice(&keys[..m]);
+            sample += m as u32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::Settings;
+
+    /// The lane-parallel camera rays (when the CPU runs them) are bit for bit the rays of
+    /// `Transport::camera_ray_keyed`, for batches that fill 8 lanes and batches that do not.
+    #[test]
+    fn wave_rays_are_the_single_camera_rays() {
+        let scene = crate::load::default_scene();
+        let (w, h) = (13, 7);
+        for (spp, batch) in [(16, 16), (16, 5), (1, 1), (64, 11)] {
+            let s = Settings { width: w, height: h, spp, ..Settings::default() };
+            let t = Transport::new(&scene, &s);
+            let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
+            let wave = Wave { pixels: &pixels, base: 2, batch };
+            let mut q = PathQueue::default();
+            generate(&t, &mut q, &wave, w, h, spp);
+            assert_eq!(q.len(), wave.len());
+            for slot in 0..wave.len() as u32 {
+                let (pixel, sample) = wave.pixel_sample(slot);
+                let key = t.path_key(pixel, sample);
+                let (x, y) = (pixel % w as u32, pixel / w as u32);
+                assert_eq!(q.key[slot as usize], key);
+                assert_eq!(q.ray[slot as usize], t.camera_ray_keyed(x, y, w, h, key, spp), "slot {slot}");
+                assert_eq!(q.ray[slot as usize], t.camera_ray(x, y, w, h, sample, spp));
+            }
+        }
+    }
 }

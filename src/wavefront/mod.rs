@@ -20,6 +20,7 @@
 
 pub mod compact;
 pub mod generate;
+pub mod lanes;
 pub mod queues;
 pub mod shade;
 pub mod shadow;

@@ -11,6 +11,14 @@ use glam::Vec3;
 /// rays, appends the path's shadow rays (throughput applied), and replaces the path's ray by
 /// its continuation (`alive`, after Russian roulette) or ends it. Parts whose effect `F` leaves out are not compiled in.
 pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+    if super::lanes::applies::<F>(t) && super::lanes::shade_lanes::<F>(t, q, hits, shadow) {
+        return;
+    }
+    shade_scalar::<F>(t, q, hits, shadow);
+}
+
+/// [`shade`] one path at a time (any features; the reference for the lane kernel).
+pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
     for (i, hit) in hits.iter().enumerate().take(q.len()) {
@@ -73,8 +81,8 @@ pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>]
 /// Russian roulette for path `i`'s new continuation, here where the vertex's stream is at
 /// hand (the bounce stage would have to derive it again), applied after the BSDF weight as
 /// [`Transport::continuation`] does; the shadow rays already took the throughput before it.
-#[inline]
-fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
+#[inline(always)]
+pub(super) fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
     if F::ROULETTE {
         match t.roulette(depth, rng) {
             Some(f) => q.throughput[i] *= f,

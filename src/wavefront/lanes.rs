@@ -1,0 +1,387 @@
+//! Shade for the common case, eight paths at a time: Lambertian materials, light sampling,
+//! only area lights. What is per path and irregular (the hit's surface point, the random
+//! numbers) is gathered one path at a time into structure-of-arrays lanes; the light
+//! samples, offsets, shadow-ray setup and the continuation rays then run lane-parallel:
+//! [`crate::integrator::area`]'s branch-free per-sample functions in fixed loops of 8 lanes
+//! that the compiler vectorises (8 square roots and divisions per instruction instead of
+//! one). The functions are the ones the one-vertex-at-a-time code calls, so the image is
+//! the same, bit for bit, as [`super::shade::shade`]'s.
+//!
+//! The lane kernel is compiled with AVX2 and FMA enabled (behind run-time detection; Rust
+//! never contracts `a * b + c` into an FMA, so the bits do not change) and everything it
+//! calls is `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
+
+use super::Features;
+use super::queues::{PathQueue, ShadowQueue};
+use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
+use crate::integrator::{DIM_DIRECT, Transport, orient};
+use crate::lights::SampledLight;
+use crate::ray::{Hit, Ray};
+use crate::sampling::Sampler;
+use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// Paths per group.
+const L: usize = 8;
+
+/// Whether the lane kernel can shade this render's paths: no BSDF models, light sampling
+/// (not hemisphere probes) and nothing but area lights.
+pub fn applies<F: Features>(t: &Transport) -> bool {
+    !F::NON_DIFFUSE && !t.hemisphere && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
+}
+
+/// [`super::shade::shade`] eight paths at a time when the CPU has AVX2 and FMA; `false` (and
+/// nothing done) when it has not.
+pub fn shade_lanes<F: Features>(
+    t: &Transport,
+    q: &mut PathQueue,
+    hits: &[Option<Hit>],
+    shadow: &mut ShadowQueue,
+) -> bool {
+    #[cfg(target_arch = "x86_64")]
+    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        // SAFETY: AVX2 and FMA were detected on this CPU just above.
+        unsafe { shade_avx2::<F>(t, q, hits, shadow) };
+        return true;
+    }
+    let _ = (t, q, hits, shadow);
+    false
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn shade_avx2<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+    shade_groups::<F>(t, q, hits, shadow);
+}
+
+/// The shading points of a group, one array per component.
+#[derive(Default)]
+struct Points {
+    p: [[f32; L]; 3],
+    e: [[f32; L]; 3],
+    ng: [[f32; L]; 3],
+    ns: [[f32; L]; 3],
+}
+
+impl Points {
+    #[inline(always)]
+    fn set(&mut self, j: usize, s: &ShadingPoint) {
+        for (a, v) in [(&mut self.p, s.p), (&mut self.e, s.p_error), (&mut self.ng, s.ng), (&mut self.ns, s.ns)] {
+            a[0][j] = v.x;
+            a[1][j] = v.y;
+            a[2][j] = v.z;
+        }
+    }
+
+    #[inline(always)]
+    fn get(&self, j: usize) -> ShadingPoint {
+        ShadingPoint { p: get(&self.p, j), p_error: get(&self.e, j), ng: get(&self.ng, j), ns: get(&self.ns, j) }
+    }
+}
+
+/// What the surface points of a group are reconstructed from: a triangle's corners (and
+/// corner normals) and barycentrics, or a sphere and the ray's hit point on it.
+#[derive(Default)]
+struct Surfaces {
+    corner: [[[f32; L]; 3]; 3],
+    normal: [[[f32; L]; 3]; 3],
+    u: [f32; L],
+    v: [f32; L],
+    center: [[f32; L]; 3],
+    radius: [f32; L],
+    hit: [[f32; L]; 3],
+    dir: [[f32; L]; 3],
+    triangle: [bool; L],
+}
+
+#[inline(always)]
+fn put(a: &mut [[f32; L]; 3], j: usize, v: Vec3) {
+    a[0][j] = v.x;
+    a[1][j] = v.y;
+    a[2][j] = v.z;
+}
+
+#[inline(always)]
+fn get(a: &[[f32; L]; 3], j: usize) -> Vec3 {
+    Vec3::new(a[0][j], a[1][j], a[2][j])
+}
+
+impl Surfaces {
+    /// Gathers lane `j`'s hit (prim `prim`, on `ray`).
+    #[inline(always)]
+    fn set(&mut self, t: &Transport, j: usize, ray: &Ray, hit: &Hit) {
+        let mesh = &t.scene.mesh;
+        let prim = hit.prim as usize;
+        put(&mut self.dir, j, ray.dir);
+        self.triangle[j] = prim < mesh.triangles.len();
+        if self.triangle[j] {
+            let ids = mesh.triangles[prim];
+            for k in 0..3 {
+                put(&mut self.corner[k], j, mesh.positions[ids[k] as usize]);
+                if let Some(n) = &mesh.normals {
+                    put(&mut self.normal[k], j, n[ids[k] as usize]);
+                }
+            }
+            (self.u[j], self.v[j]) = (hit.u, hit.v);
+        } else {
+            let s = &t.scene.spheres[prim - mesh.triangles.len()];
+            put(&mut self.center, j, s.center);
+            self.radius[j] = s.radius;
+            put(&mut self.hit, j, ray.at(hit.t));
+        }
+    }
+
+    /// Lane `j`'s shading point: both reconstructions (the same functions as
+    /// `Scene::surface_point`), one kept, so all lanes run the same instructions.
+    #[inline(always)]
+    fn point(&self, j: usize, normals: bool) -> ShadingPoint {
+        let (u, v) = (self.u[j], self.v[j]);
+        let c = &self.corner;
+        let (tp, te, tn) = triangle_point(get(&c[0], j), get(&c[1], j), get(&c[2], j), u, v);
+        let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
+        let tri = self.triangle[j];
+        let ts = if normals {
+            let n = &self.normal;
+            interpolated_normal([get(&n[0], j), get(&n[1], j), get(&n[2], j)], u, v, tn)
+        } else {
+            tn
+        };
+        let (p, p_error, g, sh) = if tri { (tp, te, tn, ts) } else { (sp, se, sn, sn) };
+        let (ng, ns, _) = orient(g, sh, get(&self.dir, j));
+        ShadingPoint { p, p_error, ng, ns }
+    }
+}
+
+/// Reconstructs the shading points of all lanes (lane-parallel).
+#[inline(always)]
+fn surface_points(s: &Surfaces, normals: bool, out: &mut Points) {
+    if normals {
+        for j in 0..L {
+            out.set(j, &s.point(j, true));
+        }
+    } else {
+        for j in 0..L {
+            out.set(j, &s.point(j, false));
+        }
+    }
+}
+
+/// A group's rays, one array per component.
+#[derive(Default)]
+struct Rays {
+    o: [[f32; L]; 3],
+    d: [[f32; L]; 3],
+    tmax: [f32; L],
+    g: [f32; L],
+    valid: [bool; L],
+}
+
+impl Rays {
+    #[inline(always)]
+    fn set(&mut self, j: usize, r: &Ray) {
+        for (a, v) in [(&mut self.o, r.origin), (&mut self.d, r.dir)] {
+            a[0][j] = v.x;
+            a[1][j] = v.y;
+            a[2][j] = v.z;
+        }
+        self.tmax[j] = r.tmax;
+    }
+
+    #[inline(always)]
+    fn ray(&self, j: usize) -> Ray {
+        Ray { origin: get(&self.o, j), dir: get(&self.d, j), tmin: 0.0, tmax: self.tmax[j] }
+    }
+}
+
+/// The shadow rays toward light `l` of all lanes (lane-parallel).
+#[inline(always)]
+fn area_rays(pts: &Points, l: &AreaLight, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
+    for j in 0..L {
+        let r = area_ray(&pts.get(j), l, ua[j], ub[j]);
+        out.set(j, &r.ray);
+        out.g[j] = r.g;
+        out.valid[j] = r.valid;
+    }
+}
+
+/// The continuation rays of all lanes (lane-parallel).
+#[inline(always)]
+fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
+    for j in 0..L {
+        let r = cosine_ray(&pts.get(j), ua[j], ub[j]);
+        out.set(j, &r);
+    }
+}
+
+#[inline(always)]
+fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+    shadow.clear();
+    let sees_emission = t.counts_emission();
+    let n = q.len().min(hits.len());
+    let mut pts = Points::default();
+    let mut rays = Rays::default();
+    let mut surf = Surfaces::default();
+    let normals = t.scene.mesh.normals.is_some();
+    for base in (0..n).step_by(L) {
+        let m = (n - base).min(L);
+        let mut rng = [Sampler::default(); L];
+        let mut albedo = [Vec3::ZERO; L];
+        let mut direct = [false; L];
+        let mut cont = [false; L];
+        // Gather, one path at a time.
+        for j in 0..m {
+            let i = base + j;
+            let depth = q.depth[i];
+            q.alive[i] = false;
+            let Some(hit) = hits[i] else {
+                if F::ENVIRONMENT && depth == 0 && sees_emission {
+                    q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
+                }
+                continue;
+            };
+            let m = t.material_of(hit.prim);
+            if F::EMISSION && depth == 0 && sees_emission {
+                q.radiance[i] += t.emission[m];
+            }
+            if !F::DIRECT && !F::INDIRECT {
+                continue;
+            }
+            rng[j] = t.vertex_sampler(q.key[i], depth);
+            surf.set(t, j, &q.ray[i], &hit);
+            albedo[j] = t.albedo[m];
+            // As `Transport::direct_rays` and `Transport::scatter` decide.
+            direct[j] = F::DIRECT && t.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
+            cont[j] = F::INDIRECT && t.continues(depth) && albedo[j] != Vec3::ZERO;
+        }
+        if !direct.iter().chain(&cont).any(|&b| b) {
+            continue;
+        }
+        surface_points(&surf, normals, &mut pts);
+        if F::DIRECT && direct.iter().any(|&d| d) {
+            let mut dim = DIM_DIRECT;
+            for (li, light) in t.lights.lights.iter().enumerate() {
+                let (Some(al), SampledLight::Area { radiance, .. }) = (&t.area_lights[li], light) else {
+                    unreachable!("the lane kernel runs only with area lights")
+                };
+                let ns = t.lights.samples_for(li, t.light_samples);
+                let mut c = [Vec3::ZERO; L];
+                for j in 0..L {
+                    c[j] = albedo[j] * FRAC_1_PI / ns as f32 * *radiance;
+                }
+                for _ in 0..ns {
+                    let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
+                    for j in 0..m {
+                        if direct[j] {
+                            (ua[j], ub[j]) = rng[j].at(dim).next_2d();
+                        }
+                    }
+                    dim += 1;
+                    area_rays(&pts, al, &ua, &ub, &mut rays);
+                    for j in 0..m {
+                        if direct[j] && rays.valid[j] {
+                            let i = base + j;
+                            shadow.push(rays.ray(j), c[j] * rays.g[j] * q.throughput[i], i as u32);
+                        }
+                    }
+                }
+            }
+        }
+        if F::INDIRECT && cont.iter().any(|&c| c) {
+            let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
+            for j in 0..m {
+                if cont[j] {
+                    (ua[j], ub[j]) = rng[j].at(0).next_2d();
+                }
+            }
+            cosine_rays(&pts, &ua, &ub, &mut rays);
+            for j in 0..m {
+                if cont[j] {
+                    let i = base + j;
+                    let depth = q.depth[i];
+                    q.ray[i] = rays.ray(j);
+                    q.throughput[i] *= albedo[j];
+                    q.depth[i] = depth + 1;
+                    q.alive[i] = true;
+                    super::shade::roulette::<F>(t, q, i, depth, rng[j]);
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{BruteForce, Intersector, TraceCounters};
+    use crate::settings::{Settings, Shading};
+    use crate::wavefront::generate::{Wave, generate};
+    use crate::wavefront::{Kernel, compact, shade};
+
+    type K = Kernel<true, false, true, true, true, false>;
+
+    /// Each path's shadow rays (in the order they were made) and weights, by owner.
+    fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
+        let mut out = vec![Vec::new(); n];
+        for k in 0..s.len() {
+            out[s.owner[k] as usize].push((s.ray[k], s.weight[k]));
+        }
+        out
+    }
+
+    /// The lane kernel gives every path the same continuation, throughput, radiance and
+    /// shadow rays (bit for bit) as the one-path-at-a-time kernel, over five bounces, on
+    /// triangles with and without corner normals and on spheres.
+    #[test]
+    fn lanes_match_the_scalar_kernel() {
+        for with_normals in [false, true] {
+            let mut scene = crate::load::default_scene();
+            if with_normals {
+                let n = scene.mesh.positions.len();
+                // Unit normals tilted differently at every vertex.
+                let normals = (0..n)
+                    .map(|i| Vec3::new((i as f32 * 0.7).sin(), 1.0, (i as f32 * 1.3).cos()).normalize())
+                    .collect();
+                scene.mesh.normals = Some(normals);
+            }
+            let s = Settings {
+                width: 24,
+                height: 18,
+                spp: 8,
+                light_samples: 3,
+                max_depth: 5,
+                shading: Shading::Global,
+                ..Settings::default()
+            };
+            let t = Transport::new(&scene, &s);
+            assert!(applies::<K>(&t));
+            let accel = BruteForce::new(&scene);
+            let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
+            let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
+            let mut q = PathQueue::default();
+            generate(&t, &mut q, &wave, 24, 18, 8);
+            let (mut hits, mut sl, mut ss) = (Vec::new(), ShadowQueue::default(), ShadowQueue::default());
+            let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
+            let mut shadow_rays = 0;
+            while !q.is_empty() {
+                hits.clear();
+                hits.resize(q.len(), None);
+                accel.closest_hits(&q.ray, &mut hits, &mut TraceCounters::default());
+                let mut qs = q.clone();
+                if !shade_lanes::<K>(&t, &mut q, &hits, &mut sl) {
+                    return; // no AVX2 on this CPU: nothing to compare
+                }
+                shade::shade_scalar::<K>(&t, &mut qs, &hits, &mut ss);
+                assert_eq!(q.ray, qs.ray);
+                assert_eq!(q.throughput, qs.throughput);
+                assert_eq!(q.radiance, qs.radiance);
+                assert_eq!(q.alive, qs.alive);
+                assert_eq!(q.depth, qs.depth);
+                assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
+                shadow_rays += sl.len();
+                compact::compact(&mut q, &mut slot_radiance);
+            }
+            assert!(shadow_rays > 1000, "{shadow_rays}");
+        }
+    }
+}
