@@ -9,7 +9,7 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
-use super::wide::{Node8, WIDTH};
+use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
 
@@ -32,6 +32,8 @@ pub struct BoxRay {
     pub(super) oi_far: [f32; 3],
     /// Whether every `oi` term is finite (else the kernels use the unfused form).
     pub(super) fma: bool,
+    /// `3 * octant`: where this ray's visiting order sits in `Node8::perm`.
+    pub(super) perm_shift: u32,
     /// Whether the ray can hit anything at all (finite origin, finite non-zero direction,
     /// ordered non-NaN range).
     pub(super) live: bool,
@@ -69,6 +71,7 @@ impl BoxRay {
         oi_near: [0.0; 3],
         oi_far: [0.0; 3],
         fma: false,
+        perm_shift: 0,
         live: false,
     };
 
@@ -89,6 +92,7 @@ impl BoxRay {
             oi_near: [nx, ny, nz],
             oi_far: [fx, fy, fz],
             fma: (nx - fx + ny - fy + nz - fz).is_finite(),
+            perm_shift: 3 * octant([d.x, d.y, d.z]),
             live: ShearedRay::traceable(ray) && !ray.tmin.is_nan() && !ray.tmax.is_nan() && ray.tmin <= ray.tmax,
         }
     }
@@ -99,6 +103,33 @@ pub trait BoxTest: Copy {
     /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
     /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
+
+    /// Tests the children of `node` (as [`BoxTest::test`]) and, when two or more are hit,
+    /// pushes them at `sp` in the node's order for the ray's octant, farthest first, so the
+    /// nearest is on top: `nodes[sp..]` their references, `dists[sp..]` their entry
+    /// distances. Returns the number hit and, when that is one, the child (not pushed).
+    /// The stack needs [`WIDTH`] free entries at `sp` (the SIMD path stores whole vectors).
+    #[inline(always)]
+    fn visit(self, node: &Node8, r: &BoxRay, tmax: f32, nodes: &mut [u32], dists: &mut [f32], sp: usize) -> (u32, u32) {
+        let mut tnear = [0f32; WIDTH];
+        let mask = self.test(node, r, tmax, &mut tnear);
+        let n = mask.count_ones();
+        if n == 1 {
+            return (1, node.child[mask.trailing_zeros() as usize]);
+        }
+        let mut top = sp;
+        if n > 1 {
+            for k in node.perm {
+                let slot = (k >> r.perm_shift & 7) as usize;
+                if mask >> slot & 1 != 0 {
+                    nodes[top] = node.child[slot];
+                    dists[top] = tnear[slot];
+                    top += 1;
+                }
+            }
+        }
+        (n, 0)
+    }
 
     /// Asks the cache for the memory of `x` (a node or leaf block the traversal will read
     /// soon), so several misses overlap instead of following one another. No effect on

@@ -88,40 +88,44 @@ impl BoxTest for Avx2 {
 
     #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; loads/stores are unaligned
-        // ones on in-bounds arrays of exactly 8 f32 (`BoxRay` plane indices are < 6).
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the store is unaligned on
+        // an array of exactly 8 f32.
         unsafe {
-            let plane = |p: usize| _mm256_loadu_ps(node.b.as_ptr().add(p).cast::<f32>());
-            let (t0, t1, t2, u0, u1, u2);
-            if r.fma {
-                // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
-                let d = |p: usize, axis: usize, oi: &[f32; 3]| {
-                    _mm256_fmsub_ps(plane(p), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
-                };
-                t0 = d(r.near[0], 0, &r.oi_near);
-                t1 = d(r.near[1], 1, &r.oi_near);
-                t2 = d(r.near[2], 2, &r.oi_near);
-                u0 = d(r.far[0], 0, &r.oi_far);
-                u1 = d(r.far[1], 1, &r.oi_far);
-                u2 = d(r.far[2], 2, &r.oi_far);
-            } else {
-                let d = |p: usize, axis: usize| {
-                    _mm256_mul_ps(_mm256_sub_ps(plane(p), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
-                };
-                t0 = d(r.near[0], 0);
-                t1 = d(r.near[1], 1);
-                t2 = d(r.near[2], 2);
-                u0 = d(r.far[0], 0);
-                u1 = d(r.far[1], 1);
-                u2 = d(r.far[2], 2);
-            }
-            let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
-            let exit = _mm256_min_ps(
-                _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE)),
-                _mm256_set1_ps(tmax),
-            );
+            let (enter, hit) = slab8(node, r, tmax);
             _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
-            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
+            _mm256_movemask_ps(hit) as u32
+        }
+    }
+
+    #[inline(always)]
+    fn visit(self, node: &Node8, r: &BoxRay, tmax: f32, nodes: &mut [u32], dists: &mut [f32], sp: usize) -> (u32, u32) {
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the loads are unaligned
+        // ones of 8 u32 inside `node`, the stores go to the sub-slices of exactly 8 entries
+        // taken (bounds-checked) at `sp`; `COMPRESS` is indexed by an 8-bit mask.
+        unsafe {
+            let (enter, hit) = slab8(node, r, tmax);
+            let mask = _mm256_movemask_ps(hit) as u32;
+            let n = mask.count_ones();
+            if n == 1 {
+                return (1, node.child[mask.trailing_zeros() as usize]);
+            }
+            if n > 1 {
+                let (dn, dd) = (&mut nodes[sp..sp + WIDTH], &mut dists[sp..sp + WIDTH]);
+                // Slots in the octant's order (far to near); `permutevar8x32` reads only the
+                // low three bits of each index, so the other octants' bits need no masking.
+                let order = _mm256_srl_epi32(
+                    _mm256_loadu_si256(node.perm.as_ptr().cast()),
+                    _mm_cvtsi32_si128(r.perm_shift as i32),
+                );
+                let sorted_hit = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, order)) as usize;
+                // Then the hit ones packed to the front, keeping that order.
+                let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
+                let idx = _mm256_permutevar8x32_epi32(order, pack);
+                let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
+                _mm256_storeu_si256(dn.as_mut_ptr().cast(), child);
+                _mm256_storeu_ps(dd.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
+            }
+            (n, 0)
         }
     }
 
@@ -131,6 +135,68 @@ impl BoxTest for Avx2 {
         unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
     }
 }
+
+/// Entry distances and hit lanes of the eight children of `node` (AVX2 + FMA slab test).
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32) -> (__m256, __m256) {
+    // SAFETY: the caller guarantees AVX2 and FMA; loads are unaligned ones on in-bounds arrays
+    // of exactly 8 f32 (`BoxRay` plane indices are < 6).
+    unsafe {
+        let plane = |p: usize| _mm256_loadu_ps(node.b.as_ptr().add(p).cast::<f32>());
+        let (t0, t1, t2, u0, u1, u2);
+        if r.fma {
+            // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
+            let d = |p: usize, axis: usize, oi: &[f32; 3]| {
+                _mm256_fmsub_ps(plane(p), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
+            };
+            t0 = d(r.near[0], 0, &r.oi_near);
+            t1 = d(r.near[1], 1, &r.oi_near);
+            t2 = d(r.near[2], 2, &r.oi_near);
+            u0 = d(r.far[0], 0, &r.oi_far);
+            u1 = d(r.far[1], 1, &r.oi_far);
+            u2 = d(r.far[2], 2, &r.oi_far);
+        } else {
+            let d = |p: usize, axis: usize| {
+                _mm256_mul_ps(_mm256_sub_ps(plane(p), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
+            };
+            t0 = d(r.near[0], 0);
+            t1 = d(r.near[1], 1);
+            t2 = d(r.near[2], 2);
+            u0 = d(r.far[0], 0);
+            u1 = d(r.far[1], 1);
+            u2 = d(r.far[2], 2);
+        }
+        let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
+        let exit = _mm256_min_ps(
+            _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE)),
+            _mm256_set1_ps(tmax),
+        );
+        (enter, _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit))
+    }
+}
+
+/// For each 8-bit mask, the indices of its set bits in increasing order, one per byte from
+/// the lowest (the rest zero): the lane permutation that packs the selected lanes to the front.
+static COMPRESS: [u64; 256] = {
+    let mut t = [0u64; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut lane) = (0, 0);
+        while lane < 8 {
+            if m >> lane & 1 == 1 {
+                t[m] |= (lane as u64) << (8 * k);
+                k += 1;
+            }
+            lane += 1;
+        }
+        m += 1;
+    }
+    t
+};
 
 /// Prefetches every cache line of `x` into all cache levels.
 #[cfg(target_arch = "x86_64")]
