@@ -12,7 +12,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
-use boxtest::{BoxRay, Scalar};
+use boxtest::{BoxRay, BoxTest, Scalar};
 use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -277,7 +277,15 @@ impl Intersector for Bvh {
                         for &i in order {
                             let (i, isa) = (i as usize, $isa);
                             let br = BoxRay::new(&rays[i]);
-                            hits[i] = traverse::closest_hit_with(self, isa, &rays[i], &br, c, &mut stack.nodes, &mut stack.dists);
+                            hits[i] = traverse::closest_hit_with(
+                                self,
+                                isa,
+                                &rays[i],
+                                &br,
+                                c,
+                                &mut stack.nodes,
+                                &mut stack.dists,
+                            );
                         }
                     }
                     None => {
@@ -285,10 +293,18 @@ impl Intersector for Bvh {
                         for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
                             let mut prep = [BoxRay::DEAD; SETUP_GROUP];
                             for (p, r) in prep.iter_mut().zip(rs) {
-                                *p = BoxRay::new(r);
+                                *p = $isa.box_ray(r);
                             }
                             for ((r, h), br) in rs.iter().zip(hs.iter_mut()).zip(prep.iter()) {
-                                *h = traverse::closest_hit_with(self, $isa, r, br, c, &mut stack.nodes, &mut stack.dists);
+                                *h = traverse::closest_hit_with(
+                                    self,
+                                    $isa,
+                                    r,
+                                    br,
+                                    c,
+                                    &mut stack.nodes,
+                                    &mut stack.dists,
+                                );
                             }
                         }
                     }

@@ -35,6 +35,24 @@ struct Best {
     found: bool,
 }
 
+/// Calls `f::<_, OCT>(args)` with the constant `OCT` equal to the octant `oct`: traversal is
+/// compiled once per direction octant (as tinybvh's BVH8_CPU), so the near and far planes
+/// are fixed offsets in the node and the visiting order a fixed shift.
+macro_rules! by_octant {
+    ($oct:expr, $f:ident($($a:expr),*)) => {
+        match $oct & 7 {
+            0 => $f::<_, 0>($($a),*),
+            1 => $f::<_, 1>($($a),*),
+            2 => $f::<_, 2>($($a),*),
+            3 => $f::<_, 3>($($a),*),
+            4 => $f::<_, 4>($($a),*),
+            5 => $f::<_, 5>($($a),*),
+            6 => $f::<_, 6>($($a),*),
+            _ => $f::<_, 7>($($a),*),
+        }
+    };
+}
+
 #[inline(always)]
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
     if bvh.stack_need <= FIXED_STACK {
@@ -46,6 +64,20 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounte
     }
 }
 
+/// [`closest_hit_octant`] for the ray's octant.
+#[inline(always)]
+pub fn closest_hit_with<B: BoxTest>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    br: &BoxRay,
+    c: &mut TraceCounters,
+    nodes: &mut [u32],
+    dists: &mut [f32],
+) -> Option<Hit> {
+    by_octant!(br.octant, closest_hit_octant(bvh, isa, ray, br, c, nodes, dists))
+}
+
 /// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a caller-provided
 /// stack of at least `bvh.stack_need` entries (batches set up their rays ahead, so the
 /// divisions of one ray overlap the traversal of the one before, and reuse one stack instead
@@ -55,7 +87,7 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounte
 /// their entry corner, not by the ray's entry distance): no sort per node. The entry
 /// distances still go on the stack, so a pop skips children beyond the closest hit so far.
 #[inline(always)]
-pub fn closest_hit_with<B: BoxTest>(
+fn closest_hit_octant<B: BoxTest, const OCT: u32>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
@@ -78,7 +110,7 @@ pub fn closest_hit_with<B: BoxTest>(
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
-            let (n, one) = isa.visit(node, br, best.t, nodes, dists, sp);
+            let (n, one) = isa.visit(node, br, OCT, best.t, nodes, dists, sp);
             if n == 1 {
                 // One child hit (the common case): no stack traffic.
                 cur = one;
@@ -208,12 +240,24 @@ pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) 
 /// child costs at least another node. Only inner children go on the stack, in no order.
 #[inline(always)]
 pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters, stack: &mut [u32]) -> bool {
+    let br = BoxRay::new(ray);
+    by_octant!(br.octant, any_hit_octant(bvh, isa, ray, &br, c, stack))
+}
+
+#[inline(always)]
+fn any_hit_octant<B: BoxTest, const OCT: u32>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    br: &BoxRay,
+    c: &mut TraceCounters,
+    stack: &mut [u32],
+) -> bool {
     c.rays += 1;
-    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !br.live {
         return false;
     }
     let mut sr = None;
-    let br = BoxRay::new(ray);
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
@@ -221,7 +265,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
     let hit = 'trace: loop {
         visited += 1;
         let node = &bvh.nodes[cur as usize];
-        let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
+        let mut mask = isa.test(node, br, OCT, ray.tmax, &mut tnear);
         if mask.count_ones() > 1 {
             let mut m = mask;
             while m != 0 {

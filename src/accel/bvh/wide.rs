@@ -153,3 +153,41 @@ fn emit(bin: &[Node2], i: usize, nodes: &mut Vec<Node8>, root_area: f64, cost: &
     }
     depth
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// For every octant the order is a permutation of the slots, from the farthest entry
+    /// corner to the nearest along that octant's diagonal, empty slots first.
+    #[test]
+    fn order_is_far_to_near_per_octant() {
+        let mut n = Node8::empty();
+        let boxes = [
+            ([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]),
+            ([5.0, 0.0, 0.0], [6.0, 1.0, 1.0]),
+            ([0.0, 3.0, -4.0], [1.0, 4.0, -3.0]),
+        ];
+        for (slot, (lo, hi)) in boxes.iter().enumerate() {
+            for axis in 0..3 {
+                n.b[2 * axis][slot] = lo[axis];
+                n.b[2 * axis + 1][slot] = hi[axis];
+            }
+        }
+        n.set_order();
+        let order = |q: u32| -> Vec<usize> { n.perm.iter().map(|p| (p >> (3 * q) & 7) as usize).collect() };
+        for q in 0..8 {
+            let mut seen = order(q);
+            seen.sort();
+            assert_eq!(seen, (0..WIDTH).collect::<Vec<_>>(), "octant {q}");
+            // The five empty slots come first (farthest).
+            assert!(order(q)[..5].iter().all(|&s| s >= 3), "octant {q}: {:?}", order(q));
+        }
+        // +x +y +z (octant 0): keys 0, 5, -1 -> far to near 1, 0, 2.
+        assert_eq!(&order(0)[5..], &[1, 0, 2]);
+        // -x +y +z (octant 1): keys -1, -6, -2 -> 0, 2, 1.
+        assert_eq!(&order(1)[5..], &[0, 2, 1]);
+        // +x +y -z (octant 4): keys -1, 4, 6 -> 2, 1, 0.
+        assert_eq!(&order(4)[5..], &[2, 1, 0]);
+    }
+}
