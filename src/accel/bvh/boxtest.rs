@@ -17,8 +17,7 @@ use crate::ray::Ray;
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
 
 /// Index into `Node8::b` of the near plane on `axis` for rays of octant `oct` (below 6 for
-/// any `oct`, as the SIMD kernels index node planes with it unchecked). Traversal is
-/// compiled once per octant, so with a constant `oct` this is a constant.
+/// any `oct`, as the SIMD kernels index node planes with it unchecked).
 #[inline(always)]
 pub fn near(oct: u32, axis: usize) -> usize {
     2 * (axis % 3) + (oct >> axis & 1) as usize

@@ -35,24 +35,6 @@ struct Best {
     found: bool,
 }
 
-/// Calls `f::<_, OCT>(args)` with the constant `OCT` equal to the octant `oct`: traversal is
-/// compiled once per direction octant (as tinybvh's BVH8_CPU), so the near and far planes
-/// are fixed offsets in the node and the visiting order a fixed shift.
-macro_rules! by_octant {
-    ($oct:expr, $f:ident($($a:expr),*)) => {
-        match $oct & 7 {
-            0 => $f::<_, 0>($($a),*),
-            1 => $f::<_, 1>($($a),*),
-            2 => $f::<_, 2>($($a),*),
-            3 => $f::<_, 3>($($a),*),
-            4 => $f::<_, 4>($($a),*),
-            5 => $f::<_, 5>($($a),*),
-            6 => $f::<_, 6>($($a),*),
-            _ => $f::<_, 7>($($a),*),
-        }
-    };
-}
-
 #[inline(always)]
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
     if bvh.stack_need <= FIXED_STACK {
@@ -64,20 +46,6 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounte
     }
 }
 
-/// [`closest_hit_octant`] for the ray's octant.
-#[inline(always)]
-pub fn closest_hit_with<B: BoxTest>(
-    bvh: &Bvh,
-    isa: B,
-    ray: &Ray,
-    br: &BoxRay,
-    c: &mut TraceCounters,
-    nodes: &mut [u32],
-    dists: &mut [f32],
-) -> Option<Hit> {
-    by_octant!(br.octant, closest_hit_octant(bvh, isa, ray, br, c, nodes, dists))
-}
-
 /// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a caller-provided
 /// stack of at least `bvh.stack_need` entries (batches set up their rays ahead, so the
 /// divisions of one ray overlap the traversal of the one before, and reuse one stack instead
@@ -87,7 +55,7 @@ pub fn closest_hit_with<B: BoxTest>(
 /// their entry corner, not by the ray's entry distance): no sort per node. The entry
 /// distances still go on the stack, so a pop skips children beyond the closest hit so far.
 #[inline(always)]
-fn closest_hit_octant<B: BoxTest, const OCT: u32>(
+pub fn closest_hit_with<B: BoxTest>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
@@ -110,7 +78,7 @@ fn closest_hit_octant<B: BoxTest, const OCT: u32>(
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
-            let (n, one) = isa.visit(node, br, OCT, best.t, nodes, dists, sp);
+            let (n, one) = isa.visit(node, br, br.octant, best.t, nodes, dists, sp);
             if n == 1 {
                 // One child hit (the common case): no stack traffic.
                 cur = one;
@@ -120,7 +88,7 @@ fn closest_hit_octant<B: BoxTest, const OCT: u32>(
                 // The nearest is on top: take it, the others wait.
                 sp += n as usize - 1;
                 cur = nodes[sp];
-                for &r in &nodes[sp.saturating_sub(n as usize - 1)..sp] {
+                for &r in &nodes[sp + 1 - n as usize..=sp] {
                     prefetch_child(bvh, isa, r);
                 }
                 continue;
@@ -240,19 +208,7 @@ pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) 
 /// child costs at least another node. Only inner children go on the stack, in no order.
 #[inline(always)]
 pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters, stack: &mut [u32]) -> bool {
-    let br = BoxRay::new(ray);
-    by_octant!(br.octant, any_hit_octant(bvh, isa, ray, &br, c, stack))
-}
-
-#[inline(always)]
-fn any_hit_octant<B: BoxTest, const OCT: u32>(
-    bvh: &Bvh,
-    isa: B,
-    ray: &Ray,
-    br: &BoxRay,
-    c: &mut TraceCounters,
-    stack: &mut [u32],
-) -> bool {
+    let br = &isa.box_ray(ray);
     c.rays += 1;
     if !br.live {
         return false;
@@ -265,7 +221,7 @@ fn any_hit_octant<B: BoxTest, const OCT: u32>(
     let hit = 'trace: loop {
         visited += 1;
         let node = &bvh.nodes[cur as usize];
-        let mut mask = isa.test(node, br, OCT, ray.tmax, &mut tnear);
+        let mut mask = isa.test(node, br, br.octant, ray.tmax, &mut tnear);
         if mask.count_ones() > 1 {
             let mut m = mask;
             while m != 0 {
