@@ -9,23 +9,36 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
-use super::wide::{Node8, WIDTH};
+use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
 
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
 
-/// Per-ray values for the box test. The plane indices are private so they stay below 6
-/// (the SIMD kernels index node planes with them unchecked).
+/// Index into `Node8::b` of the near plane on `axis` for rays of octant `oct` (below 6 for
+/// any `oct`, as the SIMD kernels index node planes with it unchecked).
+#[inline(always)]
+pub fn near(oct: u32, axis: usize) -> usize {
+    2 * (axis % 3) + (oct >> axis & 1) as usize
+}
+
+/// Index into `Node8::b` of the far plane on `axis` (see [`near`]).
+#[inline(always)]
+pub fn far(oct: u32, axis: usize) -> usize {
+    2 * (axis % 3) + 1 - (oct >> axis & 1) as usize
+}
+
+/// Per-ray values for the box test. The layout is fixed (two 32-byte halves) so the AVX2
+/// set-up (`simd::box_ray`) writes each half with one store.
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
 pub struct BoxRay {
     pub(super) org: [f32; 3],
     pub(super) inv: [f32; 3],
-    /// Index into `Node8::b` of the near / far plane per axis.
-    pub(super) near: [usize; 3],
-    pub(super) far: [usize; 3],
     pub(super) tmin: f32,
+    /// Direction octant ([`octant`]): picks the near and far planes and the visiting order.
+    pub(super) octant: u32,
     /// `origin * inv` per axis, rounded up (near) and down (far) by more than its own rounding
     /// error, for the fused form `fma(plane, inv, -oi)` of the slab distance (see [`fma_terms`]).
     pub(super) oi_near: [f32; 3],
@@ -63,12 +76,11 @@ impl BoxRay {
     pub const DEAD: BoxRay = BoxRay {
         org: [0.0; 3],
         inv: [0.0; 3],
-        near: [0, 2, 4],
-        far: [1, 3, 5],
         tmin: 0.0,
         oi_near: [0.0; 3],
         oi_far: [0.0; 3],
         fma: false,
+        octant: 0,
         live: false,
     };
 
@@ -76,19 +88,17 @@ impl BoxRay {
     pub fn new(ray: &Ray) -> Self {
         let (o, d) = (ray.origin, ray.dir);
         let inv = [safe_inv(d.x), safe_inv(d.y), safe_inv(d.z)];
-        let neg = [d.x.is_sign_negative() as usize, d.y.is_sign_negative() as usize, d.z.is_sign_negative() as usize];
         let (nx, fx) = fma_terms(o.x, inv[0]);
         let (ny, fy) = fma_terms(o.y, inv[1]);
         let (nz, fz) = fma_terms(o.z, inv[2]);
         BoxRay {
             org: [o.x, o.y, o.z],
             inv,
-            near: [neg[0], 2 + neg[1], 4 + neg[2]],
-            far: [1 - neg[0], 3 - neg[1], 5 - neg[2]],
             tmin: ray.tmin,
             oi_near: [nx, ny, nz],
             oi_far: [fx, fy, fz],
-            fma: (nx - fx + ny - fy + nz - fz).is_finite(),
+            fma: [nx, ny, nz, fx, fy, fz].iter().all(|t| t.is_finite()),
+            octant: octant([d.x, d.y, d.z]),
             live: ShearedRay::traceable(ray) && !ray.tmin.is_nan() && !ray.tmax.is_nan() && ray.tmin <= ray.tmax,
         }
     }
@@ -98,7 +108,51 @@ impl BoxRay {
 pub trait BoxTest: Copy {
     /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
     /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
-    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
+    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
+
+    /// Tests the children of `node` (as [`BoxTest::test`]) and, when two or more are hit,
+    /// pushes them at `sp` in the node's order for the ray's octant, farthest first, so the
+    /// nearest is on top: `nodes[sp..]` their references, `dists[sp..]` their entry
+    /// distances. Returns the number hit and, when that is one, the child (not pushed).
+    /// The stack needs [`WIDTH`] free entries at `sp` (the SIMD path stores whole vectors).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn visit(
+        self,
+        node: &Node8,
+        r: &BoxRay,
+        oct: u32,
+        tmax: f32,
+        nodes: &mut [u32],
+        dists: &mut [f32],
+        sp: usize,
+    ) -> (u32, u32) {
+        let mut tnear = [0f32; WIDTH];
+        let mask = self.test(node, r, oct, tmax, &mut tnear);
+        let n = mask.count_ones();
+        if n == 1 {
+            return (1, node.child[mask.trailing_zeros() as usize]);
+        }
+        let mut top = sp;
+        if n > 1 {
+            for k in node.perm {
+                let slot = (k >> (3 * oct) & 7) as usize;
+                if mask >> slot & 1 != 0 {
+                    nodes[top] = node.child[slot];
+                    dists[top] = tnear[slot];
+                    top += 1;
+                }
+            }
+        }
+        (n, 0)
+    }
+
+    /// The box-test values of `ray` ([`BoxRay::new`]; the AVX2 path computes the same values
+    /// in one register).
+    #[inline(always)]
+    fn box_ray(self, ray: &Ray) -> BoxRay {
+        BoxRay::new(ray)
+    }
 
     /// Asks the cache for the memory of `x` (a node or leaf block the traversal will read
     /// soon), so several misses overlap instead of following one another. No effect on
@@ -123,15 +177,15 @@ pub struct Scalar;
 
 impl BoxTest for Scalar {
     #[inline(always)]
-    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         let mut mask = 0;
         for (i, tn) in tnear.iter_mut().enumerate() {
-            let t0 = (node.b[r.near[0]][i] - r.org[0]) * r.inv[0];
-            let t1 = (node.b[r.near[1]][i] - r.org[1]) * r.inv[1];
-            let t2 = (node.b[r.near[2]][i] - r.org[2]) * r.inv[2];
-            let u0 = (node.b[r.far[0]][i] - r.org[0]) * r.inv[0];
-            let u1 = (node.b[r.far[1]][i] - r.org[1]) * r.inv[1];
-            let u2 = (node.b[r.far[2]][i] - r.org[2]) * r.inv[2];
+            let t0 = (node.b[near(oct, 0)][i] - r.org[0]) * r.inv[0];
+            let t1 = (node.b[near(oct, 1)][i] - r.org[1]) * r.inv[1];
+            let t2 = (node.b[near(oct, 2)][i] - r.org[2]) * r.inv[2];
+            let u0 = (node.b[far(oct, 0)][i] - r.org[0]) * r.inv[0];
+            let u1 = (node.b[far(oct, 1)][i] - r.org[1]) * r.inv[1];
+            let u2 = (node.b[far(oct, 2)][i] - r.org[2]) * r.inv[2];
             // Same operation order as the SIMD paths, so every path visits the same nodes.
             let enter = t0.max(t1).max(t2).max(r.tmin);
             let exit = (u0.min(u1).min(u2) * EXIT_SCALE).min(tmax);

@@ -12,7 +12,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
-use boxtest::{BoxRay, Scalar};
+use boxtest::{BoxRay, BoxTest, Scalar};
 use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -269,7 +269,7 @@ impl Intersector for Bvh {
         // larger body (set-up of the shear added to this loop) was left out of line by the
         // inliner, outside the AVX2 context, and ran six times slower.
         let order = self.batch_order(rays);
-        let mut stack = vec![traverse::Entry::default(); self.stack_need];
+        let mut stack = traverse::Stack::new(self.stack_need);
         macro_rules! run {
             ($isa:expr) => {
                 match &order {
@@ -277,7 +277,15 @@ impl Intersector for Bvh {
                         for &i in order {
                             let (i, isa) = (i as usize, $isa);
                             let br = BoxRay::new(&rays[i]);
-                            hits[i] = traverse::closest_hit_with(self, isa, &rays[i], &br, c, &mut stack);
+                            hits[i] = traverse::closest_hit_with(
+                                self,
+                                isa,
+                                &rays[i],
+                                &br,
+                                c,
+                                &mut stack.nodes,
+                                &mut stack.dists,
+                            );
                         }
                     }
                     None => {
@@ -285,10 +293,18 @@ impl Intersector for Bvh {
                         for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
                             let mut prep = [BoxRay::DEAD; SETUP_GROUP];
                             for (p, r) in prep.iter_mut().zip(rs) {
-                                *p = BoxRay::new(r);
+                                *p = $isa.box_ray(r);
                             }
                             for ((r, h), br) in rs.iter().zip(hs.iter_mut()).zip(prep.iter()) {
-                                *h = traverse::closest_hit_with(self, $isa, r, br, c, &mut stack);
+                                *h = traverse::closest_hit_with(
+                                    self,
+                                    $isa,
+                                    r,
+                                    br,
+                                    c,
+                                    &mut stack.nodes,
+                                    &mut stack.dists,
+                                );
                             }
                         }
                     }

@@ -1,9 +1,10 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a token whose constructor checked the CPU at run time.
-use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE};
+use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, far, near};
 use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::ShearedRay;
+use crate::ray::Ray;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
@@ -43,7 +44,7 @@ impl BoxTest for Sse {
     }
 
     #[inline(always)]
-    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected; loads/stores are unaligned ones on
         // in-bounds arrays of 8 f32 at offsets 0 and 4 (`BoxRay` plane indices are < 6).
         unsafe {
@@ -54,12 +55,12 @@ impl BoxTest for Sse {
                     let p = _mm_loadu_ps(node.b.as_ptr().add(plane).cast::<f32>().add(o));
                     _mm_mul_ps(_mm_sub_ps(p, _mm_set1_ps(r.org[axis])), _mm_set1_ps(r.inv[axis]))
                 };
-                let t0 = lane(r.near[0], 0);
-                let t1 = lane(r.near[1], 1);
-                let t2 = lane(r.near[2], 2);
-                let u0 = lane(r.far[0], 0);
-                let u1 = lane(r.far[1], 1);
-                let u2 = lane(r.far[2], 2);
+                let t0 = lane(near(oct, 0), 0);
+                let t1 = lane(near(oct, 1), 1);
+                let t2 = lane(near(oct, 2), 2);
+                let u0 = lane(far(oct, 0), 0);
+                let u1 = lane(far(oct, 1), 1);
+                let u2 = lane(far(oct, 2), 2);
                 let enter = _mm_max_ps(_mm_max_ps(_mm_max_ps(t0, t1), t2), _mm_set1_ps(r.tmin));
                 let exit = _mm_min_ps(
                     _mm_mul_ps(_mm_min_ps(_mm_min_ps(u0, u1), u2), _mm_set1_ps(EXIT_SCALE)),
@@ -87,41 +88,58 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; loads/stores are unaligned
-        // ones on in-bounds arrays of exactly 8 f32 (`BoxRay` plane indices are < 6).
+    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the store is unaligned on
+        // an array of exactly 8 f32.
         unsafe {
-            let plane = |p: usize| _mm256_loadu_ps(node.b.as_ptr().add(p).cast::<f32>());
-            let (t0, t1, t2, u0, u1, u2);
-            if r.fma {
-                // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
-                let d = |p: usize, axis: usize, oi: &[f32; 3]| {
-                    _mm256_fmsub_ps(plane(p), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
-                };
-                t0 = d(r.near[0], 0, &r.oi_near);
-                t1 = d(r.near[1], 1, &r.oi_near);
-                t2 = d(r.near[2], 2, &r.oi_near);
-                u0 = d(r.far[0], 0, &r.oi_far);
-                u1 = d(r.far[1], 1, &r.oi_far);
-                u2 = d(r.far[2], 2, &r.oi_far);
-            } else {
-                let d = |p: usize, axis: usize| {
-                    _mm256_mul_ps(_mm256_sub_ps(plane(p), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
-                };
-                t0 = d(r.near[0], 0);
-                t1 = d(r.near[1], 1);
-                t2 = d(r.near[2], 2);
-                u0 = d(r.far[0], 0);
-                u1 = d(r.far[1], 1);
-                u2 = d(r.far[2], 2);
-            }
-            let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
-            let exit = _mm256_min_ps(
-                _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE)),
-                _mm256_set1_ps(tmax),
-            );
+            let (enter, hit) = slab8(node, r, oct, tmax);
             _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
-            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
+            _mm256_movemask_ps(hit) as u32
+        }
+    }
+
+    #[inline(always)]
+    fn box_ray(self, ray: &Ray) -> BoxRay {
+        // SAFETY: `Avx2` exists only if AVX2 was detected.
+        unsafe { box_ray8(ray) }
+    }
+
+    #[inline(always)]
+    fn visit(
+        self,
+        node: &Node8,
+        r: &BoxRay,
+        oct: u32,
+        tmax: f32,
+        nodes: &mut [u32],
+        dists: &mut [f32],
+        sp: usize,
+    ) -> (u32, u32) {
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the loads are unaligned
+        // ones of 8 u32 inside `node`, the stores go to the sub-slices of exactly 8 entries
+        // taken (bounds-checked) at `sp`; `COMPRESS` is indexed by an 8-bit mask.
+        unsafe {
+            let (enter, hit) = slab8(node, r, oct, tmax);
+            let mask = _mm256_movemask_ps(hit) as u32;
+            let n = mask.count_ones();
+            if n == 1 {
+                return (1, node.child[mask.trailing_zeros() as usize]);
+            }
+            if n > 1 {
+                let (dn, dd) = (&mut nodes[sp..sp + WIDTH], &mut dists[sp..sp + WIDTH]);
+                // Slots in the octant's order (far to near); `permutevar8x32` reads only the
+                // low three bits of each index, so the other octants' bits need no masking.
+                let order =
+                    _mm256_srl_epi32(_mm256_loadu_si256(node.perm.as_ptr().cast()), _mm_cvtsi32_si128(3 * oct as i32));
+                let sorted_hit = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, order)) as usize;
+                // Then the hit ones packed to the front, keeping that order.
+                let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
+                let idx = _mm256_permutevar8x32_epi32(order, pack);
+                let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
+                _mm256_storeu_si256(dn.as_mut_ptr().cast(), child);
+                _mm256_storeu_ps(dd.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
+            }
+            (n, 0)
         }
     }
 
@@ -129,6 +147,123 @@ impl BoxTest for Avx2 {
     fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
         unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
+    }
+}
+
+/// Entry distances and hit lanes of the eight children of `node` (AVX2 + FMA slab test).
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn slab8(node: &Node8, r: &BoxRay, oct: u32, tmax: f32) -> (__m256, __m256) {
+    // SAFETY: the caller guarantees AVX2 and FMA; loads are unaligned ones on in-bounds arrays
+    // of exactly 8 f32 (`BoxRay` plane indices are < 6).
+    unsafe {
+        let plane = |p: usize| _mm256_loadu_ps(node.b.as_ptr().add(p).cast::<f32>());
+        let (t0, t1, t2, u0, u1, u2);
+        if r.fma {
+            // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
+            let d = |p: usize, axis: usize, oi: &[f32; 3]| {
+                _mm256_fmsub_ps(plane(p), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
+            };
+            t0 = d(near(oct, 0), 0, &r.oi_near);
+            t1 = d(near(oct, 1), 1, &r.oi_near);
+            t2 = d(near(oct, 2), 2, &r.oi_near);
+            u0 = d(far(oct, 0), 0, &r.oi_far);
+            u1 = d(far(oct, 1), 1, &r.oi_far);
+            u2 = d(far(oct, 2), 2, &r.oi_far);
+        } else {
+            let d = |p: usize, axis: usize| {
+                _mm256_mul_ps(_mm256_sub_ps(plane(p), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
+            };
+            t0 = d(near(oct, 0), 0);
+            t1 = d(near(oct, 1), 1);
+            t2 = d(near(oct, 2), 2);
+            u0 = d(far(oct, 0), 0);
+            u1 = d(far(oct, 1), 1);
+            u2 = d(far(oct, 2), 2);
+        }
+        let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
+        let exit = _mm256_min_ps(
+            _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE)),
+            _mm256_set1_ps(tmax),
+        );
+        (enter, _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit))
+    }
+}
+
+/// For each 8-bit mask, the indices of its set bits in increasing order, one per byte from
+/// the lowest (the rest zero): the lane permutation that packs the selected lanes to the front.
+static COMPRESS: [u64; 256] = {
+    let mut t = [0u64; 256];
+    let mut m = 0;
+    while m < 256 {
+        let (mut k, mut lane) = (0, 0);
+        while lane < 8 {
+            if m >> lane & 1 == 1 {
+                t[m] |= (lane as u64) << (8 * k);
+                k += 1;
+            }
+            lane += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
+// `box_ray` loads a ray as one vector: (origin, dir, tmin, tmax).
+const _: () = assert!(
+    std::mem::size_of::<Ray>() == 32
+        && std::mem::offset_of!(Ray, origin) == 0
+        && std::mem::offset_of!(Ray, dir) == 12
+        && std::mem::offset_of!(Ray, tmin) == 24
+        && std::mem::offset_of!(Ray, tmax) == 28
+        && std::mem::size_of::<BoxRay>() == 64
+        && std::mem::offset_of!(BoxRay, oi_near) == 32
+);
+
+/// `BoxRay::new` in one AVX2 register: the same operations in the same order per lane, so
+/// the same values.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn box_ray8(ray: &Ray) -> BoxRay {
+    // SAFETY: the caller guarantees AVX2; `Ray` is exactly 8 f32 (asserted above) and the two
+    // stores write the two 32-byte halves of `out` (asserted layout); the flag bytes are
+    // written after the second store.
+    unsafe {
+        let v = _mm256_loadu_ps((ray as *const Ray).cast::<f32>());
+        let d = _mm256_permutevar8x32_ps(v, _mm256_setr_epi32(3, 4, 5, 3, 4, 5, 3, 4));
+        let sign = _mm256_set1_ps(-0.0);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+        let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
+        let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
+        let inv = _mm256_blendv_ps(big, i, finite(i));
+        let oi = _mm256_mul_ps(v, inv);
+        let e = _mm256_add_ps(
+            _mm256_mul_ps(_mm256_andnot_ps(sign, oi), _mm256_set1_ps(1.0 / 1048576.0)),
+            _mm256_set1_ps(f32::MIN_POSITIVE),
+        );
+        let (on, of) = (_mm256_add_ps(oi, e), _mm256_sub_ps(oi, e));
+        let spread = _mm256_setr_epi32(0, 0, 0, 0, 1, 2, 0, 0);
+        let head = _mm256_blend_ps::<0b0011_1000>(v, _mm256_permutevar8x32_ps(inv, spread));
+        let tail = _mm256_blend_ps::<0b0011_1000>(on, _mm256_permutevar8x32_ps(of, spread));
+        // Lanes 6 and 7 hold the flags and padding: zero (false) until set below.
+        let tail = _mm256_blend_ps::<0b1100_0000>(tail, _mm256_setzero_ps());
+        let mut out = BoxRay::DEAD;
+        let p = (&mut out as *mut BoxRay).cast::<f32>();
+        _mm256_store_ps(p, head);
+        _mm256_store_ps(p.add(8), tail);
+        let vm = _mm256_movemask_ps(v) as u32;
+        out.octant = vm >> 3 & 7;
+        out.fma = _mm256_movemask_ps(finite(tail)) & 0x3f == 0x3f;
+        let dir_nonzero = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(v, _mm256_setzero_ps())) & 0x38 != 0;
+        out.live = _mm256_movemask_ps(finite(v)) & 0x3f == 0x3f && dir_nonzero && ray.tmin <= ray.tmax;
+        out
     }
 }
 
@@ -205,15 +340,15 @@ unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 
 // Other architectures: the tokens are never constructed; the impls only keep the code generic.
 #[cfg(not(target_arch = "x86_64"))]
 impl BoxTest for Sse {
-    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        super::boxtest::Scalar.test(node, r, tmax, tnear)
+    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+        super::boxtest::Scalar.test(node, r, oct, tmax, tnear)
     }
 }
 
 #[cfg(not(target_arch = "x86_64"))]
 impl BoxTest for Avx2 {
-    fn test(self, node: &Node8, r: &BoxRay, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        super::boxtest::Scalar.test(node, r, tmax, tnear)
+    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+        super::boxtest::Scalar.test(node, r, oct, tmax, tnear)
     }
 }
 
@@ -232,4 +367,37 @@ pub fn with_avx2<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
 #[cfg(not(target_arch = "x86_64"))]
 pub fn with_avx2<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
     f(tok)
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// Every field of the AVX2 set-up equals the scalar one (bit for bit, any NaN matching
+    /// any NaN), including zero, negative zero, denormal, huge, infinite and NaN components.
+    #[test]
+    fn avx2_box_ray_matches_scalar() {
+        let Some(avx) = Avx2::new() else { return };
+        let vals = [0.0, -0.0, 1e-40, -1e-40, 1.0, -2.5, 3e38, -3e38, 1e-30, f32::INFINITY, f32::NAN, 7.25];
+        let mut n = 0;
+        for (i, &a) in vals.iter().enumerate() {
+            for (j, &b) in vals.iter().enumerate() {
+                for (k, &c) in vals.iter().enumerate() {
+                    let o = Vec3::new(vals[(i + 4) % 12], b * 3.0, vals[(k + j) % 12]);
+                    let ray = Ray { origin: o, dir: Vec3::new(a, b, c), tmin: vals[(i + j) % 12], tmax: 1e30 };
+                    let (s, v) = (BoxRay::new(&ray), with_avx2(avx, |t| t.box_ray(&ray)));
+                    let bits = |x: [f32; 3]| x.map(|v| if v.is_nan() { u32::MAX } else { v.to_bits() });
+                    assert_eq!(bits(s.org), bits(v.org), "{ray:?}");
+                    assert_eq!(bits(s.inv), bits(v.inv), "{ray:?}");
+                    assert_eq!(bits(s.oi_near), bits(v.oi_near), "{ray:?}");
+                    assert_eq!(bits(s.oi_far), bits(v.oi_far), "{ray:?}");
+                    assert_eq!(s.tmin.to_bits(), v.tmin.to_bits(), "{ray:?}");
+                    assert_eq!((s.octant, s.fma, s.live), (v.octant, v.fma, v.live), "{ray:?}");
+                    n += s.live as u32;
+                }
+            }
+        }
+        assert!(n > 100, "too few live rays in the sample: {n}");
+    }
 }

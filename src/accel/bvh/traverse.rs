@@ -13,10 +13,17 @@ use glam::Vec3;
 /// possible for adversarial inputs) use a heap stack.
 pub const FIXED_STACK: usize = 128;
 
-#[derive(Clone, Copy, Default)]
-pub struct Entry {
-    node: u32,
-    t: f32,
+/// The closest-hit stack, node references and entry distances in separate arrays (the SIMD
+/// path stores a node's hit children as one vector each).
+pub struct Stack {
+    pub nodes: Vec<u32>,
+    pub dists: Vec<f32>,
+}
+
+impl Stack {
+    pub fn new(len: usize) -> Stack {
+        Stack { nodes: vec![0; len], dists: vec![0.0; len] }
+    }
 }
 
 /// The closest hit so far.
@@ -31,10 +38,11 @@ struct Best {
 #[inline(always)]
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
     if bvh.stack_need <= FIXED_STACK {
-        let mut fixed = [Entry::default(); FIXED_STACK];
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut fixed)
+        let (mut nodes, mut dists) = ([0u32; FIXED_STACK], [0f32; FIXED_STACK]);
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut nodes, &mut dists)
     } else {
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut vec![Entry::default(); bvh.stack_need])
+        let mut s = Stack::new(bvh.stack_need);
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut s.nodes, &mut s.dists)
     }
 }
 
@@ -42,6 +50,10 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounte
 /// stack of at least `bvh.stack_need` entries (batches set up their rays ahead, so the
 /// divisions of one ray overlap the traversal of the one before, and reuse one stack instead
 /// of clearing a fresh one per ray).
+///
+/// Children are visited in the node's precomputed order for the ray's octant (nearest by
+/// their entry corner, not by the ray's entry distance): no sort per node. The entry
+/// distances still go on the stack, so a pop skips children beyond the closest hit so far.
 #[inline(always)]
 pub fn closest_hit_with<B: BoxTest>(
     bvh: &Bvh,
@@ -49,7 +61,8 @@ pub fn closest_hit_with<B: BoxTest>(
     ray: &Ray,
     br: &BoxRay,
     c: &mut TraceCounters,
-    stack: &mut [Entry],
+    nodes: &mut [u32],
+    dists: &mut [f32],
 ) -> Option<Hit> {
     c.rays += 1;
     if !br.live {
@@ -60,42 +73,24 @@ pub fn closest_hit_with<B: BoxTest>(
     let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
     let mut sp = 0usize;
     let mut cur = 0u32;
-    let mut tnear = [0f32; WIDTH];
     let mut visited = 0u64;
     loop {
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
-            let mut mask = isa.test(node, br, best.t, &mut tnear);
-            if mask != 0 {
-                let i = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                if mask == 0 {
-                    // One child hit (the common case): no ordering, no stack traffic.
-                    cur = node.child[i];
-                    continue;
+            let (n, one) = isa.visit(node, br, br.octant, best.t, nodes, dists, sp);
+            if n == 1 {
+                // One child hit (the common case): no stack traffic.
+                cur = one;
+                continue;
+            }
+            if n > 1 {
+                // The nearest is on top: take it, the others wait.
+                sp += n as usize - 1;
+                cur = nodes[sp];
+                for &r in &nodes[sp + 1 - n as usize..=sp] {
+                    prefetch_child(bvh, isa, r);
                 }
-                // Several: push them all, kept sorted by entry distance with the nearest on
-                // top (insertion; most nodes have two or three hit children), then pop it.
-                let base = sp;
-                prefetch_child(bvh, isa, node.child[i]);
-                stack[sp] = Entry { node: node.child[i], t: tnear[i] };
-                sp += 1;
-                while mask != 0 {
-                    let i = mask.trailing_zeros() as usize;
-                    mask &= mask - 1;
-                    prefetch_child(bvh, isa, node.child[i]);
-                    let e = Entry { node: node.child[i], t: tnear[i] };
-                    let mut j = sp;
-                    while j > base && stack[j - 1].t < e.t {
-                        stack[j] = stack[j - 1];
-                        j -= 1;
-                    }
-                    stack[j] = e;
-                    sp += 1;
-                }
-                sp -= 1;
-                cur = stack[sp].node;
                 continue;
             }
         } else {
@@ -108,8 +103,8 @@ pub fn closest_hit_with<B: BoxTest>(
                 return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
             }
             sp -= 1;
-            if stack[sp].t <= best.t {
-                cur = stack[sp].node;
+            if dists[sp] <= best.t {
+                cur = nodes[sp];
                 break;
             }
         }
@@ -213,12 +208,12 @@ pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) 
 /// child costs at least another node. Only inner children go on the stack, in no order.
 #[inline(always)]
 pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters, stack: &mut [u32]) -> bool {
+    let br = &isa.box_ray(ray);
     c.rays += 1;
-    if !ShearedRay::traceable(ray) || ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax {
+    if !br.live {
         return false;
     }
     let mut sr = None;
-    let br = BoxRay::new(ray);
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut tnear = [0f32; WIDTH];
@@ -226,7 +221,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
     let hit = 'trace: loop {
         visited += 1;
         let node = &bvh.nodes[cur as usize];
-        let mut mask = isa.test(node, &br, ray.tmax, &mut tnear);
+        let mut mask = isa.test(node, br, br.octant, ray.tmax, &mut tnear);
         if mask.count_ones() > 1 {
             let mut m = mask;
             while m != 0 {
