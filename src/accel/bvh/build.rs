@@ -22,6 +22,8 @@ pub struct PrimRef {
     pub lo: Vec3,
     pub hi: Vec3,
     pub id: u32,
+    /// Spheres are tested one by one, outside the leaf's SIMD triangle block.
+    pub sphere: bool,
 }
 
 impl PrimRef {
@@ -113,7 +115,9 @@ fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: 
     let n = refs.len();
     // A leaf of up to MAX_LEAF triangles is one SIMD block: testing it costs about what a
     // single triangle does, and splitting it only adds nodes (and cache lines) to visit.
-    if n <= MAX_LEAF {
+    // Spheres are not in the block: each costs a full test, so a set holding one is split by
+    // the SAH below (a sphere shares a leaf only when that is cheaper).
+    if n <= 1 || (n <= MAX_LEAF && !refs.iter().any(|r| r.sphere)) {
         return None;
     }
     let ext = chi - clo;
@@ -203,4 +207,43 @@ fn blocks(c: u32) -> f32 {
 #[inline]
 fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
     (((c - lo) * scale) as usize).min(BINS - 1)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn unit_box(at: Vec3, id: u32, sphere: bool) -> PrimRef {
+        PrimRef { lo: at - Vec3::splat(0.5), hi: at + Vec3::splat(0.5), id, sphere }
+    }
+
+    /// Leaves of the binary tree, as sets of ids.
+    fn leaves(nodes: &[Node2], refs: &[PrimRef]) -> Vec<Vec<u32>> {
+        let mut ids: Vec<Vec<u32>> = nodes
+            .iter()
+            .filter(|n| n.count > 0)
+            .map(|n| {
+                let mut v: Vec<u32> = refs[n.a as usize..(n.a + n.count) as usize].iter().map(|r| r.id).collect();
+                v.sort();
+                v
+            })
+            .collect();
+        ids.sort();
+        ids
+    }
+
+    #[test]
+    fn four_triangles_make_one_leaf_but_distant_spheres_are_split_off() {
+        let at = [Vec3::ZERO, Vec3::X * 10.0, Vec3::Y * 10.0, Vec3::Z * 10.0];
+        let mut tris: Vec<PrimRef> = at.iter().enumerate().map(|(i, &p)| unit_box(p, i as u32, false)).collect();
+        let nodes = build(&mut tris);
+        assert_eq!(leaves(&nodes, &tris), vec![vec![0, 1, 2, 3]]);
+        // Two of the four are spheres: each full sphere test is paid only by rays that reach
+        // its own box.
+        let mut mixed: Vec<PrimRef> = at.iter().enumerate().map(|(i, &p)| unit_box(p, i as u32, i >= 2)).collect();
+        let nodes = build(&mut mixed);
+        let l = leaves(&nodes, &mixed);
+        assert!(l.iter().all(|leaf| !(leaf.contains(&2) && leaf.contains(&3))), "{l:?}");
+        assert_eq!(l.iter().map(Vec::len).sum::<usize>(), 4);
+    }
 }

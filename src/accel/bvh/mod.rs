@@ -117,12 +117,12 @@ impl Bvh {
             .into_par_iter()
             .map(|i| {
                 let [a, b, c] = mesh.corners(i);
-                PrimRef { lo: a.min(b).min(c), hi: a.max(b).max(c), id: i as u32 }
+                PrimRef { lo: a.min(b).min(c), hi: a.max(b).max(c), id: i as u32, sphere: false }
             })
             .collect();
         refs.extend(scene.spheres.iter().enumerate().map(|(i, s)| {
             let r = Vec3::splat(s.radius.abs());
-            PrimRef { lo: s.center - r, hi: s.center + r, id: (tri_count + i) as u32 }
+            PrimRef { lo: s.center - r, hi: s.center + r, id: (tri_count + i) as u32, sphere: true }
         }));
         let (nodes, depth, sah_cost, ids, prims) = if refs.is_empty() {
             (vec![], 0, 0.0, vec![], vec![])
