@@ -270,6 +270,8 @@ impl Intersector for Bvh {
         // inliner, outside the AVX2 context, and ran six times slower.
         let order = self.batch_order(rays);
         let mut stack = traverse::Stack::new(self.stack_need);
+        // Filled per group (not cleared: every entry read was just written).
+        let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
             ($isa:expr) => {
                 match &order {
@@ -291,7 +293,6 @@ impl Intersector for Bvh {
                     None => {
                         // Ray set-up (three divisions) for a group ahead of its traversal.
                         for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
-                            let mut prep = [BoxRay::DEAD; SETUP_GROUP];
                             for (p, r) in prep.iter_mut().zip(rs) {
                                 *p = $isa.box_ray(r);
                             }

@@ -12,7 +12,8 @@ use std::arch::x86_64::*;
 #[derive(Clone, Copy, Debug)]
 pub struct Sse(());
 
-/// Proof that the CPU has AVX2 and FMA (constructed only after detection).
+/// Proof that the CPU has AVX2, FMA, BMI1 and POPCNT (constructed only after detection;
+/// every AVX2 CPU has the last two, and without them a popcount is five instructions).
 #[derive(Clone, Copy, Debug)]
 pub struct Avx2(());
 
@@ -29,7 +30,11 @@ impl Sse {
 impl Avx2 {
     pub fn new() -> Option<Self> {
         #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
+        if is_x86_feature_detected!("avx2")
+            && is_x86_feature_detected!("fma")
+            && is_x86_feature_detected!("bmi1")
+            && is_x86_feature_detected!("popcnt")
+        {
             return Some(Avx2(()));
         }
         None
@@ -352,11 +357,11 @@ impl BoxTest for Avx2 {
     }
 }
 
-/// Runs `f` compiled with AVX2 and FMA enabled, so the inlined kernels use them.
+/// Runs `f` compiled with AVX2, FMA, BMI1 and POPCNT enabled, so the inlined kernels use them.
 #[cfg(target_arch = "x86_64")]
 #[inline]
 pub fn with_avx2<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
-    #[target_feature(enable = "avx2,fma")]
+    #[target_feature(enable = "avx2,fma,bmi1,popcnt")]
     fn inner<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
         f(tok)
     }
