@@ -104,6 +104,50 @@ impl BoxRay {
     }
 }
 
+/// A box the batched traversal tests each ray against before its traversal (the root's
+/// bounds, widened): most primary rays miss the whole tree, and this costs them about a
+/// quarter of a node test plus the traversal's entry and exit.
+#[derive(Clone, Copy, Debug)]
+pub struct RootBox {
+    pub(super) lo: [f32; 3],
+    pub(super) hi: [f32; 3],
+}
+
+impl RootBox {
+    /// `[lo, hi]` widened by 2^-10 of its largest extent plus 2^-16 of its largest
+    /// coordinate, so a ray any child test could accept (they round differently, fused or
+    /// not) always enters it; None for a box that is empty or not finite (no quick test).
+    pub fn new(lo: glam::Vec3, hi: glam::Vec3) -> Option<RootBox> {
+        if !(lo.is_finite() && hi.is_finite() && lo.cmple(hi).all()) {
+            return None;
+        }
+        let m = (hi - lo).max_element() * (1.0 / 1024.0) + lo.abs().max(hi.abs()).max_element() * (1.0 / 65536.0);
+        let (lo, hi) = (lo - glam::Vec3::splat(m), hi + glam::Vec3::splat(m));
+        (lo.is_finite() && hi.is_finite()).then_some(RootBox { lo: lo.to_array(), hi: hi.to_array() })
+    }
+
+    /// Whether ray `r` (box-test values, and its `tmax`) may enter the box: the slab test of
+    /// the nodes in its unfused form (no NaN for a live ray: `inv` is finite and non-zero,
+    /// so min and max are exact and any order of them gives the same answer).
+    #[inline(always)]
+    pub fn admits(&self, r: &BoxRay, tmax: f32) -> bool {
+        let (mut enter, mut exit) = (r.tmin, f32::INFINITY);
+        for axis in 0..3 {
+            let a = (self.lo[axis] - r.org[axis]) * r.inv[axis];
+            let b = (self.hi[axis] - r.org[axis]) * r.inv[axis];
+            enter = enter.max(a.min(b));
+            exit = exit.min(a.max(b));
+        }
+        enter <= (exit * EXIT_SCALE).min(tmax)
+    }
+}
+
+/// [`BoxTest::admit_mask`], one ray at a time.
+#[inline(always)]
+pub fn admit_mask_scalar(root: &RootBox, rays: &[Ray]) -> u32 {
+    rays.iter().enumerate().fold(0, |m, (i, r)| m | (root.admits(&BoxRay::new(r), r.tmax) as u32) << i)
+}
+
 /// The per-instruction-set kernels of the traversal.
 pub trait BoxTest: Copy {
     /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
@@ -145,6 +189,13 @@ pub trait BoxTest: Copy {
             }
         }
         (n, 0)
+    }
+
+    /// Bit `i` set when ray `i` of `rays` (at most 32) may enter `root`: [`RootBox::admits`]
+    /// of its box-test values (the AVX2 path computes the same answers eight rays at a time).
+    #[inline(always)]
+    fn admit_mask(self, root: &RootBox, rays: &[Ray]) -> u32 {
+        admit_mask_scalar(root, rays)
     }
 
     /// The box-test values of `ray` ([`BoxRay::new`]; the AVX2 path computes the same values
@@ -193,5 +244,82 @@ impl BoxTest for Scalar {
             mask |= ((enter <= exit) as u32) << i;
         }
         mask
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    /// The quick root test never rejects a ray the node test accepts for a child of the
+    /// root: eight random child boxes, their union as the root box, and rays aimed at the
+    /// children's corners, edges and faces (where rounding decides) from random origins.
+    #[test]
+    #[allow(clippy::needless_range_loop)]
+    fn root_box_admits_every_ray_a_child_test_accepts() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut accepted, mut rejected) = (0, 0);
+        for scale in [1e-4f32, 1.0, 1e5] {
+            let mut b = [[0f32; WIDTH]; 6];
+            let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+            for slot in 0..WIDTH {
+                let c = Vec3::new(next(), next(), next()) * scale + Vec3::splat(scale * 3.0);
+                let e = Vec3::new(next(), next(), next()) * scale * 0.3;
+                for axis in 0..3 {
+                    b[2 * axis][slot] = c[axis] - e[axis];
+                    b[2 * axis + 1][slot] = c[axis] + e[axis];
+                }
+                lo = lo.min(c - e);
+                hi = hi.max(c + e);
+            }
+            let node = Node8 { b, child: [0; WIDTH], perm: [0; WIDTH] };
+            let root = RootBox::new(lo, hi).unwrap();
+            for _ in 0..20000 {
+                let slot = (next() * WIDTH as f32) as usize % WIDTH;
+                let pick = |axis: usize, t: f32, u: f32| {
+                    let (l, h) = (b[2 * axis][slot], b[2 * axis + 1][slot]);
+                    if t < 0.33 {
+                        l
+                    } else if t < 0.66 {
+                        h
+                    } else {
+                        l + (h - l) * u
+                    }
+                };
+                let mut p = [0f32; 3];
+                for (axis, v) in p.iter_mut().enumerate() {
+                    let (t, u) = (next(), next());
+                    *v = pick(axis, t, u);
+                }
+                let target = Vec3::from(p);
+                let o = target + (Vec3::new(next(), next(), next()) - Vec3::splat(0.5)) * scale * 20.0;
+                let mut d = target - o;
+                if next() < 0.2 {
+                    d[(next() * 3.0) as usize % 3] = 0.0;
+                }
+                let tmax = if next() < 0.5 { f32::INFINITY } else { 1.0 };
+                let ray = Ray { origin: o, dir: d, tmin: 0.0, tmax };
+                let br = BoxRay::new(&ray);
+                if !br.live {
+                    continue;
+                }
+                let mut tnear = [0f32; WIDTH];
+                if Scalar.test(&node, &br, br.octant, tmax, &mut tnear) != 0 {
+                    assert!(root.admits(&br, tmax), "{ray:?}");
+                    accepted += 1;
+                } else {
+                    rejected += root.admits(&br, tmax) as u32 ^ 1;
+                }
+            }
+        }
+        assert!(accepted > 10000, "too few rays hit a child: {accepted}");
+        assert!(rejected > 100, "the root test never rejects: {rejected}");
     }
 }

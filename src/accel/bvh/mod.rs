@@ -12,7 +12,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
-use boxtest::{BoxRay, BoxTest, Scalar};
+use boxtest::{BoxRay, BoxTest, RootBox, Scalar};
 use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -95,6 +95,8 @@ pub struct Bvh {
     /// Bounds of everything in the tree (the grid of the ray-order key).
     lo: Vec3,
     hi: Vec3,
+    /// The quick test of batched closest-hit rays (None: every ray is traversed).
+    root: Option<RootBox>,
     info: BuildInfo,
 }
 
@@ -156,6 +158,7 @@ impl Bvh {
         }
         Bvh {
             sort_batches: ray_order_from_env(),
+            root: RootBox::new(lo, hi),
             lo,
             hi,
             nodes,
@@ -219,7 +222,8 @@ impl Bvh {
     }
 }
 
-/// Rays set up at a time ahead of their traversal in a batch.
+/// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
+/// in the mask of rays that may enter the tree).
 const SETUP_GROUP: usize = 32;
 
 /// Stack entries needed per tree level (a node pushes at most all its children).
@@ -291,16 +295,31 @@ impl Intersector for Bvh {
                         }
                     }
                     None => {
-                        // Ray set-up (three divisions) for a group ahead of its traversal.
+                        // Per group: which rays may enter the tree at all (most primary rays
+                        // miss it), then the set-up (three divisions) of those ahead of
+                        // their traversal; the others are misses without further work.
+                        let mut slot = [0u8; SETUP_GROUP];
                         for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
-                            for (p, r) in prep.iter_mut().zip(rs) {
-                                *p = $isa.box_ray(r);
+                            let mut todo = match &self.root {
+                                Some(root) => $isa.admit_mask(root, rs),
+                                None => u32::MAX >> (SETUP_GROUP - rs.len()),
+                            };
+                            let mut n = 0;
+                            while todo != 0 {
+                                let i = todo.trailing_zeros() as usize;
+                                todo &= todo - 1;
+                                prep[n] = $isa.box_ray(&rs[i]);
+                                slot[n] = i as u8;
+                                n += 1;
                             }
-                            for ((r, h), br) in rs.iter().zip(hs.iter_mut()).zip(prep.iter()) {
-                                *h = traverse::closest_hit_with(
+                            c.rays += (rs.len() - n) as u64;
+                            hs.fill(None);
+                            for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
+                                let i = i as usize;
+                                hs[i] = traverse::closest_hit_with(
                                     self,
                                     $isa,
-                                    r,
+                                    &rs[i],
                                     br,
                                     c,
                                     &mut stack.nodes,
