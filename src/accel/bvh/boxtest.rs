@@ -19,13 +19,13 @@ pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 
 /// Index into `Node8::b` of the near plane on `axis` for rays of octant `oct` (below 6 for
 /// any `oct`, as the SIMD kernels index node planes with it unchecked).
 #[inline(always)]
-pub fn near(oct: u32, axis: usize) -> usize {
+pub const fn near(oct: u32, axis: usize) -> usize {
     2 * (axis % 3) + (oct >> axis & 1) as usize
 }
 
 /// Index into `Node8::b` of the far plane on `axis` (see [`near`]).
 #[inline(always)]
-pub fn far(oct: u32, axis: usize) -> usize {
+pub const fn far(oct: u32, axis: usize) -> usize {
     2 * (axis % 3) + 1 - (oct >> axis & 1) as usize
 }
 
@@ -48,7 +48,28 @@ pub struct BoxRay {
     /// Whether the ray can hit anything at all (finite origin, finite non-zero direction,
     /// ordered non-NaN range).
     pub(super) live: bool,
+    /// Byte offsets in `Node8::b` of the near planes (x, y, z) and then the far planes of
+    /// the octant: `PLANES[octant]`, always. Set up with the ray, so the node loop does not
+    /// recompute the plane indices at every node (the SIMD kernels load at these offsets
+    /// unchecked: each is `32 * plane` with plane < 6).
+    pub(super) planes: [u8; 6],
 }
+
+/// [`BoxRay::planes`] of each octant.
+pub const PLANES: [[u8; 6]; 8] = {
+    let mut t = [[0u8; 6]; 8];
+    let mut oct = 0;
+    while oct < 8 {
+        let mut axis = 0;
+        while axis < 3 {
+            t[oct][axis] = (32 * near(oct as u32, axis)) as u8;
+            t[oct][axis + 3] = (32 * far(oct as u32, axis)) as u8;
+            axis += 1;
+        }
+        oct += 1;
+    }
+    t
+};
 
 /// Safe reciprocal: `1 / d`, or `+-f32::MAX` with the sign of `d` where that is not finite.
 #[inline(always)]
@@ -82,6 +103,7 @@ impl BoxRay {
         fma: false,
         octant: 0,
         live: false,
+        planes: PLANES[0],
     };
 
     #[inline(always)]
@@ -91,6 +113,7 @@ impl BoxRay {
         let (nx, fx) = fma_terms(o.x, inv[0]);
         let (ny, fy) = fma_terms(o.y, inv[1]);
         let (nz, fz) = fma_terms(o.z, inv[2]);
+        let octant = octant([d.x, d.y, d.z]);
         BoxRay {
             org: [o.x, o.y, o.z],
             inv,
@@ -98,8 +121,9 @@ impl BoxRay {
             oi_near: [nx, ny, nz],
             oi_far: [fx, fy, fz],
             fma: [nx, ny, nz, fx, fy, fz].iter().all(|t| t.is_finite()),
-            octant: octant([d.x, d.y, d.z]),
+            octant,
             live: ShearedRay::traceable(ray) && !ray.tmin.is_nan() && !ray.tmax.is_nan() && ray.tmin <= ray.tmax,
+            planes: PLANES[octant as usize & 7],
         }
     }
 }

@@ -1,6 +1,6 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a token whose constructor checked the CPU at run time.
-use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, RootBox, admit_mask_scalar, far, near};
+use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, admit_mask_scalar, far, near};
 use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::ShearedRay;
@@ -97,7 +97,8 @@ impl BoxTest for Avx2 {
         // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the store is unaligned on
         // an array of exactly 8 f32.
         unsafe {
-            let (enter, hit) = slab8(node, r, oct, tmax);
+            debug_assert_eq!(oct, r.octant);
+            let (enter, hit) = slab8(node, r, tmax);
             _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
             _mm256_movemask_ps(hit) as u32
         }
@@ -124,7 +125,8 @@ impl BoxTest for Avx2 {
         // ones of 8 u32 inside `node`, the stores go to the sub-slices of exactly 8 entries
         // taken (bounds-checked) at `sp`; `COMPRESS` is indexed by an 8-bit mask.
         unsafe {
-            let (enter, hit) = slab8(node, r, oct, tmax);
+            debug_assert_eq!(oct, r.octant);
+            let (enter, hit) = slab8(node, r, tmax);
             let mask = _mm256_movemask_ps(hit) as u32;
             let n = mask.count_ones();
             if n == 1 {
@@ -227,33 +229,35 @@ unsafe fn admit8(root: &RootBox, rays: &[Ray; 8]) -> u32 {
 /// The CPU must have AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn slab8(node: &Node8, r: &BoxRay, oct: u32, tmax: f32) -> (__m256, __m256) {
-    // SAFETY: the caller guarantees AVX2 and FMA; loads are unaligned ones on in-bounds arrays
-    // of exactly 8 f32 (`BoxRay` plane indices are < 6).
+unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32) -> (__m256, __m256) {
+    // SAFETY: the caller guarantees AVX2 and FMA; each load reads 8 f32 of `node.b` at a
+    // byte offset `32 * plane` with plane < 6 (`BoxRay::planes` is always `PLANES[octant]`),
+    // unaligned loads.
     unsafe {
-        let plane = |p: usize| _mm256_loadu_ps(node.b.as_ptr().add(p).cast::<f32>());
+        let base = node.b.as_ptr().cast::<u8>();
+        let plane = |k: usize| _mm256_loadu_ps(base.add(r.planes[k] as usize).cast::<f32>());
         let (t0, t1, t2, u0, u1, u2);
         if r.fma {
             // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
-            let d = |p: usize, axis: usize, oi: &[f32; 3]| {
-                _mm256_fmsub_ps(plane(p), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
+            let d = |k: usize, axis: usize, oi: &[f32; 3]| {
+                _mm256_fmsub_ps(plane(k), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))
             };
-            t0 = d(near(oct, 0), 0, &r.oi_near);
-            t1 = d(near(oct, 1), 1, &r.oi_near);
-            t2 = d(near(oct, 2), 2, &r.oi_near);
-            u0 = d(far(oct, 0), 0, &r.oi_far);
-            u1 = d(far(oct, 1), 1, &r.oi_far);
-            u2 = d(far(oct, 2), 2, &r.oi_far);
+            t0 = d(0, 0, &r.oi_near);
+            t1 = d(1, 1, &r.oi_near);
+            t2 = d(2, 2, &r.oi_near);
+            u0 = d(3, 0, &r.oi_far);
+            u1 = d(4, 1, &r.oi_far);
+            u2 = d(5, 2, &r.oi_far);
         } else {
-            let d = |p: usize, axis: usize| {
-                _mm256_mul_ps(_mm256_sub_ps(plane(p), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
+            let d = |k: usize, axis: usize| {
+                _mm256_mul_ps(_mm256_sub_ps(plane(k), _mm256_set1_ps(r.org[axis])), _mm256_set1_ps(r.inv[axis]))
             };
-            t0 = d(near(oct, 0), 0);
-            t1 = d(near(oct, 1), 1);
-            t2 = d(near(oct, 2), 2);
-            u0 = d(far(oct, 0), 0);
-            u1 = d(far(oct, 1), 1);
-            u2 = d(far(oct, 2), 2);
+            t0 = d(0, 0);
+            t1 = d(1, 1);
+            t2 = d(2, 2);
+            u0 = d(3, 0);
+            u1 = d(4, 1);
+            u2 = d(5, 2);
         }
         let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
         let exit = _mm256_min_ps(
@@ -292,6 +296,7 @@ const _: () = assert!(
         && std::mem::offset_of!(Ray, tmax) == 28
         && std::mem::size_of::<BoxRay>() == 64
         && std::mem::offset_of!(BoxRay, oi_near) == 32
+        && std::mem::offset_of!(BoxRay, planes) == 58
 );
 
 /// `BoxRay::new` in one AVX2 register: the same operations in the same order per lane, so
@@ -323,7 +328,7 @@ unsafe fn box_ray8(ray: &Ray) -> BoxRay {
         let spread = _mm256_setr_epi32(0, 0, 0, 0, 1, 2, 0, 0);
         let head = _mm256_blend_ps::<0b0011_1000>(v, _mm256_permutevar8x32_ps(inv, spread));
         let tail = _mm256_blend_ps::<0b0011_1000>(on, _mm256_permutevar8x32_ps(of, spread));
-        // Lanes 6 and 7 hold the flags and padding: zero (false) until set below.
+        // Lanes 6 and 7 hold the flags and plane offsets: zero until set below.
         let tail = _mm256_blend_ps::<0b1100_0000>(tail, _mm256_setzero_ps());
         let mut out = BoxRay::DEAD;
         let p = (&mut out as *mut BoxRay).cast::<f32>();
@@ -331,6 +336,7 @@ unsafe fn box_ray8(ray: &Ray) -> BoxRay {
         _mm256_store_ps(p.add(8), tail);
         let vm = _mm256_movemask_ps(v) as u32;
         out.octant = vm >> 3 & 7;
+        out.planes = PLANES[out.octant as usize];
         out.fma = _mm256_movemask_ps(finite(tail)) & 0x3f == 0x3f;
         let dir_nonzero = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(v, _mm256_setzero_ps())) & 0x38 != 0;
         out.live = _mm256_movemask_ps(finite(v)) & 0x3f == 0x3f && dir_nonzero && ray.tmin <= ray.tmax;
@@ -465,6 +471,7 @@ mod tests {
                     assert_eq!(bits(s.oi_far), bits(v.oi_far), "{ray:?}");
                     assert_eq!(s.tmin.to_bits(), v.tmin.to_bits(), "{ray:?}");
                     assert_eq!((s.octant, s.fma, s.live), (v.octant, v.fma, v.live), "{ray:?}");
+                    assert_eq!(s.planes, v.planes, "{ray:?}");
                     n += s.live as u32;
                 }
             }
