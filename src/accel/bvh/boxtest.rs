@@ -181,7 +181,8 @@ pub trait BoxTest: Copy {
     /// Tests the children of `node` (as [`BoxTest::test`]) and, when two or more are hit,
     /// pushes them at `sp` in the node's order for the ray's octant, farthest first, so the
     /// nearest is on top: `nodes[sp..]` their references, `dists[sp..]` their entry
-    /// distances. Returns the number hit and, when that is one, the child (not pushed).
+    /// distances. Returns the number hit and the nearest of them (when only one is hit,
+    /// it is not pushed).
     /// The stack needs [`WIDTH`] free entries at `sp` (the SIMD path stores whole vectors).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
@@ -211,6 +212,7 @@ pub trait BoxTest: Copy {
                     top += 1;
                 }
             }
+            return (n, nodes[top - 1]);
         }
         (n, 0)
     }

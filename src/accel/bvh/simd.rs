@@ -145,6 +145,9 @@ impl BoxTest for Avx2 {
                 let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
                 _mm256_storeu_si256(dn.as_mut_ptr().cast(), child);
                 _mm256_storeu_ps(dd.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
+                // The nearest (the last pushed) from the register, not back from the stack.
+                let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
+                return (n, _mm256_cvtsi256_si32(top) as u32);
             }
             (n, 0)
         }

@@ -87,7 +87,7 @@ pub fn closest_hit_with<B: BoxTest>(
             if n > 1 {
                 // The nearest is on top: take it, the others wait.
                 sp += n as usize - 1;
-                cur = nodes[sp];
+                cur = one;
                 for &r in &nodes[sp + 1 - n as usize..=sp] {
                     prefetch_child(bvh, isa, r);
                 }
