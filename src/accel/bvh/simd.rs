@@ -262,12 +262,16 @@ unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32) -> (__m256, __m256) {
             u1 = d(4, 1);
             u2 = d(5, 2);
         }
-        let enter = _mm256_max_ps(_mm256_max_ps(_mm256_max_ps(t0, t1), t2), _mm256_set1_ps(r.tmin));
-        let exit = _mm256_min_ps(
-            _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE)),
-            _mm256_set1_ps(tmax),
+        // Shallow trees of the exact max/min (no operand is NaN: `inv` is finite and
+        // non-zero and the fused terms finite), and `enter <= min(exit, tmax)` as two
+        // compares, so fewer dependent steps per node with the same answer.
+        let enter = _mm256_max_ps(_mm256_max_ps(t0, t1), _mm256_max_ps(t2, _mm256_set1_ps(r.tmin)));
+        let exit = _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE));
+        let hit = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(tmax)),
         );
-        (enter, _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit))
+        (enter, hit)
     }
 }
 
