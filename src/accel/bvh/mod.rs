@@ -225,6 +225,7 @@ impl Bvh {
 /// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
 /// in the mask of rays that may enter the tree).
 const SETUP_GROUP: usize = 32;
+const _: () = assert!(SETUP_GROUP <= 32);
 
 /// Stack entries needed per tree level (a node pushes at most all its children).
 const WIDTH_STACK: usize = wide::WIDTH;
