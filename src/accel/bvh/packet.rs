@@ -1,7 +1,9 @@
-//! Any-hit for packets of shadow rays that leave one point (the `-l N` samples of one
-//! shading point toward one light). The rays of such a packet walk nearly the same nodes, so
-//! the packet is traversed once: one stack, one node fetch and one decision per node for all
-//! of its rays, instead of one traversal per ray that repeats the same branches.
+//! Any-hit for packets of shadow rays: up to eight consecutive rays of the shadow queue, made
+//! of whole runs of rays that leave one point (the `-l N` samples of one shading point toward
+//! one light; the lane kernel queues them together). The packet is traversed once: one
+//! stack, one node fetch and one decision per node for all of its rays, instead of one
+//! traversal per ray that repeats the same loads and branches. Shadow rays of different points
+//! still share the nodes near the light they all aim at, which is why whole runs are merged.
 //!
 //! Every ray still gets its own box test ([`BoxTest::test`] with its own [`BoxRay`], exactly
 //! as in [`traverse::any_hit_with`]) and its own leaf tests (the same `leaf_any`); a ray
