@@ -53,6 +53,13 @@ pub trait Intersector: Sync + Send {
             *o = self.any_hit(r, counters);
         }
     }
+
+    /// [`Intersector::any_hits`] for a queue in which the shadow rays of one point (same
+    /// origin) sit next to one another: accelerators may trace each such run as a packet.
+    /// The results are exactly those of `any_hits`.
+    fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
+        self.any_hits(rays, occluded, counters)
+    }
 }
 
 /// How the acceleration structure turned out (zeros for brute force).

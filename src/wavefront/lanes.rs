@@ -223,6 +223,7 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
     let mut rays = Rays::default();
     let mut surf = Surfaces::default();
     let normals = t.scene.mesh.normals.is_some();
+    let mut pending: Vec<Rays> = Vec::new();
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
         let mut rng = [Sampler::default(); L];
@@ -269,7 +270,13 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                 for j in 0..L {
                     c[j] = albedo[j] * FRAC_1_PI / ns as f32 * *radiance;
                 }
-                for _ in 0..ns {
+                // Sample-major here (lane-parallel), pushed path-major below: the rays of
+                // one point sit together in the queue, where the shadow stage traces them
+                // as one packet (each path still adds its own in sample order).
+                if pending.len() < ns as usize {
+                    pending.resize_with(ns as usize, Rays::default);
+                }
+                for p in pending.iter_mut().take(ns as usize) {
                     let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
                     for j in 0..m {
                         if direct[j] {
@@ -277,11 +284,16 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                         }
                     }
                     dim += 1;
-                    area_rays(&pts, al, &ua, &ub, &mut rays);
-                    for j in 0..m {
-                        if direct[j] && rays.valid[j] {
-                            let i = base + j;
-                            shadow.push(rays.ray(j), c[j] * rays.g[j] * q.throughput[i], i as u32);
+                    area_rays(&pts, al, &ua, &ub, p);
+                }
+                for j in 0..m {
+                    if !direct[j] {
+                        continue;
+                    }
+                    let tp = q.throughput[base + j];
+                    for p in pending.iter().take(ns as usize) {
+                        if p.valid[j] {
+                            shadow.push(p.ray(j), c[j] * p.g[j] * tp, (base + j) as u32);
                         }
                     }
                 }

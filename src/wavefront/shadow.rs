@@ -25,7 +25,7 @@ pub fn shadow(
     } else {
         occluded.clear();
         occluded.resize(q.len(), false);
-        accel.any_hits(&q.ray, occluded, c);
+        accel.any_hits_packets(&q.ray, occluded, c);
         for j in 0..q.len() {
             if !occluded[j] {
                 radiance[q.owner[j] as usize] += q.weight[j];

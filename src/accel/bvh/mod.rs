@@ -5,6 +5,7 @@ mod boxtest;
 mod build;
 mod leaf;
 mod order;
+mod packet;
 mod simd;
 mod traverse;
 mod wide;
@@ -341,6 +342,13 @@ impl Intersector for Bvh {
             (Some(sse), None) => run!(sse),
             _ => run!(Scalar),
         }
+    }
+
+    fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+        if self.nodes.is_empty() {
+            return self.any_hits(rays, occluded, c);
+        }
+        packet::any_hits(self, rays, occluded, c);
     }
 
     fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {

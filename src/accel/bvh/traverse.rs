@@ -113,7 +113,7 @@ pub fn closest_hit_with<B: BoxTest>(
 
 /// Starts loading the node or leaf block behind child reference `r`.
 #[inline(always)]
-fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
+pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
     if r & LEAF_BIT == 0 {
         if let Some(n) = bvh.nodes.get(r as usize) {
             isa.prefetch(n);
@@ -257,7 +257,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
 
 /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
 #[inline(always)]
-fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
+pub(super) fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
     let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
