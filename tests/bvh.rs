@@ -199,3 +199,54 @@ fn degenerate_triangles_are_never_hit() {
     let r = Ray::new(Vec3::new(-3.0, 0.0, 0.0), Vec3::X);
     assert!(bvh.closest_hit(&r, &mut c).is_none_or(|h| h.prim < ndeg));
 }
+
+/// Rays from one vertex to another (unnormalised direction, `tmax = 1`) end exactly on a
+/// surface, where the box test's entry distance and the triangle's `t` are both rounded:
+/// every ISA must still find the same hits (the fused and unfused slab forms round the
+/// entry differently, so the comparison with `tmax` needs the same margin as the exit).
+#[test]
+fn every_isa_agrees_on_rays_ending_on_vertices() {
+    let mut scenes = vec![scene_of(icosphere(8), vec![])];
+    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
+        scenes.push(wavepath::load::load(&p, &Default::default()).unwrap());
+    }
+    for scene in &scenes {
+        let v = &scene.mesh.positions;
+        let step = v.len() / 60 + 1;
+        // From vertices and from a few points off the surfaces, to vertices.
+        let (lo, hi) = scene.bounds().unwrap();
+        let mut from: Vec<Vec3> = v.iter().copied().step_by(step).collect();
+        from.extend([0.5, 0.37, 0.81].map(|f| lo + (hi - lo) * f));
+        let mut rays = Vec::new();
+        for &a in &from {
+            for &b in v.iter().step_by(step) {
+                if a != b {
+                    rays.push(Ray { tmax: 1.0, ..Ray::new(a, b - a) });
+                }
+            }
+        }
+        let reference = Bvh::build(scene).with_isa(Isa::Scalar);
+        let mut c = TraceCounters::default();
+        let want: Vec<_> = rays.iter().map(|r| reference.closest_hit(r, &mut c)).collect();
+        assert!(want.iter().filter(|h| h.is_some()).count() > rays.len() / 10, "too few hits");
+        // Brute force tests in id order: at a tie the lowest id, as the BVH's rule says.
+        let brute = BruteForce::new(scene);
+        for (r, w) in rays.iter().zip(&want) {
+            let b = brute.closest_hit(r, &mut c);
+            assert!(same(b, *w), "{r:?}: bvh {w:?}, brute force {b:?}");
+        }
+        for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+            let bvh = Bvh::build(scene).with_isa(isa);
+            let mut batch = vec![None; rays.len()];
+            bvh.closest_hits(&rays, &mut batch, &mut c);
+            let mut occ = vec![false; rays.len()];
+            bvh.any_hits(&rays, &mut occ, &mut c);
+            for (i, r) in rays.iter().enumerate() {
+                let got = bvh.closest_hit(r, &mut c);
+                assert!(same(got, want[i]), "{isa:?} {r:?}: {got:?}, scalar {:?}", want[i]);
+                assert!(same(batch[i], want[i]), "{isa:?} batch {r:?}: scalar {:?}", want[i]);
+                assert_eq!(occ[i], want[i].is_some(), "{isa:?} any-hit {r:?}");
+            }
+        }
+    }
+}

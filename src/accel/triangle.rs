@@ -57,6 +57,16 @@ impl ShearedRay {
     }
 }
 
+/// `tmax` widened by a few ulps for the range checks done before the division (`tt` against
+/// `tmax * det`), which round differently from the exact check `t <= tmax` on the divided
+/// value: a pre-check that rejected a `t` the exact check accepts would make a tie at the
+/// closest hit (a ray through a shared vertex, a range ending on a surface) depend on the
+/// order triangles are tested in, and so on the traversal and the instruction set.
+#[inline(always)]
+pub fn range_end(tmax: f32) -> f32 {
+    tmax + tmax.abs() * (8.0 * f32::EPSILON)
+}
+
 /// Watertight test of one triangle; returns (t, u, v) with `t` in `[tmin, tmax]` and `u`, `v`
 /// the weights of corners 1 and 2. Degenerate (zero-area or edge-on) triangles never hit.
 ///
@@ -105,7 +115,7 @@ pub fn intersect_sheared(
     let tt = u * az + v * bz + w * cz;
     // Range check before the division, with the sign of det folded in (no division for misses).
     let (tt_s, det_s) = if det < 0.0 { (-tt, -det) } else { (tt, det) };
-    if tt_s < tmin * det_s || tt_s > tmax * det_s {
+    if tt_s < tmin * det_s || tt_s > range_end(tmax) * det_s {
         return None;
     }
     let inv = 1.0 / det;
@@ -205,5 +215,39 @@ mod tests {
             let h2 = intersect(&r, p10, p11, p01).is_some();
             assert!(h1 || h2, "ray {i} slipped through the shared edge");
         }
+    }
+
+    /// A hit at `t` is still a hit when the range ends exactly at `t` (closest-hit searches
+    /// shrink `tmax` to the best `t` so far; losing a tie there would make the triangle
+    /// reported at a shared vertex depend on the order triangles are tested in).
+    #[test]
+    fn a_hit_survives_a_range_ending_at_its_own_t() {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        let mut hits = 0;
+        for i in 0..200_000 {
+            let scale = [1e-3f32, 1.0, 37.0, 1e4][i % 4];
+            let p = |n: &mut dyn FnMut() -> f32| Vec3::new(n(), n(), n()) * scale;
+            let (a, b, c) = (p(&mut next), p(&mut next), p(&mut next));
+            let o = p(&mut next) * 3.0;
+            // Aim at a corner, an edge point or an inside point, with unnormalised directions.
+            let target = match i % 3 {
+                0 => a,
+                1 => a + (b - a) * (next() + 0.5),
+                _ => a + (b - a) * 0.3 + (c - a) * 0.3,
+            };
+            let r = Ray::new(o, (target - o) * (1.0 + next()));
+            if let Some((t, _, _)) = intersect(&r, a, b, c) {
+                hits += 1;
+                let at = Ray { tmax: t, ..r };
+                assert!(intersect(&at, a, b, c).is_some(), "{r:?} hit {a} {b} {c} at {t}, not with tmax = t");
+            }
+        }
+        assert!(hits > 100_000, "{hits}");
     }
 }

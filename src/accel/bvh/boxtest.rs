@@ -16,6 +16,16 @@ use crate::ray::Ray;
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
 
+/// The margin on the far end of the ray's range (its `tmax`, or the closest hit so far) in
+/// box tests and stack pops. A hit on a box's boundary (a ray through a shared vertex or
+/// edge, or ending on a surface) has a `t` that rounds independently of the box's entry
+/// distance, by a few ulps each way; without a margin the leaf holding the tied triangle with
+/// the lower id could be culled or not depending on the order leaves are visited in, so the
+/// ISAs (different visiting orders) would report different triangles. 2^-16 relative is ~100
+/// ulps: it covers the rounding of both for coordinates of the order of the distances and
+/// costs nothing measurable (a node entering within it beyond the closest hit is rare).
+pub const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
+
 /// Index into `Node8::b` of the near plane on `axis` for rays of octant `oct` (below 6 for
 /// any `oct`, as the SIMD kernels index node planes with it unchecked).
 #[inline(always)]
@@ -162,7 +172,7 @@ impl RootBox {
             enter = enter.max(a.min(b));
             exit = exit.min(a.max(b));
         }
-        enter <= (exit * EXIT_SCALE).min(tmax)
+        enter <= (exit * EXIT_SCALE).min(tmax * TIE_SCALE)
     }
 }
 
@@ -265,7 +275,7 @@ impl BoxTest for Scalar {
             let u2 = (node.b[far(oct, 2)][i] - r.org[2]) * r.inv[2];
             // Same operation order as the SIMD paths, so every path visits the same nodes.
             let enter = t0.max(t1).max(t2).max(r.tmin);
-            let exit = (u0.min(u1).min(u2) * EXIT_SCALE).min(tmax);
+            let exit = (u0.min(u1).min(u2) * EXIT_SCALE).min(tmax * TIE_SCALE);
             *tn = enter;
             mask |= ((enter <= exit) as u32) << i;
         }

@@ -1,9 +1,9 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a token whose constructor checked the CPU at run time.
-use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, admit_mask_scalar, far, near};
+use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, TIE_SCALE, admit_mask_scalar, far, near};
 use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
-use crate::accel::triangle::ShearedRay;
+use crate::accel::triangle::{ShearedRay, range_end};
 use crate::ray::Ray;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -69,7 +69,7 @@ impl BoxTest for Sse {
                 let enter = _mm_max_ps(_mm_max_ps(_mm_max_ps(t0, t1), t2), _mm_set1_ps(r.tmin));
                 let exit = _mm_min_ps(
                     _mm_mul_ps(_mm_min_ps(_mm_min_ps(u0, u1), u2), _mm_set1_ps(EXIT_SCALE)),
-                    _mm_set1_ps(tmax),
+                    _mm_set1_ps(tmax * TIE_SCALE),
                 );
                 _mm_storeu_ps(tnear.as_mut_ptr().add(o), enter);
                 mask |= (_mm_movemask_ps(_mm_cmple_ps(enter, exit)) as u32) << o;
@@ -221,7 +221,10 @@ unsafe fn admit8(root: &RootBox, rays: &[Ray; 8]) -> u32 {
             enter = _mm256_max_ps(enter, _mm256_min_ps(a, b));
             exit = _mm256_min_ps(exit, _mm256_max_ps(a, b));
         }
-        let exit = _mm256_min_ps(_mm256_mul_ps(exit, _mm256_set1_ps(EXIT_SCALE)), tmax);
+        let exit = _mm256_min_ps(
+            _mm256_mul_ps(exit, _mm256_set1_ps(EXIT_SCALE)),
+            _mm256_mul_ps(tmax, _mm256_set1_ps(TIE_SCALE)),
+        );
         _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
     }
 }
@@ -263,13 +266,13 @@ unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32) -> (__m256, __m256) {
             u2 = d(5, 2);
         }
         // Shallow trees of the exact max/min (no operand is NaN: `inv` is finite and
-        // non-zero and the fused terms finite), and `enter <= min(exit, tmax)` as two
-        // compares, so fewer dependent steps per node with the same answer.
+        // non-zero and the fused terms finite), and `enter <= min(exit * EXIT_SCALE, tmax *
+        // TIE_SCALE)` as two compares, so fewer dependent steps per node with the same answer.
         let enter = _mm256_max_ps(_mm256_max_ps(t0, t1), _mm256_max_ps(t2, _mm256_set1_ps(r.tmin)));
         let exit = _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE));
         let hit = _mm256_and_ps(
             _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit),
-            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(tmax)),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(tmax * TIE_SCALE)),
         );
         (enter, hit)
     }
@@ -413,7 +416,7 @@ unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 
         let tt_s = _mm_xor_ps(tt, _mm_and_ps(det, sign));
         let out_of_range = _mm_or_ps(
             _mm_cmplt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmin), det_abs)),
-            _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmax), det_abs)),
+            _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(range_end(tmax)), det_abs)),
         );
         let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
         let keep = _mm_or_ps(on_edge, accept);

@@ -1,7 +1,7 @@
 //! Closest-hit and any-hit traversal of the 8-wide tree, generic over the box test so that
 //! the scalar and SIMD paths share every other line (and therefore every decision).
 use super::Bvh;
-use super::boxtest::{BoxRay, BoxTest};
+use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
 use super::leaf::{LANES, Tri4};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
@@ -103,7 +103,7 @@ pub fn closest_hit_with<B: BoxTest>(
                 return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
             }
             sp -= 1;
-            if dists[sp] <= best.t {
+            if dists[sp] <= best.t * TIE_SCALE {
                 cur = nodes[sp];
                 break;
             }

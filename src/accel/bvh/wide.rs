@@ -108,10 +108,22 @@ pub fn collapse(bin: &[Node2]) -> Wide {
 
 fn set_child(n: &mut Node8, slot: usize, c: &Node2, r: u32) {
     for axis in 0..3 {
-        n.b[2 * axis][slot] = c.lo[axis];
-        n.b[2 * axis + 1][slot] = c.hi[axis];
+        n.b[2 * axis][slot] = widen(c.lo[axis], -1.0);
+        n.b[2 * axis + 1][slot] = widen(c.hi[axis], 1.0);
     }
     n.child[slot] = r;
+}
+
+/// Moves a box bound outward (`side` -1 for lower, +1 for upper) by an ulp and a tiny
+/// absolute amount, so every vertex lies strictly inside its leaf's box. A ray parallel to
+/// an axis and lying in the plane of a box face (an axis-parallel ray through a shared vertex
+/// or along an edge) otherwise gets a zero slab distance, `(plane - origin) * inv = 0`, for
+/// that face: the unfused slab test then rejects the box while the watertight triangle test
+/// hits its corner, and the fused form (which shifts its terms outward) accepts it, so the
+/// instruction sets found different triangles at such ties. With the margin the distance is
+/// at least 1e-30 times the reciprocal (`f32::MAX` for a zero component): beyond any hit.
+fn widen(x: f32, side: f32) -> f32 {
+    if x.is_finite() { x + side * (x.abs() * f32::EPSILON + 1e-30) } else { x }
 }
 
 /// Emits the wide node for binary inner node `i`; returns the depth of its subtree.
