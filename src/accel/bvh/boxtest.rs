@@ -8,7 +8,7 @@
 //! would give NaN. Near and far planes are picked per axis by the sign of the direction, so
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
-use super::leaf::{Hits4, Tri4};
+use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -239,13 +239,12 @@ pub trait BoxTest: Copy {
         let _ = x;
     }
 
-    /// The scalar watertight test of the triangle lanes `lanes` of `blk` in `[tmin, tmax]`,
-    /// bit for bit, for every lane it can settle; the others are `unsure`. The reference
-    /// settles none (its callers then run the scalar test on every lane).
+    /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in
+    /// `[tmin, tmax]`: a cleared bit is a certain miss. The reference keeps every lane.
     #[inline(always)]
-    fn tri_exact(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> Hits4 {
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
         let _ = (blk, sr, tmin, tmax);
-        Hits4 { unsure: lanes, ..Hits4::default() }
+        lanes
     }
 }
 

@@ -70,18 +70,3 @@ pub fn pad_leaves(nodes: &mut [Node8], prims: &[[Vec3; 3]], ids: &[u32], tri_cou
     }
     out
 }
-
-/// What the four-lane exact triangle test settled for one block.
-#[derive(Clone, Copy, Debug, Default)]
-pub struct Hits4 {
-    /// Lanes the scalar watertight test hits.
-    pub hit: u32,
-    /// Lanes only the scalar test can settle (an edge function exactly zero: its f64 path).
-    pub unsure: u32,
-    /// The hit lanes with the smallest t (more than one is a tie), and the (t, u, v) of the
-    /// lowest of them.
-    pub nearest: u32,
-    pub t: f32,
-    pub u: f32,
-    pub v: f32,
-}

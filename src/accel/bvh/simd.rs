@@ -1,7 +1,7 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a token whose constructor checked the CPU at run time.
 use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, admit_mask_scalar, far, near};
-use super::leaf::{Hits4, Tri4};
+use super::leaf::Tri4;
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -79,9 +79,9 @@ impl BoxTest for Sse {
     }
 
     #[inline(always)]
-    fn tri_exact(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> Hits4 {
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
-        unsafe { tri_exact4(blk, sr, tmin, tmax, lanes) }
+        unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
     }
 }
 
@@ -167,9 +167,9 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn tri_exact(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> Hits4 {
-        // SAFETY: `Avx2` exists only if SSE4.1 was detected.
-        unsafe { tri_exact4(blk, sr, tmin, tmax, lanes) }
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+        // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
+        unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
     }
 }
 
@@ -365,21 +365,6 @@ fn prefetch_lines<T>(x: &T) {
     }
 }
 
-/// What [`tri_filter4`] computed: the lanes it keeps, those with an edge function of exactly
-/// zero, and its intermediates (sheared corners with z unscaled, edge functions, det, tt),
-/// so the exact test goes on from them.
-#[cfg(target_arch = "x86_64")]
-struct Edges4 {
-    keep: u32,
-    on_edge: u32,
-    x: [__m128; 3],
-    y: [__m128; 3],
-    z: [__m128; 3],
-    e: [__m128; 3],
-    det: __m128,
-    tt: __m128,
-}
-
 /// The watertight test of `crate::accel::triangle::intersect_sheared` up to its range check,
 /// on four triangles at once with the same operations in the same order (separate multiply
 /// and add, never fused), so a lane it rejects is one the scalar test rejects too. Lanes with
@@ -389,7 +374,7 @@ struct Edges4 {
 /// The CPU must have SSE4.1.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> Edges4 {
+unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 {
     // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
     // each lane array is 16 bytes at a multiple of 16).
     unsafe {
@@ -432,98 +417,7 @@ unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> Edge
         );
         let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
         let keep = _mm_or_ps(on_edge, accept);
-        Edges4 {
-            keep: _mm_movemask_ps(keep) as u32,
-            on_edge: _mm_movemask_ps(on_edge) as u32,
-            x: [ax, bx, cx],
-            y: [ay, by, cy],
-            z: [az, bz, cz],
-            e: [u, v, w],
-            det,
-            tt,
-        }
-    }
-}
-
-/// The whole scalar watertight test (`crate::accel::triangle::intersect_sheared`) on the
-/// triangle lanes `lanes` of a block: [`tri_filter4`] up to the range check on `tt`, then the
-/// division, the exact range check on `t` and the t error bound, each with the same
-/// operations in the same order as the scalar code, so every lane it settles gets the same
-/// answer and the same (t, u, v) bits. Lanes with an edge function of exactly zero take the
-/// scalar code's f64 recomputation: they are left `unsure`. The filter hands over its
-/// intermediates ([`Edges4`]).
-///
-/// # Safety
-/// The CPU must have SSE4.1.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn tri_exact4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> Hits4 {
-    use crate::scene::error_bound::gamma;
-    // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
-    // each lane array is 16 bytes at a multiple of 16), stores go to arrays of 4 f32.
-    unsafe {
-        let f = tri_filter4(blk, sr, tmin, tmax);
-        let keep = f.keep & lanes;
-        let mut out = Hits4::default();
-        if keep == 0 {
-            return out;
-        }
-        out.unsure = keep & f.on_edge;
-        let sure = keep & !out.unsure;
-        if sure == 0 {
-            return out;
-        }
-        let sz = _mm_set1_ps(sr.sz);
-        let ([ax, bx, cx], [ay, by, cy], [u, v, w], det, tt) = (f.x, f.y, f.e, f.det, f.tt);
-        let (az, bz, cz) = (_mm_mul_ps(sz, f.z[0]), _mm_mul_ps(sz, f.z[1]), _mm_mul_ps(sz, f.z[2]));
-        let inv = _mm_div_ps(_mm_set1_ps(1.0), det);
-        let t = _mm_mul_ps(tt, inv);
-        let in_range = _mm_and_ps(_mm_cmpge_ps(t, _mm_set1_ps(tmin)), _mm_cmple_ps(t, _mm_set1_ps(tmax)));
-        // `t_error_bound`: the lanes that passed the filter have non-NaN operands here (a
-        // scaled z may be infinite), so `max` and `f32::max` agree; the bound itself may be
-        // NaN, which the scalar `t <= bound` does not reject, hence `!(t <= bound)`.
-        let sign = _mm_set1_ps(-0.0);
-        let abs = |x: __m128| _mm_andnot_ps(sign, x);
-        let amax = |a: __m128, b: __m128, c: __m128| _mm_max_ps(_mm_max_ps(abs(a), abs(b)), abs(c));
-        let (max_x, max_y, max_z, max_e) = (amax(ax, bx, cx), amax(ay, by, cy), amax(az, bz, cz), amax(u, v, w));
-        let max_z_world = _mm_div_ps(max_z, _mm_set1_ps(sr.sz.abs()));
-        let g = |n: u32| _mm_set1_ps(gamma(n));
-        let delta_z = _mm_mul_ps(g(3), max_z);
-        let delta_x = _mm_mul_ps(g(5), _mm_add_ps(max_x, _mm_mul_ps(_mm_set1_ps(sr.sx.abs()), max_z_world)));
-        let delta_y = _mm_mul_ps(g(5), _mm_add_ps(max_y, _mm_mul_ps(_mm_set1_ps(sr.sy.abs()), max_z_world)));
-        let delta_e = _mm_mul_ps(
-            _mm_set1_ps(2.0),
-            _mm_add_ps(
-                _mm_add_ps(_mm_mul_ps(_mm_mul_ps(g(2), max_x), max_y), _mm_mul_ps(delta_y, max_x)),
-                _mm_mul_ps(delta_x, max_y),
-            ),
-        );
-        let sum = _mm_add_ps(
-            _mm_add_ps(_mm_mul_ps(_mm_mul_ps(g(3), max_e), max_z), _mm_mul_ps(delta_e, max_z)),
-            _mm_mul_ps(delta_z, max_e),
-        );
-        let bound = _mm_mul_ps(_mm_mul_ps(_mm_set1_ps(3.0), sum), abs(inv));
-        let ok = _mm_and_ps(in_range, _mm_cmpnle_ps(t, bound));
-        out.hit = sure & _mm_movemask_ps(ok) as u32;
-        if out.hit == 0 {
-            return out;
-        }
-        // The nearest hit lane(s): minimum of t over the hit lanes (the others +inf).
-        let hit_v = _mm_castsi128_ps(_mm_cmpgt_epi32(
-            _mm_and_si128(_mm_set1_epi32(out.hit as i32), _mm_setr_epi32(1, 2, 4, 8)),
-            _mm_setzero_si128(),
-        ));
-        let tm = _mm_blendv_ps(_mm_set1_ps(f32::INFINITY), t, hit_v);
-        let m = _mm_min_ps(tm, _mm_shuffle_ps::<0b10_11_00_01>(tm, tm));
-        let m = _mm_min_ps(m, _mm_shuffle_ps::<0b01_00_11_10>(m, m));
-        out.nearest = out.hit & _mm_movemask_ps(_mm_cmpeq_ps(tm, m)) as u32;
-        let lane = out.nearest.trailing_zeros() as usize;
-        let (mut tl, mut ul, mut vl) = ([0f32; 4], [0f32; 4], [0f32; 4]);
-        _mm_storeu_ps(tl.as_mut_ptr(), t);
-        _mm_storeu_ps(ul.as_mut_ptr(), _mm_mul_ps(v, inv));
-        _mm_storeu_ps(vl.as_mut_ptr(), _mm_mul_ps(w, inv));
-        (out.t, out.u, out.v) = (tl[lane & 3], ul[lane & 3], vl[lane & 3]);
-        out
+        _mm_movemask_ps(keep) as u32
     }
 }
 
@@ -634,105 +528,5 @@ mod tests {
             }
         }
         assert!(checked[0] > 1000 && checked[1] > 1000, "too few live rays in or out: {checked:?}");
-    }
-
-    /// The four-lane exact test agrees with the scalar `intersect_sheared` lane by lane: every
-    /// lane it settles as a hit is a scalar hit with the same t, every lane it settles as a
-    /// miss is a scalar miss, and the nearest lane's (t, u, v) are the scalar bits. Cases:
-    /// rays through the corners and edges of a fan of triangles, degenerate and edge-on
-    /// triangles, grazing rays, ranges ending at the hit, scales 1e-4 to 1e5.
-    #[test]
-    fn tri_exact_matches_scalar_lane_by_lane() {
-        use crate::accel::triangle::intersect_sheared;
-        let Some(avx) = Avx2::new() else { return };
-        let sse = Sse::new().unwrap();
-        let mut counts = [0u32; 3]; // settled hits, settled misses, unsure
-        let mut next = 0x9e37_79b9_7f4a_7c15u64;
-        let mut rnd = move || {
-            next = next.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (next >> 40) as f32 / (1u64 << 24) as f32
-        };
-        for &scale in &[1e-4f32, 1.0, 3.7, 1e5] {
-            // A fan around the origin plus a degenerate and an edge-on triangle.
-            let fan = |k: usize| {
-                let a = k as f32 * 0.7;
-                Vec3::new(a.cos(), a.sin(), 0.1 * k as f32) * scale
-            };
-            let tris: Vec<[Vec3; 3]> = (0..6)
-                .map(|k| [Vec3::ZERO, fan(k), fan(k + 1)])
-                .chain([[Vec3::ZERO, fan(1), fan(1) * 2.0], [Vec3::ZERO, Vec3::X * scale, Vec3::Z * scale]])
-                .collect();
-            let mut targets: Vec<Vec3> = (0..8).map(fan).collect();
-            targets.push(Vec3::ZERO);
-            targets.extend((0..7).map(|k| (fan(k) + fan(k + 1)) * 0.5));
-            targets.extend((0..7).map(|k| fan(k) * 0.5));
-            for _ in 0..60 {
-                targets.push(Vec3::new(rnd() * 2.0 - 1.0, rnd() * 2.0 - 1.0, rnd() * 0.6) * scale);
-            }
-            let origins = [
-                Vec3::new(0.3, -0.2, 2.0),
-                Vec3::new(-3.0, 0.5, 0.05),
-                Vec3::new(0.0, 0.0, -4.0),
-                Vec3::new(5.0, 5.0, 0.0),
-                Vec3::new(1e-3, 2e-3, 1e-3),
-            ];
-            for block in tris.chunks(4) {
-                let mut blk = Tri4::default();
-                for (lane, t) in block.iter().enumerate() {
-                    for (c, p) in t.iter().enumerate() {
-                        for axis in 0..3 {
-                            blk.c[c][axis][lane] = p[axis];
-                        }
-                    }
-                }
-                let lanes = (1u32 << block.len()) - 1;
-                for &o in &origins {
-                    for &target in &targets {
-                        let o = o * scale;
-                        for (dir, tmin, tmax) in [
-                            (target - o, 0.0, f32::INFINITY),
-                            ((target - o) * 1e3, 1e-4, 1e-3),
-                            (target - o, 0.0, 1.0),
-                            (target - o, 1.0, 2.0),
-                        ] {
-                            let ray = Ray { origin: o, dir, tmin, tmax };
-                            let Some(sr) = ShearedRay::new(&ray) else { continue };
-                            let scalar: Vec<_> =
-                                block.iter().map(|t| intersect_sheared(&sr, tmin, tmax, t[0], t[1], t[2])).collect();
-                            let a = with_avx2(avx, |k| k.tri_exact(&blk, &sr, tmin, tmax, lanes));
-                            let b = sse.tri_exact(&blk, &sr, tmin, tmax, lanes);
-                            assert_eq!((a.hit, a.unsure, a.nearest), (b.hit, b.unsure, b.nearest));
-                            assert_eq!(
-                                (a.t.to_bits(), a.u.to_bits(), a.v.to_bits()),
-                                (b.t.to_bits(), b.u.to_bits(), b.v.to_bits())
-                            );
-                            for (lane, s) in scalar.iter().enumerate() {
-                                let bit = 1u32 << lane;
-                                if a.unsure & bit != 0 {
-                                    counts[2] += 1;
-                                    continue;
-                                }
-                                assert_eq!(a.hit & bit != 0, s.is_some(), "{ray:?} lane {lane} {:?}", block[lane]);
-                                counts[s.is_none() as usize] += 1;
-                                let (t, u, v) = match s {
-                                    Some(h) => *h,
-                                    None => continue,
-                                };
-                                if a.nearest & bit != 0 && a.nearest.trailing_zeros() == lane as u32 {
-                                    assert_eq!(
-                                        (a.t.to_bits(), a.u.to_bits(), a.v.to_bits()),
-                                        (t.to_bits(), u.to_bits(), v.to_bits()),
-                                        "{ray:?} lane {lane}"
-                                    );
-                                }
-                                // Nearest means no settled hit is closer.
-                                assert!(a.t <= t, "{ray:?} lane {lane}");
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        assert!(counts.iter().all(|&n| n > 50), "too few settled hits, misses or unsure lanes: {counts:?}");
     }
 }

@@ -123,6 +123,23 @@ pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
     }
 }
 
+/// Lanes of leaf `r` that need the scalar test (the SIMD kernels drop certain misses), with
+/// the leaf's first slot and block.
+#[inline(always)]
+fn leaf_candidates<'a, B: BoxTest>(
+    bvh: &'a Bvh,
+    isa: B,
+    r: u32,
+    sr: &ShearedRay,
+    tmin: f32,
+    tmax: f32,
+) -> (usize, u32, &'a Tri4) {
+    let (first, count) = leaf_range(r);
+    let all = (1u32 << count) - 1;
+    let blk = &bvh.blocks[first / LANES];
+    (first, isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes), blk)
+}
+
 /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the filter
 /// just read (the same values as `prims`, already in cache); only spheres read `prims`.
 #[inline(always)]
@@ -153,26 +170,8 @@ fn leaf_closest<B: BoxTest>(
     best: &mut Best,
     c: &mut TraceCounters,
 ) {
-    let (first, count) = leaf_range(r);
-    c.prim_tests += count as u64;
-    let blk = &bvh.blocks[first / LANES];
-    let spheres = ((1u32 << count) - 1) & !blk.tri_lanes;
-    let ex = isa.tri_exact(blk, sr, ray.tmin, best.t, blk.tri_lanes);
-    if ex.unsure | spheres == 0 {
-        // Every lane settled: the nearest hit lane is the one the scalar loop below would
-        // keep, unless two lanes tie (then the loop's order and ids decide).
-        if ex.hit == 0 {
-            return;
-        }
-        if ex.nearest.count_ones() == 1 {
-            let (t, id) = (ex.t, bvh.ids[first + ex.nearest.trailing_zeros() as usize]);
-            if !best.found || t < best.t || (t == best.t && id < best.prim) {
-                *best = Best { t, prim: id, u: ex.u, v: ex.v, found: true };
-            }
-            return;
-        }
-    }
-    let mut cand = ex.hit | ex.unsure | spheres;
+    c.prim_tests += leaf_range(r).1 as u64;
+    let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;
@@ -259,13 +258,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
 /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
 #[inline(always)]
 pub(super) fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
-    let (first, count) = leaf_range(r);
-    let blk = &bvh.blocks[first / LANES];
-    let ex = isa.tri_exact(blk, sr, ray.tmin, ray.tmax, blk.tri_lanes);
-    if ex.hit != 0 {
-        return true;
-    }
-    let mut cand = ex.unsure | (((1u32 << count) - 1) & !blk.tri_lanes);
+    let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;
