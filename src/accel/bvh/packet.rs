@@ -11,8 +11,7 @@
 //! tests a subset of what its single-ray traversal could reach and the same leaves that
 //! matter: the boolean is the single-ray one, bit for bit, whatever the ISA.
 use super::Bvh;
-use super::boxtest::{BoxRay, BoxTest, Scalar};
-use super::simd;
+use super::boxtest::{BoxRay, BoxTest};
 use super::traverse::{self, leaf_any, prefetch_child};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::TraceCounters;
@@ -42,15 +41,7 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCou
             }
         }};
     }
-    match bvh.tokens() {
-        (_, Some(avx)) => simd::with_avx2(
-            avx,
-            #[inline(always)]
-            |t| run!(t),
-        ),
-        (Some(sse), None) => run!(sse),
-        _ => run!(Scalar),
-    }
+    on_isa!(bvh, |t| run!(t))
 }
 
 /// The packet stack: node references and, per entry, the rays that entered it.
