@@ -27,6 +27,7 @@ mod build;
 mod leaf;
 mod order;
 mod packet;
+mod packet_closest;
 mod simd;
 mod traverse;
 mod wide;
@@ -281,6 +282,7 @@ impl Intersector for Bvh {
         // inliner, outside the AVX2 context, and ran six times slower.
         let order = self.batch_order(rays);
         let mut stack = traverse::Stack::new(self.stack_need);
+        let mut pstack = packet_closest::Stack::new(self.stack_need);
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
@@ -321,18 +323,17 @@ impl Intersector for Bvh {
                             }
                             c.rays += (rs.len() - n) as u64;
                             hs.fill(None);
-                            for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
-                                let i = i as usize;
-                                hs[i] = traverse::closest_hit_with(
-                                    self,
-                                    $isa,
-                                    &rs[i],
-                                    br,
-                                    c,
-                                    &mut stack.nodes,
-                                    &mut stack.dists,
-                                );
-                            }
+                            packet_closest::trace_group(
+                                self,
+                                $isa,
+                                rs,
+                                hs,
+                                &prep[..n],
+                                &slot[..n],
+                                c,
+                                &mut stack,
+                                &mut pstack,
+                            );
                         }
                     }
                 }

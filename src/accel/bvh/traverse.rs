@@ -27,12 +27,25 @@ impl Stack {
 }
 
 /// The closest hit so far.
-struct Best {
-    t: f32,
+pub(super) struct Best {
+    pub(super) t: f32,
     prim: u32,
     u: f32,
     v: f32,
     found: bool,
+}
+
+impl Best {
+    /// Nothing found yet within `[tmin, tmax]`.
+    #[inline(always)]
+    pub(super) fn new(tmax: f32) -> Best {
+        Best { t: tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false }
+    }
+
+    #[inline(always)]
+    pub(super) fn hit(&self) -> Option<Hit> {
+        self.found.then_some(Hit { t: self.t, prim: self.prim, u: self.u, v: self.v })
+    }
 }
 
 #[inline(always)]
@@ -161,7 +174,7 @@ fn lane_hit(
 }
 
 #[inline(always)]
-fn leaf_closest<B: BoxTest>(
+pub(super) fn leaf_closest<B: BoxTest>(
     bvh: &Bvh,
     isa: B,
     r: u32,
