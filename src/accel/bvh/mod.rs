@@ -38,6 +38,7 @@ use crate::scene::Scene;
 use boxtest::{BoxRay, BoxTest, RootBox};
 use build::PrimRef;
 use glam::Vec3;
+use packet_closest::PacketTest;
 use rayon::prelude::*;
 use simd::{Avx2, Sse};
 use std::time::Instant;
@@ -281,8 +282,7 @@ impl Intersector for Bvh {
         // larger body (set-up of the shear added to this loop) was left out of line by the
         // inliner, outside the AVX2 context, and ran six times slower.
         let order = self.batch_order(rays);
-        let mut stack = traverse::Stack::new(self.stack_need);
-        let mut pstack = packet_closest::Stack::new(self.stack_need);
+        let mut stacks = packet_closest::Stacks::new(self.stack_need);
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
@@ -298,8 +298,8 @@ impl Intersector for Bvh {
                                 &rays[i],
                                 &br,
                                 c,
-                                &mut stack.nodes,
-                                &mut stack.dists,
+                                &mut stacks.single.nodes,
+                                &mut stacks.single.dists,
                             );
                         }
                     }
@@ -323,17 +323,25 @@ impl Intersector for Bvh {
                             }
                             c.rays += (rs.len() - n) as u64;
                             hs.fill(None);
-                            packet_closest::trace_group(
-                                self,
-                                $isa,
-                                rs,
-                                hs,
-                                &prep[..n],
-                                &slot[..n],
-                                c,
-                                &mut stack,
-                                &mut pstack,
-                            );
+                            // Groups where coherent rays may form packets (camera rays)
+                            // go to the packet path; the others stay in this tight loop.
+                            let starts = packet_closest::coherent_starts(&prep[..n], rs, &slot[..n]);
+                            if starts != 0 {
+                                $isa.trace_group(self, rs, hs, &prep[..n], &slot[..n], starts, c, &mut stacks);
+                                continue;
+                            }
+                            for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
+                                let i = i as usize;
+                                hs[i] = traverse::closest_hit_with(
+                                    self,
+                                    $isa,
+                                    &rs[i],
+                                    br,
+                                    c,
+                                    &mut stacks.single.nodes,
+                                    &mut stacks.single.dists,
+                                );
+                            }
                         }
                     }
                 }

@@ -99,6 +99,24 @@ pub trait PacketTest: BoxTest {
         }
         keep & mask
     }
+
+    /// [`trace_group`] with this instruction set (out of line in the AVX2 path, see
+    /// `closest_group_avx2`).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn trace_group(
+        self,
+        bvh: &Bvh,
+        rs: &[Ray],
+        hs: &mut [Option<Hit>],
+        prep: &[BoxRay],
+        slot: &[u8],
+        starts: u32,
+        c: &mut TraceCounters,
+        stacks: &mut Stacks,
+    ) {
+        trace_group(bvh, self, rs, hs, prep, slot, starts, c, stacks)
+    }
 }
 
 /// [`PacketTest::test_packet`] ray by ray with the instruction set's own node test.
@@ -146,6 +164,22 @@ impl PacketTest for Avx2 {
         // SAFETY: `Avx2` exists only if AVX2 was detected; aligned loads of two `Lanes`.
         unsafe { avx2::cull(d, tmax, mask) }
     }
+
+    #[inline(always)]
+    fn trace_group(
+        self,
+        bvh: &Bvh,
+        rs: &[Ray],
+        hs: &mut [Option<Hit>],
+        prep: &[BoxRay],
+        slot: &[u8],
+        starts: u32,
+        c: &mut TraceCounters,
+        stacks: &mut Stacks,
+    ) {
+        // SAFETY: `Avx2` exists only if AVX2, FMA, BMI1 and POPCNT were detected.
+        unsafe { avx2::closest_group_avx2(bvh, self, rs, hs, prep, slot, starts, c, stacks) }
+    }
 }
 
 #[cfg(not(target_arch = "x86_64"))]
@@ -153,7 +187,7 @@ impl PacketTest for Avx2 {}
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use super::{Lanes, PacketRays, TIE_SCALE};
+    use super::{Avx2, BoxRay, Bvh, Hit, Lanes, PacketRays, Ray, Stacks, TIE_SCALE, TraceCounters};
     use crate::accel::bvh::boxtest::EXIT_SCALE;
     use crate::accel::bvh::wide::{EMPTY, Node8, WIDTH};
     use std::arch::x86_64::*;
@@ -207,6 +241,28 @@ mod avx2 {
         }
     }
 
+    /// [`super::trace_group`] compiled with the features of `simd::with_avx2`, out of line,
+    /// called only for groups where a packet may start: inlined into the batch loop, the
+    /// packet code made the single-ray traversal of every group slower (register allocation
+    /// and layout of the shared loop; measured on the dragon's diffuse rays, where packets
+    /// are rare: -4 to -7%). One call per group of 32 rays costs nothing measurable.
+    #[target_feature(enable = "avx2,fma,bmi1,popcnt")]
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn closest_group_avx2(
+        bvh: &Bvh,
+        tok: Avx2,
+        rs: &[Ray],
+        hs: &mut [Option<Hit>],
+        prep: &[BoxRay],
+        slot: &[u8],
+        starts: u32,
+        c: &mut TraceCounters,
+        stacks: &mut Stacks,
+    ) {
+        super::trace_group(bvh, tok, rs, hs, prep, slot, starts, c, stacks)
+    }
+
     /// [`super::PacketTest::cull`] for eight lanes at once.
     ///
     /// # Safety
@@ -236,16 +292,41 @@ impl Stack {
     }
 }
 
-/// Length of the run of rays starting at `br[0]` that can form a packet: live, the same
-/// octant, at most [`PACKET`].
-#[inline(always)]
-pub fn run_len(br: &[BoxRay]) -> usize {
-    let first = &br[0];
-    if !first.live {
-        return 1;
+/// The stacks of a batch: single rays' and packets'.
+pub struct Stacks {
+    pub single: super::traverse::Stack,
+    pub packet: Stack,
+}
+
+impl Stacks {
+    pub fn new(len: usize) -> Stacks {
+        Stacks { single: super::traverse::Stack::new(len), packet: Stack::new(len) }
     }
+}
+
+/// Cosine of the widest angle between a packet's first direction and any other. Camera rays
+/// of neighbouring pixels (or one pixel's samples) lie within a fraction of a degree; diffuse
+/// bounces of neighbouring points often share an octant (their normals are alike) but spread
+/// over the hemisphere, and as packets they cost more than alone (measured: +8% instructions
+/// on the dragon's diffuse rays with the octant test only).
+pub const MIN_COS: f32 = 0.99;
+
+/// Length of the run of prepared rays starting at `br[0]` (ray `rs[slot[0]]`, where
+/// [`run_starts`] allows a packet) that can form a packet: live, the same octant, directions
+/// within [`MIN_COS`] of the first; at most [`PACKET`].
+#[inline(always)]
+pub fn run_len(br: &[BoxRay], rs: &[Ray], slot: &[u8]) -> usize {
+    let first = &br[0];
+    let d0 = rs[slot[0] as usize].dir;
+    let l0 = d0.length_squared() * (MIN_COS * MIN_COS);
     let mut n = 1;
     while n < PACKET && n < br.len() && br[n].live && br[n].octant == first.octant {
+        let d = rs[slot[n] as usize].dir;
+        let dot = d.dot(d0);
+        // Same octant, so `dot >= 0`; compare squares to avoid the roots.
+        if dot * dot < l0 * d.length_squared() {
+            break;
+        }
         n += 1;
     }
     n
@@ -337,9 +418,47 @@ pub fn closest_packet<B: PacketTest>(
     }
 }
 
+/// Bit `j` set when prepared rays `j .. j + MIN_PACKET` are live and share ray `j`'s octant
+/// (where a packet may start), computed without a branch per ray: incoherent rays (diffuse
+/// bounces) rarely have such runs, and a per-ray test of the next ray's octant was a
+/// mispredicted branch per ray (-3% on the dragon's diffuse rays).
+#[inline(always)]
+pub fn run_starts(prep: &[BoxRay]) -> u32 {
+    let mut same = 0u32;
+    for (j, w) in prep.windows(2).enumerate() {
+        same |= ((w[0].octant == w[1].octant) as u32 & w[0].live as u32 & w[1].live as u32) << j;
+    }
+    let mut starts = same;
+    for k in 1..MIN_PACKET - 1 {
+        starts &= same >> k;
+    }
+    starts
+}
+
+/// [`run_starts`] of the prepared rays `prep` (ray `rs[slot[j]]` for `prep[j]`), or 0 when
+/// no start has its next [`MIN_PACKET`] rays within [`MIN_COS`] of the first: diffuse
+/// bounces of neighbouring points often share octants (a third of the dragon's groups of 32
+/// had such runs) but almost never pass the cone, and a group without a packet stays in the
+/// caller's single-ray loop. (The first start that passes is enough: the group path checks
+/// each packet again.)
+#[inline(always)]
+pub fn coherent_starts(prep: &[BoxRay], rs: &[Ray], slot: &[u8]) -> u32 {
+    let starts = run_starts(prep);
+    let mut m = starts;
+    while m != 0 {
+        let j = m.trailing_zeros() as usize;
+        m &= m - 1;
+        if run_len(&prep[j..j + MIN_PACKET], rs, &slot[j..j + MIN_PACKET]) >= MIN_PACKET {
+            return starts;
+        }
+    }
+    0
+}
+
 /// Traces the prepared rays of one batch group: `prep[j]` are the box-test values of ray
-/// `rs[slot[j]]` (the rays that passed the root-box test, in batch order). Runs of at least
-/// [`MIN_PACKET`] live same-octant rays go as packets, every other ray alone.
+/// `rs[slot[j]]` (the rays that passed the root-box test, in batch order; at most 32), and
+/// `starts` is [`run_starts`] of them. Runs of at least [`MIN_PACKET`] coherent rays
+/// ([`run_len`]) go as packets, every other ray alone.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn trace_group<B: PacketTest>(
@@ -349,37 +468,42 @@ pub fn trace_group<B: PacketTest>(
     hs: &mut [Option<Hit>],
     prep: &[BoxRay],
     slot: &[u8],
+    starts: u32,
     c: &mut TraceCounters,
-    stack: &mut super::traverse::Stack,
-    pstack: &mut Stack,
+    stacks: &mut Stacks,
 ) {
+    let n = prep.len();
+    let stack = &mut stacks.single;
     let mut j = 0;
-    while j < prep.len() {
-        let len = run_len(&prep[j..]);
+    loop {
+        // Single rays up to the next place a packet may start.
+        let pending = if j < 32 { starts & (u32::MAX << j) } else { 0 };
+        let next = if pending == 0 { n } else { pending.trailing_zeros() as usize };
+        for k in j..next {
+            let i = slot[k] as usize;
+            hs[i] =
+                super::traverse::closest_hit_with(bvh, isa, &rs[i], &prep[k], c, &mut stack.nodes, &mut stack.dists);
+        }
+        if next >= n {
+            break;
+        }
+        let len = run_len(&prep[next..], rs, &slot[next..]);
         if len >= MIN_PACKET {
-            let mut pr = [rs[slot[j] as usize]; PACKET];
+            let mut pr = [rs[slot[next] as usize]; PACKET];
             for k in 1..len {
-                pr[k] = rs[slot[j + k] as usize];
+                pr[k] = rs[slot[next + k] as usize];
             }
             let mut ph = [None; PACKET];
-            closest_packet(bvh, isa, &pr[..len], &prep[j..j + len], &mut ph[..len], c, pstack);
+            closest_packet(bvh, isa, &pr[..len], &prep[next..next + len], &mut ph[..len], c, &mut stacks.packet);
             for k in 0..len {
-                hs[slot[j + k] as usize] = ph[k];
+                hs[slot[next + k] as usize] = ph[k];
             }
+            j = next + len;
         } else {
-            for k in j..j + len {
-                let i = slot[k] as usize;
-                hs[i] = super::traverse::closest_hit_with(
-                    bvh,
-                    isa,
-                    &rs[i],
-                    &prep[k],
-                    c,
-                    &mut stack.nodes,
-                    &mut stack.dists,
-                );
-            }
+            let i = slot[next] as usize;
+            hs[i] =
+                super::traverse::closest_hit_with(bvh, isa, &rs[i], &prep[next], c, &mut stack.nodes, &mut stack.dists);
+            j = next + 1;
         }
-        j += len;
     }
 }
