@@ -145,16 +145,30 @@ fn hard_rays(scene: &Scene, runs: usize) -> Vec<Ray> {
 
 /// Chords from vertex to vertex ending exactly on the target (`tmax = 1`): from inside a
 /// closed mesh the first hit is the target vertex itself, shared by several triangles at
-/// the same `t` (the tie the lower id must win in every visiting order). Consecutive
-/// targets are neighbouring vertices, so the rays of one origin come in coherent runs.
+/// the same `t` (the tie the lower id must win in every visiting order). Each origin aims at
+/// runs of eight vertices nearest to one another (a coherent run that forms a packet when
+/// seen from far enough), and the same targets in another order.
 fn vertex_rays(scene: &Scene) -> Vec<Ray> {
     let v = &scene.mesh.positions;
     let step = v.len() / 60 + 1;
+    let clusters: Vec<Vec<Vec3>> = v
+        .iter()
+        .step_by(step)
+        .map(|&b| {
+            let mut near: Vec<Vec3> = v.clone();
+            near.sort_by(|p, q| (*p - b).length_squared().total_cmp(&(*q - b).length_squared()));
+            near.dedup();
+            near.truncate(8);
+            near
+        })
+        .collect();
     let mut rays = Vec::new();
     for &a in v.iter().step_by(step) {
-        for &b in v.iter().step_by(step) {
-            if a != b {
-                rays.push(Ray { tmax: 1.0, ..Ray::new(a, b - a) });
+        for cluster in &clusters {
+            for &b in cluster {
+                if a != b {
+                    rays.push(Ray { tmax: 1.0, ..Ray::new(a, b - a) });
+                }
             }
         }
     }
