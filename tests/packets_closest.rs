@@ -1,4 +1,4 @@
-//! Closest-hit packets (`Intersector::closest_hits` traces runs of coherent rays together)
+//! Closest-hit packets (`Intersector::closest_hits_packets` traces runs of coherent rays together)
 //! against the scalar single-ray `closest_hit`, for every instruction set: camera rays in
 //! 4x4 pixel blocks and per-pixel jittered samples (the coherent case packets are for), and
 //! hard rays in coherent runs: ending exactly on shared vertices and edges, axis-parallel
@@ -186,20 +186,20 @@ fn check(scene: &Scene, rays: &[Ray], what: &str) {
         let bvh = Bvh::build(scene).with_isa(isa);
         let mut got = vec![None; rays.len()];
         let mut c = TraceCounters::default();
-        bvh.closest_hits(rays, &mut got, &mut c);
+        bvh.closest_hits_packets(rays, &mut got, &mut c);
         assert_eq!(c.rays, rays.len() as u64, "{what} {isa:?}");
         for (i, r) in rays.iter().enumerate() {
             assert!(same(got[i], want[i]), "{what} {isa:?} ray {i} {r:?}: {:?}, scalar {:?}", got[i], want[i]);
         }
         // Other groupings: shifted by three, and slices of 1..=9 rays (short packets).
         let mut got = vec![None; rays.len() - 3];
-        bvh.closest_hits(&rays[3..], &mut got, &mut c);
+        bvh.closest_hits_packets(&rays[3..], &mut got, &mut c);
         assert!(got.iter().zip(&want[3..]).all(|(a, b)| same(*a, *b)), "{what} {isa:?} shifted");
         let (mut i, mut len) = (0, 1);
         while i < rays.len() {
             let n = len.min(rays.len() - i);
             let mut got = vec![None; n];
-            bvh.closest_hits(&rays[i..i + n], &mut got, &mut c);
+            bvh.closest_hits_packets(&rays[i..i + n], &mut got, &mut c);
             for k in 0..n {
                 assert!(same(got[k], want[i + k]), "{what} {isa:?} slice {i}+{k} of {n}: {:?}", rays[i + k]);
             }

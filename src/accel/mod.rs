@@ -47,6 +47,13 @@ pub trait Intersector: Sync + Send {
         }
     }
 
+    /// [`Intersector::closest_hits`] for a queue of coherent rays (camera rays in pixel
+    /// blocks): accelerators may trace runs of neighbouring rays as packets. The results are
+    /// exactly those of `closest_hits`.
+    fn closest_hits_packets(&self, rays: &[Ray], hits: &mut [Option<Hit>], counters: &mut TraceCounters) {
+        self.closest_hits(rays, hits, counters)
+    }
+
     /// Any-hit for a whole queue of shadow rays (`occluded[i]`: ray i hits something).
     fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
         for (r, o) in rays.iter().zip(occluded.iter_mut()) {

@@ -28,7 +28,8 @@ pub fn trace_all(accel: &dyn Intersector, rays: &[Ray], out: &mut [HitRecord], t
         while let Some((start, mut dst)) = claim() {
             let rs = &rays[start..start + dst.len()];
             let hs = &mut buf[..rs.len()];
-            accel.closest_hits(rs, hs, &mut c);
+            // The peers' primary rays come in 4x4 pixel blocks (packets where runs allow).
+            accel.closest_hits_packets(rs, hs, &mut c);
             for (d, h) in dst.iter_mut().zip(hs.iter()) {
                 *d = HitRecord::from_hit(*h);
             }

@@ -268,6 +268,55 @@ impl Intersector for Bvh {
     }
 
     fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
+        self.closest_batch(rays, hits, c, false)
+    }
+
+    /// Packets only here, not in `closest_hits` (the wavefront's traverse stage): on CBbunny
+    /// the camera rays' traverse stage was not faster with them (BENCHMARKS.md, session 12).
+    fn closest_hits_packets(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
+        self.closest_batch(rays, hits, c, true)
+    }
+
+    fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+        if self.nodes.is_empty() {
+            return self.any_hits(rays, occluded, c);
+        }
+        packet::any_hits(self, rays, occluded, c);
+    }
+
+    fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+        if self.nodes.is_empty() {
+            c.rays += rays.len() as u64;
+            occluded.iter_mut().for_each(|o| *o = false);
+            return;
+        }
+        let order = self.batch_order(rays);
+        let mut stack = vec![0u32; self.stack_need];
+        macro_rules! run {
+            ($isa:expr) => {
+                match &order {
+                    Some(order) => {
+                        for &i in order {
+                            let i = i as usize;
+                            occluded[i] = traverse::any_hit_with(self, $isa, &rays[i], c, &mut stack);
+                        }
+                    }
+                    None => {
+                        for (r, o) in rays.iter().zip(occluded.iter_mut()) {
+                            *o = traverse::any_hit_with(self, $isa, r, c, &mut stack);
+                        }
+                    }
+                }
+            };
+        }
+        on_isa!(self, |t| run!(t))
+    }
+}
+
+impl Bvh {
+    /// Closest hits of a batch; with `packets`, runs of coherent rays are traced as packets
+    /// ([`packet_closest`]), with the same results.
+    fn closest_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters, packets: bool) {
         if self.nodes.is_empty() {
             c.rays += rays.len() as u64;
             hits.iter_mut().for_each(|h| *h = None);
@@ -325,7 +374,8 @@ impl Intersector for Bvh {
                             hs.fill(None);
                             // Groups where coherent rays may form packets (camera rays)
                             // go to the packet path; the others stay in this tight loop.
-                            let starts = packet_closest::coherent_starts(&prep[..n], rs, &slot[..n]);
+                            let starts =
+                                if packets { packet_closest::coherent_starts(&prep[..n], rs, &slot[..n]) } else { 0 };
                             if starts != 0 {
                                 $isa.trace_group(self, rs, hs, &prep[..n], &slot[..n], starts, c, &mut stacks);
                                 continue;
@@ -342,41 +392,6 @@ impl Intersector for Bvh {
                                     &mut stacks.single.dists,
                                 );
                             }
-                        }
-                    }
-                }
-            };
-        }
-        on_isa!(self, |t| run!(t))
-    }
-
-    fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
-        if self.nodes.is_empty() {
-            return self.any_hits(rays, occluded, c);
-        }
-        packet::any_hits(self, rays, occluded, c);
-    }
-
-    fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
-        if self.nodes.is_empty() {
-            c.rays += rays.len() as u64;
-            occluded.iter_mut().for_each(|o| *o = false);
-            return;
-        }
-        let order = self.batch_order(rays);
-        let mut stack = vec![0u32; self.stack_need];
-        macro_rules! run {
-            ($isa:expr) => {
-                match &order {
-                    Some(order) => {
-                        for &i in order {
-                            let i = i as usize;
-                            occluded[i] = traverse::any_hit_with(self, $isa, &rays[i], c, &mut stack);
-                        }
-                    }
-                    None => {
-                        for (r, o) in rays.iter().zip(occluded.iter_mut()) {
-                            *o = traverse::any_hit_with(self, $isa, r, c, &mut stack);
                         }
                     }
                 }
