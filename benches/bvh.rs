@@ -76,6 +76,15 @@ fn bench(c: &mut Criterion) {
                     black_box(&hits);
                 })
             });
+            // Runs of coherent rays as packets (`rays trace`'s path; these primary rays are
+            // row-major, so a packet is 8 x 1 pixels instead of the peers' 4 x 2).
+            g.bench_function(format!("closest_packets/{set}"), |b| {
+                b.iter(|| {
+                    let mut tc = TraceCounters::default();
+                    bvh.closest_hits_packets(rays, &mut hits, &mut tc);
+                    black_box(&hits);
+                })
+            });
             g.bench_function(format!("any/{set}"), |b| {
                 b.iter(|| {
                     let mut tc = TraceCounters::default();
