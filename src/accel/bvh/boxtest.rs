@@ -9,6 +9,7 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
+use super::packet::LeafRay;
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -247,6 +248,13 @@ pub trait BoxTest: Copy {
     #[inline(always)]
     fn prefetch<T>(self, x: &T) {
         let _ = x;
+    }
+
+    /// [`BoxTest::tri_filter`] for a ray whose leaf set-up is `r` (the SIMD paths start
+    /// from the set-up's values instead of deriving them again at every leaf).
+    #[inline(always)]
+    fn tri_filter_leaf(self, blk: &Tri4, r: &LeafRay, lanes: u32) -> u32 {
+        self.tri_filter(blk, &r.sr, r.tmin, r.tmax, lanes)
     }
 
     /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in

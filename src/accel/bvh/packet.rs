@@ -12,10 +12,11 @@
 //! matter: the boolean is the single-ray one, bit for bit, whatever the ISA.
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest};
-use super::traverse::{self, leaf_any, prefetch_child};
+use super::leaf::LANES;
+use super::traverse::{self, lane_hit, prefetch_child};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::TraceCounters;
-use crate::accel::triangle::ShearedRay;
+use crate::accel::triangle::{ShearedRay, range_end};
 use crate::ray::Ray;
 
 /// Rays per packet at most (one byte of a ray mask per child; 8 x 8 masks transpose in a u64).
@@ -24,7 +25,8 @@ pub const PACKET: usize = 8;
 /// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
 pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
-    let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need] };
+    let mut stack =
+        Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need], leaf: [LeafRay::DEAD; PACKET] };
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
     // left out of line would be compiled outside the AVX2 context (see `Bvh::closest_hits`).
     macro_rules! run {
@@ -44,10 +46,56 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCou
     on_isa!(bvh, |t| run!(t))
 }
 
-/// The packet stack: node references and, per entry, the rays that entered it.
+/// The packet stack: node references and, per entry, the rays that entered it; and the
+/// leaf-test set-up of the packet's rays (reused across packets: each packet marks which
+/// entries it has written).
 struct Stack {
     nodes: Vec<u32>,
     masks: Vec<u32>,
+    leaf: [LeafRay; PACKET],
+}
+
+/// A ray's set-up for its leaf tests, made at its first leaf: the shear of the watertight
+/// test and, for the SIMD filter, the same values the single-ray filter derives from it at
+/// every leaf (the origin on the sheared axes, `range_end(tmax)`, the offsets of the axes'
+/// rows in a [`super::leaf::Tri4`] corner), so a ray that tests several leaves derives them once.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LeafRay {
+    pub(super) sr: ShearedRay,
+    /// The origin's kx, ky, kz coordinates.
+    pub(super) org: [f32; 3],
+    pub(super) tmin: f32,
+    pub(super) tmax: f32,
+    /// `range_end(tmax)`.
+    pub(super) tend: f32,
+    /// Byte offsets `16 * axis` of the kx, ky, kz rows of a corner (`Tri4::c[corner]`).
+    pub(super) rows: [u8; 3],
+}
+
+impl LeafRay {
+    const DEAD: LeafRay = LeafRay {
+        sr: ShearedRay { org: glam::Vec3::ZERO, kx: 0, ky: 1, kz: 2, sx: 0.0, sy: 0.0, sz: 0.0 },
+        org: [0.0; 3],
+        tmin: 0.0,
+        tmax: 0.0,
+        tend: 0.0,
+        rows: [0, 16, 32],
+    };
+
+    #[inline(always)]
+    fn new(ray: &Ray) -> LeafRay {
+        let sr = ShearedRay::of(ray);
+        let o = sr.org.to_array();
+        let (kx, ky, kz) = (sr.kx % 3, sr.ky % 3, sr.kz % 3);
+        LeafRay {
+            sr,
+            org: [o[kx], o[ky], o[kz]],
+            tmin: ray.tmin,
+            tmax: ray.tmax,
+            tend: range_end(ray.tmax),
+            rows: [16 * kx as u8, 16 * ky as u8, 16 * kz as u8],
+        }
+    }
 }
 
 /// Length of the next packet: whole runs of rays with one origin (the shadow rays of one
@@ -113,8 +161,8 @@ fn packet_any<B: BoxTest>(
         br[k] = isa.box_ray(&rays[k]);
         live |= (br[k].live as u32) << k;
     }
-    // The shear of a ray is set up at its first leaf (as in the single-ray traversal).
-    let mut sr = [None::<ShearedRay>; PACKET];
+    // The leaf set-up of a ray is made at its first leaf (as in the single-ray traversal).
+    let mut ready = 0u32;
     let mut hit = 0u32;
     let (mut sp, mut cur, mut cur_rays) = (0usize, 0u32, live);
     let mut tnear = [0f32; WIDTH];
@@ -154,22 +202,29 @@ fn packet_any<B: BoxTest>(
                     sp += 1;
                     continue;
                 }
-                let count = leaf_range(child).1 as u64;
+                let (first, count) = leaf_range(child);
+                let blk = &bvh.blocks[first / LANES];
+                // As `leaf_any`: the filter's triangle lanes and every other lane, then the
+                // exact test in lane order up to the first hit.
+                let others = ((1u32 << count) - 1) & !blk.tri_lanes;
                 let mut m = entered & !hit;
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    tests += count;
-                    let s = match sr[k] {
-                        Some(s) => s,
-                        None => {
-                            let s = ShearedRay::of(&rays[k]);
-                            sr[k] = Some(s);
-                            s
+                    tests += count as u64;
+                    if ready >> k & 1 == 0 {
+                        stack.leaf[k] = LeafRay::new(&rays[k]);
+                        ready |= 1 << k;
+                    }
+                    let lr = &stack.leaf[k];
+                    let mut cand = isa.tri_filter_leaf(blk, lr, blk.tri_lanes) | others;
+                    while cand != 0 {
+                        let lane = cand.trailing_zeros() as usize;
+                        cand &= cand - 1;
+                        if lane_hit(bvh, blk, first, lane, &lr.sr, &rays[k], rays[k].tmax).is_some() {
+                            hit |= 1 << k;
+                            break;
                         }
-                    };
-                    if leaf_any(bvh, isa, child, &s, &rays[k]) {
-                        hit |= 1 << k;
                     }
                 }
                 if hit == live {
