@@ -9,7 +9,7 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
-use super::packet::LeafRay;
+use super::packet::{LeafRay, PACKET, PacketBoxRays};
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -248,6 +248,25 @@ pub trait BoxTest: Copy {
     #[inline(always)]
     fn prefetch<T>(self, x: &T) {
         let _ = x;
+    }
+
+    /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).
+    #[inline(always)]
+    fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
+        let mut p = PacketBoxRays::EMPTY;
+        for (k, r) in rays.iter().enumerate().take(PACKET) {
+            p.set(k, &self.box_ray(r), r.tmax);
+        }
+        p
+    }
+
+    /// [`BoxTest::test`] of `node` for lane `k` of `p` (with that ray's `tmax`), without the
+    /// entry distances.
+    #[inline(always)]
+    fn test_lane(self, node: &Node8, p: &PacketBoxRays, k: usize) -> u32 {
+        let b = p.lane(k);
+        let mut tnear = [0f32; WIDTH];
+        self.test(node, &b, b.octant, p.tmax[k], &mut tnear)
     }
 
     /// [`BoxTest::tri_filter`] for a ray whose leaf set-up is `r` (the SIMD paths start

@@ -2,7 +2,7 @@
 //! through a token whose constructor checked the CPU at run time.
 use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, TIE_SCALE, admit_mask_scalar, far, near};
 use super::leaf::Tri4;
-use super::packet::LeafRay;
+use super::packet::{LeafRay, PACKET, PacketBoxRays};
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::{ShearedRay, range_end};
 use crate::ray::Ray;
@@ -183,6 +183,156 @@ impl BoxTest for Avx2 {
     fn tri_filter_leaf(self, blk: &Tri4, r: &LeafRay, lanes: u32) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
         unsafe { tri_filter4_leaf(blk, r) & lanes }
+    }
+
+    #[inline(always)]
+    fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
+        match <&[Ray; 8]>::try_from(rays) {
+            // SAFETY: `Avx2` exists only if AVX2 was detected.
+            Ok(eight) => unsafe { box_rays8(eight) },
+            Err(_) => {
+                let mut p = PacketBoxRays::EMPTY;
+                for (k, r) in rays.iter().enumerate().take(PACKET) {
+                    p.set(k, &self.box_ray(r), r.tmax);
+                }
+                p
+            }
+        }
+    }
+
+    #[inline(always)]
+    fn test_lane(self, node: &Node8, p: &PacketBoxRays, k: usize) -> u32 {
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected.
+        unsafe { _mm256_movemask_ps(slab8_lane(node, p, k % PACKET)) as u32 }
+    }
+}
+
+/// Ray fields of eight rays, one register per field (lane k = ray k): origin x, y, z,
+/// direction x, y, z, tmin, tmax.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn transpose_rays8(rays: &[Ray; 8]) -> [__m256; 8] {
+    // SAFETY: the caller guarantees AVX2; each load reads one 32-byte `Ray` (asserted layout).
+    unsafe {
+        let p = rays.as_ptr().cast::<f32>();
+        let r = [0, 1, 2, 3, 4, 5, 6, 7].map(|k| _mm256_loadu_ps(p.add(8 * k)));
+        let (t0, t1) = (_mm256_unpacklo_ps(r[0], r[1]), _mm256_unpackhi_ps(r[0], r[1]));
+        let (t2, t3) = (_mm256_unpacklo_ps(r[2], r[3]), _mm256_unpackhi_ps(r[2], r[3]));
+        let (t4, t5) = (_mm256_unpacklo_ps(r[4], r[5]), _mm256_unpackhi_ps(r[4], r[5]));
+        let (t6, t7) = (_mm256_unpacklo_ps(r[6], r[7]), _mm256_unpackhi_ps(r[6], r[7]));
+        let (s0, s1) = (_mm256_shuffle_ps::<0x44>(t0, t2), _mm256_shuffle_ps::<0xee>(t0, t2));
+        let (s2, s3) = (_mm256_shuffle_ps::<0x44>(t1, t3), _mm256_shuffle_ps::<0xee>(t1, t3));
+        let (s4, s5) = (_mm256_shuffle_ps::<0x44>(t4, t6), _mm256_shuffle_ps::<0xee>(t4, t6));
+        let (s6, s7) = (_mm256_shuffle_ps::<0x44>(t5, t7), _mm256_shuffle_ps::<0xee>(t5, t7));
+        [
+            _mm256_permute2f128_ps::<0x20>(s0, s4),
+            _mm256_permute2f128_ps::<0x20>(s1, s5),
+            _mm256_permute2f128_ps::<0x20>(s2, s6),
+            _mm256_permute2f128_ps::<0x20>(s3, s7),
+            _mm256_permute2f128_ps::<0x31>(s0, s4),
+            _mm256_permute2f128_ps::<0x31>(s1, s5),
+            _mm256_permute2f128_ps::<0x31>(s2, s6),
+            _mm256_permute2f128_ps::<0x31>(s3, s7),
+        ]
+    }
+}
+
+/// [`box_ray8`] of eight rays at once, one ray per lane: the same operations per lane, so the
+/// same values ([`PacketBoxRays`] holds each ray's [`BoxRay`] fields).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn box_rays8(rays: &[Ray; 8]) -> PacketBoxRays {
+    // SAFETY: the caller guarantees AVX2; the stores are aligned ones of 8 f32 into the
+    // 32-byte aligned arrays of `out`.
+    unsafe {
+        let f = transpose_rays8(rays);
+        let (org, dir, tmin, tmax) = ([f[0], f[1], f[2]], [f[3], f[4], f[5]], f[6], f[7]);
+        let sign = _mm256_set1_ps(-0.0);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let mut out = PacketBoxRays::EMPTY;
+        let ones = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        let (mut finite_all, mut fma_all, mut nonzero) = (ones, ones, _mm256_setzero_ps());
+        for axis in 0..3 {
+            let (o, d) = (org[axis], dir[axis]);
+            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+            let finite_i = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
+            let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
+            let inv = _mm256_blendv_ps(big, i, finite_i);
+            let oi = _mm256_mul_ps(o, inv);
+            let e = _mm256_add_ps(
+                _mm256_mul_ps(_mm256_andnot_ps(sign, oi), _mm256_set1_ps(1.0 / 1048576.0)),
+                _mm256_set1_ps(f32::MIN_POSITIVE),
+            );
+            let (on, of) = (_mm256_add_ps(oi, e), _mm256_sub_ps(oi, e));
+            _mm256_store_ps(out.org[axis].as_mut_ptr(), o);
+            _mm256_store_ps(out.inv[axis].as_mut_ptr(), inv);
+            _mm256_store_ps(out.oi_near[axis].as_mut_ptr(), on);
+            _mm256_store_ps(out.oi_far[axis].as_mut_ptr(), of);
+            let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
+            fma_all = _mm256_and_ps(fma_all, _mm256_and_ps(finite(on), finite(of)));
+            finite_all = _mm256_and_ps(finite_all, _mm256_and_ps(finite(o), finite(d)));
+            nonzero = _mm256_or_ps(nonzero, _mm256_cmp_ps::<_CMP_NEQ_UQ>(d, _mm256_setzero_ps()));
+        }
+        _mm256_store_ps(out.tmin.as_mut_ptr(), tmin);
+        _mm256_store_ps(out.tmax.as_mut_ptr(), tmax);
+        _mm256_store_ps(out.tie.as_mut_ptr(), _mm256_mul_ps(tmax, _mm256_set1_ps(TIE_SCALE)));
+        let ordered = _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax);
+        out.fma = _mm256_movemask_ps(fma_all) as u32;
+        out.live = _mm256_movemask_ps(_mm256_and_ps(_mm256_and_ps(finite_all, nonzero), ordered)) as u32;
+        let (sx, sy, sz) =
+            (_mm256_movemask_ps(dir[0]) as u32, _mm256_movemask_ps(dir[1]) as u32, _mm256_movemask_ps(dir[2]) as u32);
+        for k in 0..8 {
+            let oct = (sx >> k & 1) | (sy >> k & 1) << 1 | (sz >> k & 1) << 2;
+            out.octant[k] = oct;
+            out.planes[k][..6].copy_from_slice(&PLANES[oct as usize]);
+        }
+        out
+    }
+}
+
+/// [`slab8`]'s hit lanes for lane `k` of a packet (the same operations on the same values).
+///
+/// # Safety
+/// The CPU must have AVX2 and FMA; `k` < 8.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn slab8_lane(node: &Node8, p: &PacketBoxRays, k: usize) -> __m256 {
+    // SAFETY: the caller guarantees AVX2 and FMA; each load reads 8 f32 of `node.b` at a
+    // byte offset `32 * plane` with plane < 6 (`planes[k]` is `PLANES[octant]` or zero),
+    // unaligned loads.
+    unsafe {
+        let base = node.b.as_ptr().cast::<u8>();
+        let pl = &p.planes[k];
+        let plane = |i: usize| _mm256_loadu_ps(base.add(pl[i] as usize).cast::<f32>());
+        let b = |a: &[[f32; 8]; 3], axis: usize| _mm256_set1_ps(a[axis][k]);
+        let (t0, t1, t2, u0, u1, u2);
+        if p.fma >> k & 1 != 0 {
+            t0 = _mm256_fmsub_ps(plane(0), b(&p.inv, 0), b(&p.oi_near, 0));
+            t1 = _mm256_fmsub_ps(plane(1), b(&p.inv, 1), b(&p.oi_near, 1));
+            t2 = _mm256_fmsub_ps(plane(2), b(&p.inv, 2), b(&p.oi_near, 2));
+            u0 = _mm256_fmsub_ps(plane(3), b(&p.inv, 0), b(&p.oi_far, 0));
+            u1 = _mm256_fmsub_ps(plane(4), b(&p.inv, 1), b(&p.oi_far, 1));
+            u2 = _mm256_fmsub_ps(plane(5), b(&p.inv, 2), b(&p.oi_far, 2));
+        } else {
+            t0 = _mm256_mul_ps(_mm256_sub_ps(plane(0), b(&p.org, 0)), b(&p.inv, 0));
+            t1 = _mm256_mul_ps(_mm256_sub_ps(plane(1), b(&p.org, 1)), b(&p.inv, 1));
+            t2 = _mm256_mul_ps(_mm256_sub_ps(plane(2), b(&p.org, 2)), b(&p.inv, 2));
+            u0 = _mm256_mul_ps(_mm256_sub_ps(plane(3), b(&p.org, 0)), b(&p.inv, 0));
+            u1 = _mm256_mul_ps(_mm256_sub_ps(plane(4), b(&p.org, 1)), b(&p.inv, 1));
+            u2 = _mm256_mul_ps(_mm256_sub_ps(plane(5), b(&p.org, 2)), b(&p.inv, 2));
+        }
+        let enter = _mm256_max_ps(_mm256_max_ps(t0, t1), _mm256_max_ps(t2, _mm256_set1_ps(p.tmin[k])));
+        let exit = _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE));
+        _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(p.tie[k])),
+        )
     }
 }
 
