@@ -9,7 +9,7 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
-use super::packet::{LeafRay, PACKET, PacketBoxRays};
+use super::packet::{PACKET, PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -269,11 +269,21 @@ pub trait BoxTest: Copy {
         self.test(node, &b, b.octant, p.tmax[k], &mut tnear)
     }
 
-    /// [`BoxTest::tri_filter`] for a ray whose leaf set-up is `r` (the SIMD paths start
-    /// from the set-up's values instead of deriving them again at every leaf).
+    /// The leaf-test set-up of up to [`PACKET`] rays ([`PacketShear::set`] of each).
     #[inline(always)]
-    fn tri_filter_leaf(self, blk: &Tri4, r: &LeafRay, lanes: u32) -> u32 {
-        self.tri_filter(blk, &r.sr, r.tmin, r.tmax, lanes)
+    fn packet_shear(self, rays: &[Ray]) -> PacketShear {
+        let mut p = PacketShear::EMPTY;
+        for (k, r) in rays.iter().enumerate().take(PACKET) {
+            p.set(k, r);
+        }
+        p
+    }
+
+    /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`); the SIMD paths start from the
+    /// set-up's values instead of deriving them again at every leaf.
+    #[inline(always)]
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+        self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
     }
 
     /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in

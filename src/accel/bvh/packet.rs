@@ -25,8 +25,7 @@ pub const PACKET: usize = 8;
 /// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
 pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
-    let mut stack =
-        Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need], leaf: [LeafRay::DEAD; PACKET] };
+    let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need] };
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
     // left out of line would be compiled outside the AVX2 context (see `Bvh::closest_hits`).
     macro_rules! run {
@@ -46,13 +45,10 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCou
     on_isa!(bvh, |t| run!(t))
 }
 
-/// The packet stack: node references and, per entry, the rays that entered it; and the
-/// leaf-test set-up of the packet's rays (reused across packets: each packet marks which
-/// entries it has written).
+/// The packet stack: node references and, per entry, the rays that entered it.
 struct Stack {
     nodes: Vec<u32>,
     masks: Vec<u32>,
-    leaf: [LeafRay; PACKET],
 }
 
 /// The box-test values ([`BoxRay`]) of a packet's rays, one array per field (lane `k` is ray
@@ -130,45 +126,63 @@ impl PacketBoxRays {
     }
 }
 
-/// A ray's set-up for its leaf tests, made at its first leaf: the shear of the watertight
-/// test and, for the SIMD filter, the same values the single-ray filter derives from it at
-/// every leaf (the origin on the sheared axes, `range_end(tmax)`, the offsets of the axes'
-/// rows in a [`super::leaf::Tri4`] corner), so a ray that tests several leaves derives them once.
+/// The packet's rays' set-up for their leaf tests, made at the packet's first leaf, one
+/// array per field (lane `k` is ray `k`): the shear of the watertight test
+/// ([`ShearedRay::of`]) and what the SIMD filter derives from it at every leaf in the
+/// single-ray path (the origin on the sheared axes, `range_end(tmax)`, the offsets of the
+/// axes' rows in a [`super::leaf::Tri4`] corner), so each is derived once per ray, and on
+/// AVX2 for eight rays at once.
 #[derive(Clone, Copy, Debug)]
-pub(super) struct LeafRay {
-    pub(super) sr: ShearedRay,
+#[repr(C, align(32))]
+pub(super) struct PacketShear {
     /// The origin's kx, ky, kz coordinates.
-    pub(super) org: [f32; 3],
-    pub(super) tmin: f32,
-    pub(super) tmax: f32,
+    pub(super) org: [[f32; PACKET]; 3],
+    /// `sx`, `sy`, `sz`.
+    pub(super) shear: [[f32; PACKET]; 3],
+    pub(super) tmin: [f32; PACKET],
     /// `range_end(tmax)`.
-    pub(super) tend: f32,
-    /// Byte offsets `16 * axis` of the kx, ky, kz rows of a corner (`Tri4::c[corner]`).
-    pub(super) rows: [u8; 3],
+    pub(super) tend: [f32; PACKET],
+    /// Byte offsets `16 * axis` (kx, ky, kz; always below 48) of the axes' rows in a corner
+    /// (`Tri4::c[corner]`).
+    pub(super) rows: [[u8; 4]; PACKET],
 }
 
-impl LeafRay {
-    const DEAD: LeafRay = LeafRay {
-        sr: ShearedRay { org: glam::Vec3::ZERO, kx: 0, ky: 1, kz: 2, sx: 0.0, sy: 0.0, sz: 0.0 },
-        org: [0.0; 3],
-        tmin: 0.0,
-        tmax: 0.0,
-        tend: 0.0,
-        rows: [0, 16, 32],
+impl PacketShear {
+    pub(super) const EMPTY: PacketShear = PacketShear {
+        org: [[0.0; PACKET]; 3],
+        shear: [[0.0; PACKET]; 3],
+        tmin: [0.0; PACKET],
+        tend: [0.0; PACKET],
+        rows: [[0, 16, 32, 0]; PACKET],
     };
 
+    /// Lane `k` from `ray`'s shear.
     #[inline(always)]
-    fn new(ray: &Ray) -> LeafRay {
-        let sr = ShearedRay::of(ray);
-        let o = sr.org.to_array();
-        let (kx, ky, kz) = (sr.kx % 3, sr.ky % 3, sr.kz % 3);
-        LeafRay {
-            sr,
-            org: [o[kx], o[ky], o[kz]],
-            tmin: ray.tmin,
-            tmax: ray.tmax,
-            tend: range_end(ray.tmax),
-            rows: [16 * kx as u8, 16 * ky as u8, 16 * kz as u8],
+    pub(super) fn set(&mut self, k: usize, ray: &Ray) {
+        let s = ShearedRay::of(ray);
+        let o = s.org.to_array();
+        let (kx, ky, kz) = (s.kx % 3, s.ky % 3, s.kz % 3);
+        for (role, (axis, sh)) in [(kx, s.sx), (ky, s.sy), (kz, s.sz)].into_iter().enumerate() {
+            self.org[role][k] = o[axis];
+            self.shear[role][k] = sh;
+            self.rows[k][role] = 16 * axis as u8;
+        }
+        self.tmin[k] = ray.tmin;
+        self.tend[k] = range_end(ray.tmax);
+    }
+
+    /// The [`ShearedRay`] of lane `k` (whose ray is `ray`).
+    #[inline(always)]
+    pub(super) fn sheared(&self, k: usize, ray: &Ray) -> ShearedRay {
+        let r = &self.rows[k];
+        ShearedRay {
+            org: ray.origin,
+            kx: (r[0] / 16) as usize,
+            ky: (r[1] / 16) as usize,
+            kz: (r[2] / 16) as usize,
+            sx: self.shear[0][k],
+            sy: self.shear[1][k],
+            sz: self.shear[2][k],
         }
     }
 }
@@ -232,8 +246,8 @@ fn packet_any<B: BoxTest>(
     c.rays += n as u64;
     let pb = isa.packet_box_rays(&rays[..n]);
     let live = pb.live;
-    // The leaf set-up of a ray is made at its first leaf (as in the single-ray traversal).
-    let mut ready = 0u32;
+    // The leaf set-up is made at the packet's first leaf (many rays never reach one).
+    let mut shear: Option<PacketShear> = None;
     let mut hit = 0u32;
     let (mut sp, mut cur, mut cur_rays) = (0usize, 0u32, live);
     let (mut visited, mut tests) = (0u64, 0u64);
@@ -282,16 +296,13 @@ fn packet_any<B: BoxTest>(
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
                     tests += count as u64;
-                    if ready >> k & 1 == 0 {
-                        stack.leaf[k] = LeafRay::new(&rays[k]);
-                        ready |= 1 << k;
-                    }
-                    let lr = &stack.leaf[k];
-                    let mut cand = isa.tri_filter_leaf(blk, lr, blk.tri_lanes) | others;
+                    let sh = shear.get_or_insert_with(|| isa.packet_shear(&rays[..n]));
+                    let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], blk.tri_lanes) | others;
                     while cand != 0 {
                         let lane = cand.trailing_zeros() as usize;
                         cand &= cand - 1;
-                        if lane_hit(bvh, blk, first, lane, &lr.sr, &rays[k], rays[k].tmax).is_some() {
+                        let sr = sh.sheared(k, &rays[k]);
+                        if lane_hit(bvh, blk, first, lane, &sr, &rays[k], rays[k].tmax).is_some() {
                             hit |= 1 << k;
                             break;
                         }
@@ -424,6 +435,34 @@ mod tests {
             }
         }
         assert!(hits > 20000, "too few box hits to compare: {hits}");
+    }
+
+    /// The AVX2 leaf set-up of eight rays equals the per-ray one (`ShearedRay::of` and
+    /// `range_end`), bit for bit with NaN matching NaN, on the hard and ordinary rays.
+    #[test]
+    fn packet_shear_is_the_single_rays() {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = super::super::simd::Avx2::new() {
+            let bits = |x: f32| if x.is_nan() { u32::MAX } else { x.to_bits() };
+            let mut n = 0;
+            for group in hard_rays().chunks_exact(PACKET) {
+                let want = Scalar.packet_shear(group);
+                let got = super::super::simd::with_avx2(avx, |t| t.packet_shear(group));
+                for (k, r) in group.iter().enumerate() {
+                    for role in 0..3 {
+                        assert_eq!(bits(want.org[role][k]), bits(got.org[role][k]), "{r:?}");
+                        assert_eq!(bits(want.shear[role][k]), bits(got.shear[role][k]), "{r:?}");
+                    }
+                    assert_eq!(bits(want.tmin[k]), bits(got.tmin[k]), "{r:?}");
+                    assert_eq!(bits(want.tend[k]), bits(got.tend[k]), "{r:?}");
+                    assert_eq!(want.rows[k], got.rows[k], "{r:?}");
+                    let s = ShearedRay::of(r);
+                    assert_eq!([s.kx, s.ky, s.kz].map(|a| 16 * a as u8), got.rows[k][..3], "{r:?}");
+                    n += 1;
+                }
+            }
+            assert!(n > 4000, "too few rays: {n}");
+        }
     }
 
     #[test]

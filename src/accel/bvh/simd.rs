@@ -2,7 +2,7 @@
 //! through a token whose constructor checked the CPU at run time.
 use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, TIE_SCALE, admit_mask_scalar, far, near};
 use super::leaf::Tri4;
-use super::packet::{LeafRay, PACKET, PacketBoxRays};
+use super::packet::{PACKET, PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::{ShearedRay, range_end};
 use crate::ray::Ray;
@@ -86,9 +86,10 @@ impl BoxTest for Sse {
     }
 
     #[inline(always)]
-    fn tri_filter_leaf(self, blk: &Tri4, r: &LeafRay, lanes: u32) -> u32 {
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+        let _ = ray;
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
-        unsafe { tri_filter4_leaf(blk, r) & lanes }
+        unsafe { tri_filter4_lane(blk, p, k % PACKET) & lanes }
     }
 }
 
@@ -180,9 +181,25 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn tri_filter_leaf(self, blk: &Tri4, r: &LeafRay, lanes: u32) -> u32 {
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+        let _ = ray;
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
-        unsafe { tri_filter4_leaf(blk, r) & lanes }
+        unsafe { tri_filter4_lane(blk, p, k % PACKET) & lanes }
+    }
+
+    #[inline(always)]
+    fn packet_shear(self, rays: &[Ray]) -> PacketShear {
+        match <&[Ray; 8]>::try_from(rays) {
+            // SAFETY: `Avx2` exists only if AVX2 was detected.
+            Ok(eight) => unsafe { shear8(eight) },
+            Err(_) => {
+                let mut p = PacketShear::EMPTY;
+                for (k, r) in rays.iter().enumerate().take(PACKET) {
+                    p.set(k, r);
+                }
+                p
+            }
+        }
     }
 
     #[inline(always)]
@@ -587,30 +604,93 @@ unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 
     }
 }
 
-/// [`tri_filter4`] for a ray with a [`LeafRay`] set-up: the same values, read from it.
+/// [`tri_filter4`] for lane `k` of a packet's leaf set-up: the same values, read from it.
 ///
 /// # Safety
-/// The CPU must have SSE4.1.
+/// The CPU must have SSE4.1; `k` < 8.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn tri_filter4_leaf(blk: &Tri4, r: &LeafRay) -> u32 {
+unsafe fn tri_filter4_lane(blk: &Tri4, p: &PacketShear, k: usize) -> u32 {
     // SAFETY: the caller guarantees SSE4.1; loads are aligned ones of 16 bytes at offsets
-    // `r.rows[i]`, which are 16 * axis with axis < 3 (`LeafRay::new`), inside a corner's
+    // `p.rows[k][i]`, which are 16 * axis with axis < 3 (`PacketShear`), inside a corner's
     // three rows of 16 bytes (`Tri4` is 64-byte aligned).
     unsafe {
-        let (ra, rb, rc) = (r.rows[0] as usize, r.rows[1] as usize, r.rows[2] as usize);
-        let (ox, oy, oz) = (_mm_set1_ps(r.org[0]), _mm_set1_ps(r.org[1]), _mm_set1_ps(r.org[2]));
-        let (sx, sy, sz) = (_mm_set1_ps(r.sr.sx), _mm_set1_ps(r.sr.sy), _mm_set1_ps(r.sr.sz));
+        let r = &p.rows[k];
+        let (ra, rb, rc) = (r[0] as usize, r[1] as usize, r[2] as usize);
+        let (ox, oy, oz) = (_mm_set1_ps(p.org[0][k]), _mm_set1_ps(p.org[1][k]), _mm_set1_ps(p.org[2][k]));
+        let (sx, sy, sz) = (_mm_set1_ps(p.shear[0][k]), _mm_set1_ps(p.shear[1][k]), _mm_set1_ps(p.shear[2][k]));
         // As in `tri_filter4`, with the rows at the set-up's offsets.
         let corner = |c: usize| {
-            let p = blk.c[c].as_ptr().cast::<u8>();
-            let z = _mm_sub_ps(_mm_load_ps(p.add(rc).cast::<f32>()), oz);
-            let x = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p.add(ra).cast::<f32>()), ox), _mm_mul_ps(sx, z));
-            let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p.add(rb).cast::<f32>()), oy), _mm_mul_ps(sy, z));
+            let q = blk.c[c].as_ptr().cast::<u8>();
+            let z = _mm_sub_ps(_mm_load_ps(q.add(rc).cast::<f32>()), oz);
+            let x = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q.add(ra).cast::<f32>()), ox), _mm_mul_ps(sx, z));
+            let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q.add(rb).cast::<f32>()), oy), _mm_mul_ps(sy, z));
             [x, y, z]
         };
         let (a, b, c) = (corner(0), corner(1), corner(2));
-        filter4_tail(a, b, c, sz, r.tmin, r.tend)
+        filter4_tail(a, b, c, sz, p.tmin[k], p.tend[k])
+    }
+}
+
+/// [`PacketShear::set`] (that is [`ShearedRay::of`]) of eight rays at once, one ray per
+/// lane: the same comparisons choose the axes (NaN compares false in both), the same
+/// divisions give `sx`, `sy`, `sz`, so the same values.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn shear8(rays: &[Ray; 8]) -> PacketShear {
+    // SAFETY: the caller guarantees AVX2; the stores are aligned ones of 8 f32 into the
+    // 32-byte aligned arrays of `out`.
+    unsafe {
+        let f = transpose_rays8(rays);
+        let ([ox, oy, oz], [dx, dy, dz], tmax) = ([f[0], f[1], f[2]], [f[3], f[4], f[5]], f[7]);
+        let sign = _mm256_set1_ps(-0.0);
+        let (ax, ay, az) = (_mm256_andnot_ps(sign, dx), _mm256_andnot_ps(sign, dy), _mm256_andnot_ps(sign, dz));
+        // kz = 0 where |x| >= |y| and |x| >= |z|, else 1 where |y| >= |z|, else 2.
+        let m0 = _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(ax, ay), _mm256_cmp_ps::<_CMP_GE_OQ>(ax, az));
+        let m1 = _mm256_andnot_ps(m0, _mm256_cmp_ps::<_CMP_GE_OQ>(ay, az));
+        // Per lane: (x, y, z) picked as (v[kx], v[ky], v[kz]) before the swap: kz = 0 gives
+        // (1, 2, 0), kz = 1 gives (2, 0, 1), kz = 2 gives (0, 1, 2).
+        let pick = |x: __m256, y: __m256, z: __m256| {
+            (
+                _mm256_blendv_ps(_mm256_blendv_ps(x, z, m1), y, m0),
+                _mm256_blendv_ps(_mm256_blendv_ps(y, x, m1), z, m0),
+                _mm256_blendv_ps(_mm256_blendv_ps(z, y, m1), x, m0),
+            )
+        };
+        let (dkx, dky, dkz) = pick(dx, dy, dz);
+        let (okx, oky, okz) = pick(ox, oy, oz);
+        // A negative d[kz] swaps kx and ky (keeps the winding).
+        let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(dkz, _mm256_setzero_ps());
+        let (dkx, dky) = (_mm256_blendv_ps(dkx, dky, neg), _mm256_blendv_ps(dky, dkx, neg));
+        let (okx, oky) = (_mm256_blendv_ps(okx, oky, neg), _mm256_blendv_ps(oky, okx, neg));
+        let mut out = PacketShear::EMPTY;
+        _mm256_store_ps(out.org[0].as_mut_ptr(), okx);
+        _mm256_store_ps(out.org[1].as_mut_ptr(), oky);
+        _mm256_store_ps(out.org[2].as_mut_ptr(), okz);
+        _mm256_store_ps(out.shear[0].as_mut_ptr(), _mm256_div_ps(dkx, dkz));
+        _mm256_store_ps(out.shear[1].as_mut_ptr(), _mm256_div_ps(dky, dkz));
+        _mm256_store_ps(out.shear[2].as_mut_ptr(), _mm256_div_ps(_mm256_set1_ps(1.0), dkz));
+        _mm256_store_ps(out.tmin.as_mut_ptr(), f[6]);
+        // range_end(tmax) = tmax + |tmax| * 8 eps.
+        let tend = _mm256_add_ps(tmax, _mm256_mul_ps(_mm256_andnot_ps(sign, tmax), _mm256_set1_ps(8.0 * f32::EPSILON)));
+        _mm256_store_ps(out.tend.as_mut_ptr(), tend);
+        let (b0, b1, bn) =
+            (_mm256_movemask_ps(m0) as u32, _mm256_movemask_ps(m1) as u32, _mm256_movemask_ps(neg) as u32);
+        for k in 0..8 {
+            let (kx, ky, kz) = if b0 >> k & 1 != 0 {
+                (1u8, 2u8, 0u8)
+            } else if b1 >> k & 1 != 0 {
+                (2, 0, 1)
+            } else {
+                (0, 1, 2)
+            };
+            let (kx, ky) = if bn >> k & 1 != 0 { (ky, kx) } else { (kx, ky) };
+            out.rows[k] = [16 * kx, 16 * ky, 16 * kz, 0];
+        }
+        out
     }
 }
 
