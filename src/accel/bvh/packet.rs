@@ -264,11 +264,11 @@ fn packet_any<B: BoxTest>(
             let node = &bvh.nodes[cur as usize];
             // Row k: the children ray k enters.
             let (mut rows, mut any) = (0u64, 0u32);
+            visited += active.count_ones() as u64;
             let mut m = active;
             while m != 0 {
                 let k = m.trailing_zeros() as usize;
                 m &= m - 1;
-                visited += 1;
                 let hm = isa.test_lane(node, &pb, k);
                 rows |= (hm as u64) << (8 * k);
                 any |= hm;
@@ -299,11 +299,14 @@ fn packet_any<B: BoxTest>(
                 // exact test in lane order up to the first hit.
                 let others = ((1u32 << count) - 1) & !blk.tri_lanes;
                 let mut m = entered & !hit;
+                if m == 0 {
+                    continue;
+                }
+                tests += (count as u32 * m.count_ones()) as u64;
+                let sh = &*shear.get_or_insert_with(|| isa.packet_shear(&rays[..n]));
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    tests += count as u64;
-                    let sh = shear.get_or_insert_with(|| isa.packet_shear(&rays[..n]));
                     let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], blk.tri_lanes) | others;
                     while cand != 0 {
                         let lane = cand.trailing_zeros() as usize;
