@@ -9,6 +9,7 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
+use super::packet::{PACKET, PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -247,6 +248,42 @@ pub trait BoxTest: Copy {
     #[inline(always)]
     fn prefetch<T>(self, x: &T) {
         let _ = x;
+    }
+
+    /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).
+    #[inline(always)]
+    fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
+        let mut p = PacketBoxRays::EMPTY;
+        for (k, r) in rays.iter().enumerate().take(PACKET) {
+            p.set(k, &self.box_ray(r), r.tmax);
+        }
+        p
+    }
+
+    /// [`BoxTest::test`] of `node` for lane `k` of `p` (with that ray's `tmax`), without the
+    /// entry distances.
+    #[inline(always)]
+    fn test_lane(self, node: &Node8, p: &PacketBoxRays, k: usize) -> u32 {
+        let b = p.lane(k);
+        let mut tnear = [0f32; WIDTH];
+        self.test(node, &b, b.octant, p.tmax[k], &mut tnear)
+    }
+
+    /// The leaf-test set-up of up to [`PACKET`] rays ([`PacketShear::set`] of each).
+    #[inline(always)]
+    fn packet_shear(self, rays: &[Ray]) -> PacketShear {
+        let mut p = PacketShear::EMPTY;
+        for (k, r) in rays.iter().enumerate().take(PACKET) {
+            p.set(k, r);
+        }
+        p
+    }
+
+    /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`); the SIMD paths start from the
+    /// set-up's values instead of deriving them again at every leaf.
+    #[inline(always)]
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+        self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
     }
 
     /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in

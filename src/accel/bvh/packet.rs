@@ -5,17 +5,25 @@
 //! traversal per ray that repeats the same loads and branches. Shadow rays of different points
 //! still share the nodes near the light they all aim at, which is why whole runs are merged.
 //!
-//! Every ray still gets its own box test ([`BoxTest::test`] with its own [`BoxRay`], exactly
-//! as in [`traverse::any_hit_with`]) and its own leaf tests (the same `leaf_any`); a ray
-//! enters a child only if its own test of that child passed at every level above. So a ray
-//! tests a subset of what its single-ray traversal could reach and the same leaves that
-//! matter: the boolean is the single-ray one, bit for bit, whatever the ISA.
+//! Every ray still gets its own box test (its own [`BoxRay`] values, the same operations as
+//! [`BoxTest::test`] in [`traverse::any_hit_with`]) and its own leaf tests (the filter and
+//! exact test of `leaf_any`, in the same lane order); a ray enters a child only if its own
+//! test of that child passed at every level above. So a ray tests a subset of what its
+//! single-ray traversal could reach and the same leaves that matter: the boolean is the
+//! single-ray one, bit for bit, whatever the ISA.
+//!
+//! Per-ray set-up is done for the whole packet at once ([`PacketBoxRays`] at the start,
+//! [`PacketShear`] at the first leaf; on AVX2 one ray per lane, with each lane's operations
+//! those of the single-ray set-up, so the same values), and the leaf filter starts from the
+//! set-up instead of deriving the shear's values again at every leaf. On CBbunny that took
+//! the shadow stage from 779 to 640 instructions per ray (BENCHMARKS.md, session 12).
 use super::Bvh;
-use super::boxtest::{BoxRay, BoxTest};
-use super::traverse::{self, leaf_any, prefetch_child};
-use super::wide::{LEAF_BIT, WIDTH, leaf_range};
+use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
+use super::leaf::LANES;
+use super::traverse::{self, lane_hit, prefetch_child};
+use super::wide::{LEAF_BIT, leaf_range};
 use crate::accel::TraceCounters;
-use crate::accel::triangle::ShearedRay;
+use crate::accel::triangle::{ShearedRay, range_end};
 use crate::ray::Ray;
 
 /// Rays per packet at most (one byte of a ray mask per child; 8 x 8 masks transpose in a u64).
@@ -48,6 +56,142 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCou
 struct Stack {
     nodes: Vec<u32>,
     masks: Vec<u32>,
+}
+
+/// The box-test values ([`BoxRay`]) of a packet's rays, one array per field (lane `k` is ray
+/// `k`), so the AVX2 path sets up eight rays with one register per field; each lane holds
+/// exactly the values of the ray's own [`BoxRay`] (dead or absent rays: not live, zeros).
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(super) struct PacketBoxRays {
+    pub(super) org: [[f32; PACKET]; 3],
+    pub(super) inv: [[f32; PACKET]; 3],
+    pub(super) oi_near: [[f32; PACKET]; 3],
+    pub(super) oi_far: [[f32; PACKET]; 3],
+    pub(super) tmin: [f32; PACKET],
+    /// `tmax * TIE_SCALE`, the bound the box test compares entries with.
+    pub(super) tie: [f32; PACKET],
+    pub(super) tmax: [f32; PACKET],
+    pub(super) octant: [u32; PACKET],
+    /// [`BoxRay::planes`] of each ray (two bytes of padding each).
+    pub(super) planes: [[u8; 8]; PACKET],
+    /// Bit `k`: [`BoxRay::fma`] of ray `k`.
+    pub(super) fma: u32,
+    /// Bit `k`: [`BoxRay::live`] of ray `k`.
+    pub(super) live: u32,
+}
+
+impl PacketBoxRays {
+    pub(super) const EMPTY: PacketBoxRays = PacketBoxRays {
+        org: [[0.0; PACKET]; 3],
+        inv: [[0.0; PACKET]; 3],
+        oi_near: [[0.0; PACKET]; 3],
+        oi_far: [[0.0; PACKET]; 3],
+        tmin: [0.0; PACKET],
+        tie: [0.0; PACKET],
+        tmax: [0.0; PACKET],
+        octant: [0; PACKET],
+        planes: [[0; 8]; PACKET],
+        fma: 0,
+        live: 0,
+    };
+
+    /// Stores `b` (the values of ray `k`, whose `tmax` is `tmax`) in lane `k`.
+    #[inline(always)]
+    pub(super) fn set(&mut self, k: usize, b: &BoxRay, tmax: f32) {
+        for axis in 0..3 {
+            self.org[axis][k] = b.org[axis];
+            self.inv[axis][k] = b.inv[axis];
+            self.oi_near[axis][k] = b.oi_near[axis];
+            self.oi_far[axis][k] = b.oi_far[axis];
+        }
+        self.tmin[k] = b.tmin;
+        self.tmax[k] = tmax;
+        self.tie[k] = tmax * TIE_SCALE;
+        self.octant[k] = b.octant;
+        self.planes[k][..6].copy_from_slice(&b.planes);
+        self.fma |= (b.fma as u32) << k;
+        self.live |= (b.live as u32) << k;
+    }
+
+    /// The [`BoxRay`] of lane `k`.
+    #[inline(always)]
+    pub(super) fn lane(&self, k: usize) -> BoxRay {
+        let mut planes = [0u8; 6];
+        planes.copy_from_slice(&self.planes[k][..6]);
+        BoxRay {
+            org: [self.org[0][k], self.org[1][k], self.org[2][k]],
+            inv: [self.inv[0][k], self.inv[1][k], self.inv[2][k]],
+            tmin: self.tmin[k],
+            octant: self.octant[k],
+            oi_near: [self.oi_near[0][k], self.oi_near[1][k], self.oi_near[2][k]],
+            oi_far: [self.oi_far[0][k], self.oi_far[1][k], self.oi_far[2][k]],
+            fma: self.fma >> k & 1 != 0,
+            live: self.live >> k & 1 != 0,
+            planes,
+        }
+    }
+}
+
+/// The packet's rays' set-up for their leaf tests, made at the packet's first leaf, one
+/// array per field (lane `k` is ray `k`): the shear of the watertight test
+/// ([`ShearedRay::of`]) and what the SIMD filter derives from it at every leaf in the
+/// single-ray path (the origin on the sheared axes, `range_end(tmax)`, the offsets of the
+/// axes' rows in a [`super::leaf::Tri4`] corner), so each is derived once per ray, and on
+/// AVX2 for eight rays at once.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(32))]
+pub(super) struct PacketShear {
+    /// The origin's kx, ky, kz coordinates.
+    pub(super) org: [[f32; PACKET]; 3],
+    /// `sx`, `sy`, `sz`.
+    pub(super) shear: [[f32; PACKET]; 3],
+    pub(super) tmin: [f32; PACKET],
+    /// `range_end(tmax)`.
+    pub(super) tend: [f32; PACKET],
+    /// Byte offsets `16 * axis` (kx, ky, kz; always below 48) of the axes' rows in a corner
+    /// (`Tri4::c[corner]`).
+    pub(super) rows: [[u8; 4]; PACKET],
+}
+
+impl PacketShear {
+    pub(super) const EMPTY: PacketShear = PacketShear {
+        org: [[0.0; PACKET]; 3],
+        shear: [[0.0; PACKET]; 3],
+        tmin: [0.0; PACKET],
+        tend: [0.0; PACKET],
+        rows: [[0, 16, 32, 0]; PACKET],
+    };
+
+    /// Lane `k` from `ray`'s shear.
+    #[inline(always)]
+    pub(super) fn set(&mut self, k: usize, ray: &Ray) {
+        let s = ShearedRay::of(ray);
+        let o = s.org.to_array();
+        let (kx, ky, kz) = (s.kx % 3, s.ky % 3, s.kz % 3);
+        for (role, (axis, sh)) in [(kx, s.sx), (ky, s.sy), (kz, s.sz)].into_iter().enumerate() {
+            self.org[role][k] = o[axis];
+            self.shear[role][k] = sh;
+            self.rows[k][role] = 16 * axis as u8;
+        }
+        self.tmin[k] = ray.tmin;
+        self.tend[k] = range_end(ray.tmax);
+    }
+
+    /// The [`ShearedRay`] of lane `k` (whose ray is `ray`).
+    #[inline(always)]
+    pub(super) fn sheared(&self, k: usize, ray: &Ray) -> ShearedRay {
+        let r = &self.rows[k];
+        ShearedRay {
+            org: ray.origin,
+            kx: (r[0] / 16) as usize,
+            ky: (r[1] / 16) as usize,
+            kz: (r[2] / 16) as usize,
+            sx: self.shear[0][k],
+            sy: self.shear[1][k],
+            sz: self.shear[2][k],
+        }
+    }
 }
 
 /// Length of the next packet: whole runs of rays with one origin (the shadow rays of one
@@ -107,17 +251,12 @@ fn packet_any<B: BoxTest>(
 ) {
     let n = rays.len().min(PACKET);
     c.rays += n as u64;
-    let mut br = [BoxRay::DEAD; PACKET];
-    let mut live = 0u32;
-    for k in 0..n {
-        br[k] = isa.box_ray(&rays[k]);
-        live |= (br[k].live as u32) << k;
-    }
-    // The shear of a ray is set up at its first leaf (as in the single-ray traversal).
-    let mut sr = [None::<ShearedRay>; PACKET];
+    let pb = isa.packet_box_rays(&rays[..n]);
+    let live = pb.live;
+    // The leaf set-up is made at the packet's first leaf (many rays never reach one).
+    let mut shear: Option<PacketShear> = None;
     let mut hit = 0u32;
     let (mut sp, mut cur, mut cur_rays) = (0usize, 0u32, live);
-    let mut tnear = [0f32; WIDTH];
     let (mut visited, mut tests) = (0u64, 0u64);
     'trace: loop {
         let active = cur_rays & !hit;
@@ -125,12 +264,12 @@ fn packet_any<B: BoxTest>(
             let node = &bvh.nodes[cur as usize];
             // Row k: the children ray k enters.
             let (mut rows, mut any) = (0u64, 0u32);
+            visited += active.count_ones() as u64;
             let mut m = active;
             while m != 0 {
                 let k = m.trailing_zeros() as usize;
                 m &= m - 1;
-                visited += 1;
-                let hm = isa.test(node, &br[k], br[k].octant, rays[k].tmax, &mut tnear);
+                let hm = isa.test_lane(node, &pb, k);
                 rows |= (hm as u64) << (8 * k);
                 any |= hm;
             }
@@ -154,22 +293,29 @@ fn packet_any<B: BoxTest>(
                     sp += 1;
                     continue;
                 }
-                let count = leaf_range(child).1 as u64;
+                let (first, count) = leaf_range(child);
+                let blk = &bvh.blocks[first / LANES];
+                // As `leaf_any`: the filter's triangle lanes and every other lane, then the
+                // exact test in lane order up to the first hit.
+                let others = ((1u32 << count) - 1) & !blk.tri_lanes;
                 let mut m = entered & !hit;
+                if m == 0 {
+                    continue;
+                }
+                tests += (count as u32 * m.count_ones()) as u64;
+                let sh = &*shear.get_or_insert_with(|| isa.packet_shear(&rays[..n]));
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;
-                    tests += count;
-                    let s = match sr[k] {
-                        Some(s) => s,
-                        None => {
-                            let s = ShearedRay::of(&rays[k]);
-                            sr[k] = Some(s);
-                            s
+                    let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], blk.tri_lanes) | others;
+                    while cand != 0 {
+                        let lane = cand.trailing_zeros() as usize;
+                        cand &= cand - 1;
+                        let sr = sh.sheared(k, &rays[k]);
+                        if lane_hit(bvh, blk, first, lane, &sr, &rays[k], rays[k].tmax).is_some() {
+                            hit |= 1 << k;
+                            break;
                         }
-                    };
-                    if leaf_any(bvh, isa, child, &s, &rays[k]) {
-                        hit |= 1 << k;
                     }
                 }
                 if hit == live {
@@ -193,7 +339,141 @@ fn packet_any<B: BoxTest>(
 
 #[cfg(test)]
 mod tests {
+    use super::super::boxtest::Scalar;
+    use super::super::wide::{Node8, WIDTH};
     use super::*;
+    use glam::Vec3;
+
+    /// Rays with zero, negative zero, denormal, huge, infinite and NaN components, empty and
+    /// NaN ranges, in groups of every length 1..=8.
+    fn hard_rays() -> Vec<Ray> {
+        let vals = [0.0, -0.0, 1e-40, -1e-40, 1.0, -2.5, 3e38, -3e38, 1e-30, f32::INFINITY, f32::NAN, 0.75];
+        let mut rays = Vec::new();
+        for (i, &a) in vals.iter().enumerate() {
+            for (j, &b) in vals.iter().enumerate() {
+                for (k, &c) in vals.iter().enumerate() {
+                    let o = Vec3::new(vals[(i + 4) % 12] * 0.5, b * 0.25 - 0.5, vals[(k + j) % 12] * 0.1);
+                    let (tmin, tmax) = match (i + j + k) % 4 {
+                        0 => (0.0, 1.0),
+                        1 => (0.0, f32::INFINITY),
+                        2 => (vals[(i + j) % 12], 2.0),
+                        _ => (1.0, vals[(j + k) % 12]),
+                    };
+                    rays.push(Ray { origin: o, dir: Vec3::new(a, b, c), tmin, tmax });
+                }
+            }
+        }
+        // And ordinary rays from around the node toward points among its boxes.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        };
+        for i in 0..3000 {
+            let o = Vec3::new(next(), next(), next()) * 6.0;
+            let target = Vec3::new(next(), next(), next()) * 3.0;
+            rays.push(Ray { origin: o, dir: target - o, tmin: 0.0, tmax: [1.0, 0.6, f32::INFINITY][i % 3] });
+        }
+        rays
+    }
+
+    /// A node with eight boxes around the origin (one empty slot), so the hard rays hit some.
+    #[allow(clippy::needless_range_loop)]
+    fn node() -> Node8 {
+        let mut b = [[0f32; WIDTH]; 6];
+        for slot in 0..WIDTH {
+            let c = Vec3::new(slot as f32 * 0.3 - 1.0, (slot % 3) as f32 * 0.5 - 0.5, (slot % 2) as f32 - 0.5);
+            for axis in 0..3 {
+                b[2 * axis][slot] = c[axis] - 0.4;
+                b[2 * axis + 1][slot] = c[axis] + 0.4;
+            }
+        }
+        for (plane, row) in b.iter_mut().enumerate() {
+            row[5] = if plane % 2 == 0 { f32::INFINITY } else { f32::NEG_INFINITY };
+        }
+        Node8 { b, child: [0; WIDTH], perm: [0; WIDTH] }
+    }
+
+    /// Every lane of a packet's box-test set-up is the ray's own `BoxRay` (bit for bit, NaN
+    /// matching NaN) and the lane test gives the same ISA's `test` of the ray, for the
+    /// scalar and the AVX2 paths (which sets up eight rays at once and tests in fused form).
+    #[test]
+    fn packet_box_rays_are_the_single_rays() {
+        let rays = hard_rays();
+        let node = node();
+        let bits = |x: [f32; 3]| x.map(|v| if v.is_nan() { u32::MAX } else { v.to_bits() });
+        let mut hits = 0;
+        let mut check = |isa_name: &str,
+                         group: &[Ray],
+                         p: &PacketBoxRays,
+                         lane_test: &dyn Fn(usize) -> u32,
+                         ray_test: &dyn Fn(&BoxRay, f32) -> u32| {
+            for (k, r) in group.iter().enumerate() {
+                let (b, l) = (BoxRay::new(r), p.lane(k));
+                assert_eq!(bits(b.org), bits(l.org), "{isa_name} {r:?}");
+                assert_eq!(bits(b.inv), bits(l.inv), "{isa_name} {r:?}");
+                assert_eq!(bits(b.oi_near), bits(l.oi_near), "{isa_name} {r:?}");
+                assert_eq!(bits(b.oi_far), bits(l.oi_far), "{isa_name} {r:?}");
+                assert_eq!(bits([b.tmin; 3]), bits([l.tmin; 3]), "{isa_name} {r:?}");
+                assert_eq!(
+                    (b.octant, b.fma, b.live, b.planes),
+                    (l.octant, l.fma, l.live, l.planes),
+                    "{isa_name} {r:?}"
+                );
+                if b.live {
+                    let want = ray_test(&b, r.tmax);
+                    assert_eq!(lane_test(k), want, "{isa_name} {r:?}");
+                    hits += want.count_ones();
+                }
+            }
+        };
+        for len in 1..=PACKET {
+            for group in rays.chunks(len) {
+                let p = Scalar.packet_box_rays(group);
+                let scalar_test = |b: &BoxRay, tmax: f32| Scalar.test(&node, b, b.octant, tmax, &mut [0.0; WIDTH]);
+                check("scalar", group, &p, &|k| Scalar.test_lane(&node, &p, k), &scalar_test);
+                #[cfg(target_arch = "x86_64")]
+                if let Some(avx) = super::super::simd::Avx2::new() {
+                    use super::super::simd::with_avx2;
+                    let p = with_avx2(avx, |t| t.packet_box_rays(group));
+                    let avx_test =
+                        |b: &BoxRay, tmax: f32| with_avx2(avx, |t| t.test(&node, b, b.octant, tmax, &mut [0.0; WIDTH]));
+                    check("avx2", group, &p, &|k| with_avx2(avx, |t| t.test_lane(&node, &p, k)), &avx_test);
+                }
+            }
+        }
+        assert!(hits > 20000, "too few box hits to compare: {hits}");
+    }
+
+    /// The AVX2 leaf set-up of eight rays equals the per-ray one (`ShearedRay::of` and
+    /// `range_end`), bit for bit with NaN matching NaN, on the hard and ordinary rays.
+    #[test]
+    fn packet_shear_is_the_single_rays() {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = super::super::simd::Avx2::new() {
+            let bits = |x: f32| if x.is_nan() { u32::MAX } else { x.to_bits() };
+            let mut n = 0;
+            for group in hard_rays().chunks_exact(PACKET) {
+                let want = Scalar.packet_shear(group);
+                let got = super::super::simd::with_avx2(avx, |t| t.packet_shear(group));
+                for (k, r) in group.iter().enumerate() {
+                    for role in 0..3 {
+                        assert_eq!(bits(want.org[role][k]), bits(got.org[role][k]), "{r:?}");
+                        assert_eq!(bits(want.shear[role][k]), bits(got.shear[role][k]), "{r:?}");
+                    }
+                    assert_eq!(bits(want.tmin[k]), bits(got.tmin[k]), "{r:?}");
+                    assert_eq!(bits(want.tend[k]), bits(got.tend[k]), "{r:?}");
+                    assert_eq!(want.rows[k], got.rows[k], "{r:?}");
+                    let s = ShearedRay::of(r);
+                    assert_eq!([s.kx, s.ky, s.kz].map(|a| 16 * a as u8), got.rows[k][..3], "{r:?}");
+                    n += 1;
+                }
+            }
+            assert!(n > 4000, "too few rays: {n}");
+        }
+    }
 
     #[test]
     fn transpose8_swaps_rows_and_columns() {

@@ -156,7 +156,7 @@ fn leaf_candidates<'a, B: BoxTest>(
 /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the filter
 /// just read (the same values as `prims`, already in cache); only spheres read `prims`.
 #[inline(always)]
-fn lane_hit(
+pub(super) fn lane_hit(
     bvh: &Bvh,
     blk: &Tri4,
     first: usize,
@@ -270,7 +270,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
 
 /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
 #[inline(always)]
-pub(super) fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
+fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
     let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
