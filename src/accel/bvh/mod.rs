@@ -268,13 +268,19 @@ impl Intersector for Bvh {
     }
 
     fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
-        self.closest_batch(rays, hits, c, false)
+        self.closest_batch::<false>(rays, hits, c)
     }
 
     /// Packets only here, not in `closest_hits` (the wavefront's traverse stage): on CBbunny
     /// the camera rays' traverse stage was not faster with them (BENCHMARKS.md, session 12).
+    /// A batch whose neighbouring rays are mostly incoherent (diffuse bounces) takes the
+    /// plain loop: checking every group for packets that never form cost it 2-5%.
     fn closest_hits_packets(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
-        self.closest_batch(rays, hits, c, true)
+        if packet_closest::mostly_coherent(rays) {
+            self.closest_batch::<true>(rays, hits, c)
+        } else {
+            self.closest_batch::<false>(rays, hits, c)
+        }
     }
 
     fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
@@ -314,9 +320,10 @@ impl Intersector for Bvh {
 }
 
 impl Bvh {
-    /// Closest hits of a batch; with `packets`, runs of coherent rays are traced as packets
-    /// ([`packet_closest`]), with the same results.
-    fn closest_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters, packets: bool) {
+    /// Closest hits of a batch; with `PACKETS`, runs of coherent rays are traced as packets
+    /// ([`packet_closest`]), with the same results (a constant, so the plain loop compiles
+    /// as if packets did not exist).
+    fn closest_batch<const PACKETS: bool>(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
         if self.nodes.is_empty() {
             c.rays += rays.len() as u64;
             hits.iter_mut().for_each(|h| *h = None);
@@ -375,7 +382,7 @@ impl Bvh {
                             // Groups where coherent rays may form packets (camera rays)
                             // go to the packet path; the others stay in this tight loop.
                             let starts =
-                                if packets { packet_closest::coherent_starts(&prep[..n], rs, &slot[..n]) } else { 0 };
+                                if PACKETS { packet_closest::coherent_starts(&prep[..n], rs, &slot[..n]) } else { 0 };
                             if starts != 0 {
                                 $isa.trace_group(self, rs, hs, &prep[..n], &slot[..n], starts, c, &mut stacks);
                                 continue;

@@ -571,36 +571,9 @@ unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 
             let z = _mm_sub_ps(_mm_load_ps(p[kz].as_ptr()), oz);
             let x = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[kx].as_ptr()), ox), _mm_mul_ps(sx, z));
             let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[ky].as_ptr()), oy), _mm_mul_ps(sy, z));
-            (x, y, z)
+            [x, y, z]
         };
-        let (ax, ay, az) = corner(0);
-        let (bx, by, bz) = corner(1);
-        let (cx, cy, cz) = corner(2);
-        let u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
-        let v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
-        let w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
-        let zero = _mm_setzero_ps();
-        let on_edge = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)), _mm_cmpeq_ps(w, zero));
-        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
-        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
-        let det = _mm_add_ps(_mm_add_ps(u, v), w);
-        let sign = _mm_set1_ps(-0.0);
-        let det_abs = _mm_andnot_ps(sign, det);
-        // det != 0 and finite (NaN fails the ordered compare).
-        let det_ok = _mm_and_ps(_mm_cmpneq_ps(det, zero), _mm_cmplt_ps(det_abs, _mm_set1_ps(f32::INFINITY)));
-        let tt = _mm_add_ps(
-            _mm_add_ps(_mm_mul_ps(u, _mm_mul_ps(sz, az)), _mm_mul_ps(v, _mm_mul_ps(sz, bz))),
-            _mm_mul_ps(w, _mm_mul_ps(sz, cz)),
-        );
-        // (tt, det) with the sign of det folded in; det is non-zero and not NaN where it matters.
-        let tt_s = _mm_xor_ps(tt, _mm_and_ps(det, sign));
-        let out_of_range = _mm_or_ps(
-            _mm_cmplt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmin), det_abs)),
-            _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(range_end(tmax)), det_abs)),
-        );
-        let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
-        let keep = _mm_or_ps(on_edge, accept);
-        _mm_movemask_ps(keep) as u32
+        filter4_tail(corner(0), corner(1), corner(2), sz, tmin, range_end(tmax))
     }
 }
 
@@ -696,9 +669,7 @@ unsafe fn shear8(rays: &[Ray; 8]) -> PacketShear {
 
 /// The rest of [`tri_filter4`] from the sheared corners `a`, `b`, `c` (x, y, z each) on:
 /// edge functions, signs, determinant and range check (`tend` = `range_end(tmax)`), the same
-/// operations in the same order. A copy, not shared: `tri_filter4` calling it compiled to
-/// 0.6% more instructions in the closest-hit traversal. tests/packets.rs compares the
-/// packets (which use this) with single rays (which use `tri_filter4`) on every ISA.
+/// operations in the same order, shared by single rays ([`tri_filter4`]) and packets.
 ///
 /// # Safety
 /// The CPU must have SSE4.1.
