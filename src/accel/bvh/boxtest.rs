@@ -9,7 +9,7 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
-use super::packet::{PACKET, PacketBoxRays, PacketShear};
+use super::packet::{PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::ray::Ray;
@@ -253,11 +253,7 @@ pub trait BoxTest: Copy {
     /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).
     #[inline(always)]
     fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
-        let mut p = PacketBoxRays::EMPTY;
-        for (k, r) in rays.iter().enumerate().take(PACKET) {
-            p.set(k, &self.box_ray(r), r.tmax);
-        }
-        p
+        PacketBoxRays::each(self, rays)
     }
 
     /// [`BoxTest::test`] of `node` for lane `k` of `p` (with that ray's `tmax`), without the
@@ -272,11 +268,7 @@ pub trait BoxTest: Copy {
     /// The leaf-test set-up of up to [`PACKET`] rays ([`PacketShear::set`] of each).
     #[inline(always)]
     fn packet_shear(self, rays: &[Ray]) -> PacketShear {
-        let mut p = PacketShear::EMPTY;
-        for (k, r) in rays.iter().enumerate().take(PACKET) {
-            p.set(k, r);
-        }
-        p
+        PacketShear::each(rays)
     }
 
     /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`); the SIMD paths start from the

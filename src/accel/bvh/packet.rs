@@ -96,6 +96,16 @@ impl PacketBoxRays {
         live: 0,
     };
 
+    /// Lanes `0..n` set up one ray at a time with `isa`'s [`BoxTest::box_ray`].
+    #[inline(always)]
+    pub(super) fn each<B: BoxTest>(isa: B, rays: &[Ray]) -> PacketBoxRays {
+        let mut p = PacketBoxRays::EMPTY;
+        for (k, r) in rays.iter().enumerate().take(PACKET) {
+            p.set(k, &isa.box_ray(r), r.tmax);
+        }
+        p
+    }
+
     /// Stores `b` (the values of ray `k`, whose `tmax` is `tmax`) in lane `k`.
     #[inline(always)]
     pub(super) fn set(&mut self, k: usize, b: &BoxRay, tmax: f32) {
@@ -162,6 +172,16 @@ impl PacketShear {
         tend: [0.0; PACKET],
         rows: [[0, 16, 32, 0]; PACKET],
     };
+
+    /// Lanes `0..n` set up one ray at a time.
+    #[inline(always)]
+    pub(super) fn each(rays: &[Ray]) -> PacketShear {
+        let mut p = PacketShear::EMPTY;
+        for (k, r) in rays.iter().enumerate().take(PACKET) {
+            p.set(k, r);
+        }
+        p
+    }
 
     /// Lane `k` from `ray`'s shear.
     #[inline(always)]

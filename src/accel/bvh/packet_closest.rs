@@ -22,6 +22,7 @@ use super::wide::{LEAF_BIT, Node8, WIDTH};
 use crate::accel::TraceCounters;
 use crate::accel::triangle::ShearedRay;
 use crate::ray::{Hit, Ray};
+use glam::Vec3;
 
 /// Rays per packet at most (one byte of a ray mask per child).
 pub const PACKET: usize = 8;
@@ -311,6 +312,13 @@ impl Stacks {
 /// on the dragon's diffuse rays with the octant test only).
 pub const MIN_COS: f32 = 0.99;
 
+/// Whether direction `d` lies within [`MIN_COS`] of `d0` (compared in squares, no roots).
+#[inline(always)]
+fn in_cone(d0: Vec3, d: Vec3) -> bool {
+    let dot = d0.dot(d);
+    dot >= 0.0 && dot * dot >= d0.length_squared() * (MIN_COS * MIN_COS) * d.length_squared()
+}
+
 /// Neighbouring pairs [`mostly_coherent`] looks at, spread evenly over the batch.
 const PROBES: usize = 16;
 
@@ -326,10 +334,7 @@ pub fn mostly_coherent(rays: &[Ray]) -> bool {
     let close = (0..PROBES.min(rays.len() - 1))
         .filter(|&k| {
             let (a, b) = (rays[k * step].dir, rays[k * step + 1].dir);
-            let dot = a.dot(b);
-            super::wide::octant(a.to_array()) == super::wide::octant(b.to_array())
-                && dot > 0.0
-                && dot * dot >= a.length_squared() * b.length_squared() * (MIN_COS * MIN_COS)
+            super::wide::octant(a.to_array()) == super::wide::octant(b.to_array()) && in_cone(a, b)
         })
         .count();
     4 * close >= PROBES.min(rays.len() - 1)
@@ -342,15 +347,13 @@ pub fn mostly_coherent(rays: &[Ray]) -> bool {
 pub fn run_len(br: &[BoxRay], rs: &[Ray], slot: &[u8]) -> usize {
     let first = &br[0];
     let d0 = rs[slot[0] as usize].dir;
-    let l0 = d0.length_squared() * (MIN_COS * MIN_COS);
     let mut n = 1;
-    while n < PACKET && n < br.len() && br[n].live && br[n].octant == first.octant {
-        let d = rs[slot[n] as usize].dir;
-        let dot = d.dot(d0);
-        // Same octant, so `dot >= 0`; compare squares to avoid the roots.
-        if dot * dot < l0 * d.length_squared() {
-            break;
-        }
+    while n < PACKET
+        && n < br.len()
+        && br[n].live
+        && br[n].octant == first.octant
+        && in_cone(d0, rs[slot[n] as usize].dir)
+    {
         n += 1;
     }
     n

@@ -192,13 +192,7 @@ impl BoxTest for Avx2 {
         match <&[Ray; 8]>::try_from(rays) {
             // SAFETY: `Avx2` exists only if AVX2 was detected.
             Ok(eight) => unsafe { shear8(eight) },
-            Err(_) => {
-                let mut p = PacketShear::EMPTY;
-                for (k, r) in rays.iter().enumerate().take(PACKET) {
-                    p.set(k, r);
-                }
-                p
-            }
+            Err(_) => PacketShear::each(rays),
         }
     }
 
@@ -207,13 +201,7 @@ impl BoxTest for Avx2 {
         match <&[Ray; 8]>::try_from(rays) {
             // SAFETY: `Avx2` exists only if AVX2 was detected.
             Ok(eight) => unsafe { box_rays8(eight) },
-            Err(_) => {
-                let mut p = PacketBoxRays::EMPTY;
-                for (k, r) in rays.iter().enumerate().take(PACKET) {
-                    p.set(k, &self.box_ray(r), r.tmax);
-                }
-                p
-            }
+            Err(_) => PacketBoxRays::each(self, rays),
         }
     }
 
