@@ -8,7 +8,7 @@
 
 use glam::{Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
-use wavepath::integrator::offset_origin;
+use wavepath::integrator::{offset_origin, shadow_ray};
 use wavepath::ray::Ray;
 use wavepath::sampling::{Frame, Sampler};
 use wavepath::scene::{Material, Mesh, Scene, Sphere, SurfacePoint};
@@ -254,5 +254,53 @@ fn no_leaks_between_close_parallel_planes() {
             }
         }
         assert_eq!(bad, 0, "planes at {at}: {bad} rays leaked or re-hit");
+    }
+}
+
+/// A Cornell-box light: the emitting quad 0.01 below the ceiling, in the ceiling's leaf. A
+/// shadow ray from a point in the room toward a point of the light (found by tracing, with
+/// its error bound) stops short enough that no box test reaches the light's leaf: it tests
+/// no triangle at all and is not occluded, single rays and packets alike, at scales from 1e-3
+/// to 1 (with the range ending within the box tests' `TIE_SCALE` margin of the light, every ray
+/// would test the four triangles of the light's leaf). Far from the origin (coordinates 20x the
+/// distances) the fused box test's own widening, 2^-20 of `origin * inv`, can exceed the
+/// shortening, so some rays test the leaf there: they must still not be occluded.
+#[test]
+fn shadow_rays_toward_a_light_skip_the_lights_leaf() {
+    for (scale, at, near) in [(1.0f32, Vec3::ZERO, true), (1e-3, Vec3::ZERO, true), (1e3, vec3(3e4, -2e4, 1e4), false)]
+    {
+        let mut mesh = Mesh::default();
+        let p = |x: f32, y: f32, z: f32| at + scale * vec3(x, y, z);
+        let s2 = 2.0 * scale;
+        quad(&mut mesh, p(-1.0, 0.0, -1.0), vec3(0.0, 0.0, s2), vec3(s2, 0.0, 0.0)); // floor, +y
+        quad(&mut mesh, p(-1.0, 1.5, -1.0), vec3(s2, 0.0, 0.0), vec3(0.0, 0.0, s2)); // ceiling, -y
+        quad(&mut mesh, p(-0.4, 1.49, -0.3), vec3(0.8 * scale, 0.0, 0.0), vec3(0.0, 0.0, 0.6 * scale)); // light
+        let s = scene(mesh, vec![]);
+        let (accel, _) = build(&s, true);
+        let mut rng = Sampler::for_sample(11, 0, 0);
+        let (mut rays, mut c) = (Vec::new(), TraceCounters::default());
+        while rays.len() < RAYS / 5 {
+            let (a, b) = rng.next_2d();
+            let origin = p(-0.95 + 1.9 * a, 0.05 + 1.3 * rng.next_f32(), -0.95 + 1.9 * b);
+            let (a, b) = rng.next_2d();
+            let light = p(-0.39 + 0.78 * a, 1.49, -0.29 + 0.58 * b);
+            let from_below = light + scale * camera_direction(-Vec3::Y, &mut rng);
+            let Some((lp, 4..=5)) = shoot(&s, accel.as_ref(), from_below, light) else {
+                panic!("scale {scale}: the light was not found at {light}");
+            };
+            let dir = (lp.position - origin).normalize();
+            let ray = shadow_ray(origin, dir, Some((lp.position, lp.p_error))).expect("the light is far away");
+            // Four rays from each point, as the renderer's `-l 4` queues them.
+            rays.extend([ray; 4]);
+        }
+        let mut occluded = vec![false; rays.len()];
+        accel.any_hits_packets(&rays, &mut occluded, &mut c);
+        let packets = c.prim_tests;
+        let singles = rays.iter().filter(|r| accel.any_hit(r, &mut c)).count();
+        let blocked = occluded.iter().filter(|&&o| o).count();
+        assert_eq!((blocked, singles), (0, 0), "scale {scale}: shadow rays toward the light were occluded");
+        if near {
+            assert_eq!((packets, c.prim_tests), (0, 0), "scale {scale}: shadow rays tested triangles");
+        }
     }
 }

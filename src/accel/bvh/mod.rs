@@ -35,6 +35,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::ray::{Hit, Ray};
 use crate::scene::Scene;
+pub use boxtest::TIE_SCALE;
 use boxtest::{BoxRay, BoxTest, RootBox};
 use build::PrimRef;
 use glam::Vec3;
