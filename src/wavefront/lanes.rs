@@ -14,10 +14,10 @@
 use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
-use crate::integrator::{DIM_DIRECT, Transport, orient};
+use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, orient};
 use crate::lights::SampledLight;
 use crate::ray::{Hit, Ray};
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -52,7 +52,8 @@ pub fn shade_lanes<F: Features>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn shade_avx2<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
-    shade_groups::<F>(t, q, hits, shadow);
+    // SAFETY: this function is compiled with AVX2 and runs only where it was detected.
+    unsafe { shade_groups::<F>(t, q, hits, shadow) };
 }
 
 /// The shading points of a group, one array per component.
@@ -194,6 +195,18 @@ impl Rays {
     }
 }
 
+/// `u` where `used`, else 0.5 (a lane whose sample is not taken computes on a harmless value).
+#[inline(always)]
+fn unused_half(u: [f32; L], used: &[bool; L]) -> [f32; L] {
+    let mut out = [0.5; L];
+    for j in 0..L {
+        if used[j] {
+            out[j] = u[j];
+        }
+    }
+    out
+}
+
 /// The shadow rays toward light `l` of all lanes (lane-parallel).
 #[inline(always)]
 fn area_rays(pts: &Points, l: &AreaLight, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
@@ -214,8 +227,11 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
     }
 }
 
+/// # Safety
+/// The CPU must have AVX2 (the random numbers are drawn eight streams at a time).
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
     let n = q.len().min(hits.len());
@@ -226,7 +242,7 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
     let mut pending: Vec<Rays> = Vec::new();
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
-        let mut rng = [Sampler::default(); L];
+        let mut vertex_input = [0u64; L];
         let mut albedo = [Vec3::ZERO; L];
         let mut direct = [false; L];
         let mut cont = [false; L];
@@ -248,7 +264,8 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
             if !F::DIRECT && !F::INDIRECT {
                 continue;
             }
-            rng[j] = t.vertex_sampler(q.key[i], depth);
+            // As `Transport::vertex_sampler`, hashed for all lanes below.
+            vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
             surf.set(t, j, &q.ray[i], &hit);
             albedo[j] = t.albedo[m];
             // As `Transport::direct_rays` and `Transport::scatter` decide.
@@ -257,6 +274,12 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
         }
         if !direct.iter().chain(&cont).any(|&b| b) {
             continue;
+        }
+        // SAFETY: the caller guarantees AVX2.
+        let keys = unsafe { rng8::splitmix64_x8(&vertex_input) };
+        let mut rng = [Sampler::default(); L];
+        for j in 0..L {
+            rng[j] = Sampler::from_vertex_hash(keys[j]);
         }
         surface_points(&surf, normals, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
@@ -277,35 +300,38 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                     pending.resize_with(ns as usize, Rays::default);
                 }
                 for p in pending.iter_mut().take(ns as usize) {
-                    let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
-                    for j in 0..m {
-                        if direct[j] {
-                            (ua[j], ub[j]) = rng[j].at(dim).next_2d();
-                        }
-                    }
+                    // SAFETY: the caller guarantees AVX2.
+                    let (ua, ub) = unsafe { rng8::next_2d_x8(&rng, dim) };
+                    let (ua, ub) = (unused_half(ua, &direct), unused_half(ub, &direct));
                     dim += 1;
                     area_rays(&pts, al, &ua, &ub, p);
                 }
+                // Every candidate is stored; the cursor moves past the valid ones only.
+                let samples = &pending[..ns as usize];
+                let (rs, ws, os) = shadow.open(m * samples.len());
+                let mut w = 0;
                 for j in 0..m {
                     if !direct[j] {
                         continue;
                     }
                     let tp = q.throughput[base + j];
-                    for p in pending.iter().take(ns as usize) {
-                        if p.valid[j] {
-                            shadow.push(p.ray(j), c[j] * p.g[j] * tp, (base + j) as u32);
-                        }
+                    let owner = (base + j) as u32;
+                    for p in samples {
+                        rs[w] = p.ray(j);
+                        ws[w] = c[j] * p.g[j] * tp;
+                        os[w] = owner;
+                        w += p.valid[j] as usize;
                     }
                 }
+                shadow.commit(w);
             }
         }
         if F::INDIRECT && cont.iter().any(|&c| c) {
-            let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
-            for j in 0..m {
-                if cont[j] {
-                    (ua[j], ub[j]) = rng[j].at(0).next_2d();
-                }
-            }
+            // SAFETY: the caller guarantees AVX2.
+            let (ua, ub) = unsafe { rng8::next_2d_x8(&rng, 0) };
+            let (ua, ub) = (unused_half(ua, &cont), unused_half(ub, &cont));
+            // SAFETY: the caller guarantees AVX2.
+            let rr = if F::ROULETTE { unsafe { rng8::next_f32_x8(&rng, DIM_ROULETTE) } } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..m {
                 if cont[j] {
@@ -315,7 +341,13 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                     q.throughput[i] *= albedo[j];
                     q.depth[i] = depth + 1;
                     q.alive[i] = true;
-                    super::shade::roulette::<F>(t, q, i, depth, rng[j]);
+                    // As `super::shade::roulette`.
+                    if F::ROULETTE && t.plays_roulette(depth) {
+                        match t.roulette_with(rr[j]) {
+                            Some(f) => q.throughput[i] *= f,
+                            None => q.alive[i] = false,
+                        }
+                    }
                 }
             }
         }
@@ -336,7 +368,7 @@ mod tests {
     fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
         let mut out = vec![Vec::new(); n];
         for k in 0..s.len() {
-            out[s.owner[k] as usize].push((s.ray[k], s.weight[k]));
+            out[s.owner()[k] as usize].push((s.ray()[k], s.weight()[k]));
         }
         out
     }
