@@ -134,21 +134,25 @@ impl Surfaces {
     }
 
     /// Lane `j`'s shading point: both reconstructions (the same functions as
-    /// `Scene::surface_point`), one kept, so all lanes run the same instructions.
+    /// `Scene::surface_point`), one kept, so all lanes run the same instructions; only the
+    /// triangle's when the scene has no spheres (`SPHERES` false).
     #[inline(always)]
-    fn point(&self, j: usize, normals: bool) -> ShadingPoint {
+    fn point<const NORMALS: bool, const SPHERES: bool>(&self, j: usize) -> ShadingPoint {
         let (u, v) = (self.u[j], self.v[j]);
         let c = &self.corner;
         let (tp, te, tn) = triangle_point(get(&c[0], j), get(&c[1], j), get(&c[2], j), u, v);
-        let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
-        let tri = self.triangle[j];
-        let ts = if normals {
+        let ts = if NORMALS {
             let n = &self.normal;
             interpolated_normal([get(&n[0], j), get(&n[1], j), get(&n[2], j)], u, v, tn)
         } else {
             tn
         };
-        let (p, p_error, g, sh) = if tri { (tp, te, tn, ts) } else { (sp, se, sn, sn) };
+        let (p, p_error, g, sh) = if SPHERES {
+            let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
+            if self.triangle[j] { (tp, te, tn, ts) } else { (sp, se, sn, sn) }
+        } else {
+            (tp, te, tn, ts)
+        };
         let (ng, ns, _) = orient(g, sh, get(&self.dir, j));
         ShadingPoint { p, p_error, ng, ns }
     }
@@ -156,15 +160,20 @@ impl Surfaces {
 
 /// Reconstructs the shading points of all lanes (lane-parallel).
 #[inline(always)]
-fn surface_points(s: &Surfaces, normals: bool, out: &mut Points) {
-    if normals {
-        for j in 0..L {
-            out.set(j, &s.point(j, true));
-        }
-    } else {
-        for j in 0..L {
-            out.set(j, &s.point(j, false));
-        }
+fn surface_points(s: &Surfaces, normals: bool, spheres: bool, out: &mut Points) {
+    // Plain loops, no closures: a closure may be compiled out of line, without AVX2.
+    match (normals, spheres) {
+        (true, true) => points_of::<true, true>(s, out),
+        (true, false) => points_of::<true, false>(s, out),
+        (false, true) => points_of::<false, true>(s, out),
+        (false, false) => points_of::<false, false>(s, out),
+    }
+}
+
+#[inline(always)]
+fn points_of<const NORMALS: bool, const SPHERES: bool>(s: &Surfaces, out: &mut Points) {
+    for j in 0..L {
+        out.set(j, &s.point::<NORMALS, SPHERES>(j));
     }
 }
 
@@ -239,6 +248,7 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
     let mut rays = Rays::default();
     let mut surf = Surfaces::default();
     let normals = t.scene.mesh.normals.is_some();
+    let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays> = Vec::new();
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
@@ -281,7 +291,7 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
         for j in 0..L {
             rng[j] = Sampler::from_vertex_hash(keys[j]);
         }
-        surface_points(&surf, normals, &mut pts);
+        surface_points(&surf, normals, spheres, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;
             for (li, light) in t.lights.lights.iter().enumerate() {
@@ -375,11 +385,15 @@ mod tests {
 
     /// The lane kernel gives every path the same continuation, throughput, radiance and
     /// shadow rays (bit for bit) as the one-path-at-a-time kernel, over five bounces, on
-    /// triangles with and without corner normals and on spheres.
+    /// triangles with and without corner normals, with spheres and without any.
     #[test]
     fn lanes_match_the_scalar_kernel() {
-        for with_normals in [false, true] {
+        for (with_normals, with_spheres) in [(false, true), (true, true), (true, false)] {
             let mut scene = crate::load::default_scene();
+            assert!(!scene.spheres.is_empty());
+            if !with_spheres {
+                scene.spheres.clear();
+            }
             if with_normals {
                 let n = scene.mesh.positions.len();
                 // Unit normals tilted differently at every vertex.

@@ -23,7 +23,7 @@ pub fn shadow(
             radiance[owner as usize] += weight * t.probe_radiance(ray, hit.as_ref());
         }
     } else {
-        occluded.clear();
+        // Not cleared first: the intersector writes every entry.
         occluded.resize(q.len(), false);
         accel.any_hits_packets(q.ray(), occluded, c);
         for ((&occ, &owner), &weight) in occluded.iter().zip(q.owner()).zip(q.weight()) {
