@@ -42,7 +42,13 @@ impl Sampler {
     /// [`path_key`](Self::path_key) from the pixel's [`pixel_key`](Self::pixel_key).
     #[inline]
     pub fn sample_key(pixel_key: u64, sample: u64) -> u64 {
-        splitmix64(pixel_key ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB))
+        splitmix64(Self::sample_input(pixel_key, sample))
+    }
+
+    /// What [`sample_key`](Self::sample_key) hashes.
+    #[inline(always)]
+    pub fn sample_input(pixel_key: u64, sample: u64) -> u64 {
+        pixel_key ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB)
     }
 
     /// Stream `bounce` of the path whose [`path_key`](Self::path_key) is `key`; the same
