@@ -109,19 +109,22 @@ fn get(a: &[[f32; L]; 3], j: usize) -> Vec3 {
 }
 
 impl Surfaces {
-    /// Gathers lane `j`'s hit (prim `prim`, on `ray`).
+    /// Gathers lane `j`'s hit (prim `prim`, on `ray`); `normals` is the mesh's corner
+    /// normals, looked up once per stage rather than once per corner.
     #[inline(always)]
-    fn set(&mut self, t: &Transport, j: usize, ray: &Ray, hit: &Hit) {
+    fn set(&mut self, t: &Transport, normals: Option<&[Vec3]>, j: usize, ray: &Ray, hit: &Hit) {
         let mesh = &t.scene.mesh;
         let prim = hit.prim as usize;
         put(&mut self.dir, j, ray.dir);
         self.triangle[j] = prim < mesh.triangles.len();
         if self.triangle[j] {
             let ids = mesh.triangles[prim];
-            for k in 0..3 {
-                put(&mut self.corner[k], j, mesh.positions[ids[k] as usize]);
-                if let Some(n) = &mesh.normals {
-                    put(&mut self.normal[k], j, n[ids[k] as usize]);
+            for (k, &id) in ids.iter().enumerate() {
+                put(&mut self.corner[k], j, mesh.positions[id as usize]);
+            }
+            if let Some(n) = normals {
+                for (k, &id) in ids.iter().enumerate() {
+                    put(&mut self.normal[k], j, n[id as usize]);
                 }
             }
             (self.u[j], self.v[j]) = (hit.u, hit.v);
@@ -247,7 +250,8 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
     let mut pts = Points::default();
     let mut rays = Rays::default();
     let mut surf = Surfaces::default();
-    let normals = t.scene.mesh.normals.is_some();
+    let corner_normals = t.scene.mesh.normals.as_deref();
+    let normals = corner_normals.is_some();
     let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays> = Vec::new();
     for base in (0..n).step_by(L) {
@@ -276,7 +280,7 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
             }
             // As `Transport::vertex_sampler`, hashed for all lanes below.
             vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
-            surf.set(t, j, &q.ray[i], &hit);
+            surf.set(t, corner_normals, j, &q.ray[i], &hit);
             albedo[j] = t.albedo[m];
             // As `Transport::direct_rays` and `Transport::scatter` decide.
             direct[j] = F::DIRECT && t.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
