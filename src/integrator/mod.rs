@@ -26,6 +26,8 @@ use crate::settings::{Settings, Shading};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
+/// Dimension of a vertex stream that plays Russian roulette.
+pub(crate) const DIM_ROULETTE: u32 = 2;
 /// First dimension of a vertex stream used by light or hemisphere samples.
 pub(crate) const DIM_DIRECT: u32 = 3;
 /// Dimension that chooses between a delta material's lobes (delta vertices take no direct
@@ -321,10 +323,23 @@ impl<'a> Transport<'a> {
     /// never stops the first indirect bounce (the continuation of the camera's hit).
     #[inline]
     pub fn roulette(&self, depth: u32, rng: Sampler) -> Option<f32> {
-        if depth == 0 || self.rr_continue >= 1.0 {
+        if !self.plays_roulette(depth) {
             return Some(1.0);
         }
-        (rng.at(2).next_f32() < self.rr_continue).then_some(1.0 / self.rr_continue)
+        self.roulette_with(rng.at(DIM_ROULETTE).next_f32())
+    }
+
+    /// Whether the continuation of a vertex at `depth` plays Russian roulette.
+    #[inline(always)]
+    pub fn plays_roulette(&self, depth: u32) -> bool {
+        depth != 0 && self.rr_continue < 1.0
+    }
+
+    /// [`roulette`](Self::roulette) where it is played, from the vertex stream's number at
+    /// [`DIM_ROULETTE`] (drawn eight paths at a time by the lane kernel).
+    #[inline(always)]
+    pub fn roulette_with(&self, u: f32) -> Option<f32> {
+        (u < self.rr_continue).then_some(1.0 / self.rr_continue)
     }
 
     /// [`scatter`](Self::scatter) followed by [`roulette`](Self::roulette).

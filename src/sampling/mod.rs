@@ -5,6 +5,7 @@
 
 pub mod distribution;
 mod rng;
+pub mod rng8;
 mod splitmix;
 pub mod warp;
 

@@ -42,15 +42,39 @@ impl Sampler {
     /// [`path_key`](Self::path_key) from the pixel's [`pixel_key`](Self::pixel_key).
     #[inline]
     pub fn sample_key(pixel_key: u64, sample: u64) -> u64 {
-        splitmix64(pixel_key ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB))
+        splitmix64(Self::sample_input(pixel_key, sample))
+    }
+
+    /// What [`sample_key`](Self::sample_key) hashes.
+    #[inline(always)]
+    pub fn sample_input(pixel_key: u64, sample: u64) -> u64 {
+        pixel_key ^ sample.wrapping_mul(0xE703_7ED1_A0B4_28DB)
     }
 
     /// Stream `bounce` of the path whose [`path_key`](Self::path_key) is `key`; the same
     /// numbers as [`for_bounce`](Self::for_bounce).
     #[inline]
     pub fn for_vertex(key: u64, bounce: u32) -> Self {
-        let key = splitmix64(key ^ (bounce as u64).wrapping_mul(0x8EBC_6AF0_9C88_C6E3));
+        Self::from_vertex_hash(splitmix64(Self::vertex_input(key, bounce)))
+    }
+
+    /// What [`for_vertex`](Self::for_vertex) hashes: the path key and the bounce, mixed.
+    #[inline(always)]
+    pub fn vertex_input(key: u64, bounce: u32) -> u64 {
+        key ^ (bounce as u64).wrapping_mul(0x8EBC_6AF0_9C88_C6E3)
+    }
+
+    /// The stream whose key is `splitmix64` of a [`vertex_input`](Self::vertex_input)
+    /// (hashed elsewhere, e.g. eight at a time), at dimension 0.
+    #[inline(always)]
+    pub fn from_vertex_hash(key: u64) -> Self {
         Sampler { key, dim: 0 }
+    }
+
+    /// What the number at dimension `dim` hashes (`key + dim * golden ratio`).
+    #[inline(always)]
+    pub fn dim_input(&self, dim: u32) -> u64 {
+        self.key.wrapping_add((dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
     }
 
     /// Jumps to dimension `dim` of this stream.
@@ -63,7 +87,7 @@ impl Sampler {
     /// The hash of the current dimension; the stream moves on one dimension.
     #[inline(always)]
     fn next_u64(&mut self) -> u64 {
-        let h = splitmix64(self.key.wrapping_add((self.dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15)));
+        let h = splitmix64(self.dim_input(self.dim));
         self.dim = self.dim.wrapping_add(1);
         h
     }
@@ -91,7 +115,7 @@ impl Sampler {
 
 /// `bits` (< 2^24) as a number in [0, 1).
 #[inline(always)]
-fn unit_f32(bits: u32) -> f32 {
+pub(super) fn unit_f32(bits: u32) -> f32 {
     bits as f32 * (1.0 / (1u32 << 24) as f32)
 }
 

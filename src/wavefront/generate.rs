@@ -2,7 +2,7 @@
 
 use super::queues::PathQueue;
 use crate::integrator::Transport;
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, rng8};
 use glam::Vec3;
 
 /// Which samples of which pixels a wave takes: slot s is sample `base + s % batch` of pixel
@@ -74,11 +74,29 @@ fn pinhole_avx2(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, hei
         let end = wave.base + wave.batch;
         while sample < end {
             let m = ((end - sample) as usize).min(L);
-            let (mut jx, mut jy, mut keys) = ([0.5f32; L], [0.5f32; L], [0u64; L]);
-            for j in 0..m {
-                keys[j] = Sampler::sample_key(pixel_key, (sample + j as u32) as u64);
-                (jx[j], jy[j]) = Transport::pixel_jitter(keys[j], spp);
+            // The keys and jitters of `Sampler::sample_key` and `Transport::pixel_jitter`,
+            // hashed eight at a time (lanes past `m` are computed and dropped).
+            let mut inputs = [0u64; L];
+            for (j, input) in inputs.iter_mut().enumerate() {
+                *input = Sampler::sample_input(pixel_key, (sample + j as u32) as u64);
             }
+            // SAFETY: this function is compiled with AVX2 and runs only where it was detected.
+            let keys = unsafe { rng8::splitmix64_x8(&inputs) };
+            let (jx, jy) = if spp <= 1 {
+                ([0.5f32; L], [0.5f32; L])
+            } else {
+                for j in 0..L {
+                    inputs[j] = Sampler::vertex_input(keys[j], 0);
+                }
+                // SAFETY: as above.
+                let hashed = unsafe { rng8::splitmix64_x8(&inputs) };
+                let mut streams = [Sampler::default(); L];
+                for j in 0..L {
+                    streams[j] = Sampler::from_vertex_hash(hashed[j]);
+                }
+                // SAFETY: as above.
+                unsafe { rng8::next_2d_x8(&streams, 0) }
+            };
             let mut rays = [crate::ray::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
             for j in 0..L {
                 rays[j] = t.pinhole_ray(x, y, width, height, jx[j], jy[j]);

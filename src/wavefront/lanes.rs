@@ -14,10 +14,10 @@
 use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
-use crate::integrator::{DIM_DIRECT, Transport, orient};
+use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, orient};
 use crate::lights::SampledLight;
 use crate::ray::{Hit, Ray};
-use crate::sampling::Sampler;
+use crate::sampling::{Sampler, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -52,7 +52,8 @@ pub fn shade_lanes<F: Features>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn shade_avx2<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
-    shade_groups::<F>(t, q, hits, shadow);
+    // SAFETY: this function is compiled with AVX2 and runs only where it was detected.
+    unsafe { shade_groups::<F>(t, q, hits, shadow) };
 }
 
 /// The shading points of a group, one array per component.
@@ -108,19 +109,22 @@ fn get(a: &[[f32; L]; 3], j: usize) -> Vec3 {
 }
 
 impl Surfaces {
-    /// Gathers lane `j`'s hit (prim `prim`, on `ray`).
+    /// Gathers lane `j`'s hit (prim `prim`, on `ray`); `normals` is the mesh's corner
+    /// normals, looked up once per stage rather than once per corner.
     #[inline(always)]
-    fn set(&mut self, t: &Transport, j: usize, ray: &Ray, hit: &Hit) {
+    fn set(&mut self, t: &Transport, normals: Option<&[Vec3]>, j: usize, ray: &Ray, hit: &Hit) {
         let mesh = &t.scene.mesh;
         let prim = hit.prim as usize;
         put(&mut self.dir, j, ray.dir);
         self.triangle[j] = prim < mesh.triangles.len();
         if self.triangle[j] {
             let ids = mesh.triangles[prim];
-            for k in 0..3 {
-                put(&mut self.corner[k], j, mesh.positions[ids[k] as usize]);
-                if let Some(n) = &mesh.normals {
-                    put(&mut self.normal[k], j, n[ids[k] as usize]);
+            for (k, &id) in ids.iter().enumerate() {
+                put(&mut self.corner[k], j, mesh.positions[id as usize]);
+            }
+            if let Some(n) = normals {
+                for (k, &id) in ids.iter().enumerate() {
+                    put(&mut self.normal[k], j, n[id as usize]);
                 }
             }
             (self.u[j], self.v[j]) = (hit.u, hit.v);
@@ -133,21 +137,25 @@ impl Surfaces {
     }
 
     /// Lane `j`'s shading point: both reconstructions (the same functions as
-    /// `Scene::surface_point`), one kept, so all lanes run the same instructions.
+    /// `Scene::surface_point`), one kept, so all lanes run the same instructions; only the
+    /// triangle's when the scene has no spheres (`SPHERES` false).
     #[inline(always)]
-    fn point(&self, j: usize, normals: bool) -> ShadingPoint {
+    fn point<const NORMALS: bool, const SPHERES: bool>(&self, j: usize) -> ShadingPoint {
         let (u, v) = (self.u[j], self.v[j]);
         let c = &self.corner;
         let (tp, te, tn) = triangle_point(get(&c[0], j), get(&c[1], j), get(&c[2], j), u, v);
-        let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
-        let tri = self.triangle[j];
-        let ts = if normals {
+        let ts = if NORMALS {
             let n = &self.normal;
             interpolated_normal([get(&n[0], j), get(&n[1], j), get(&n[2], j)], u, v, tn)
         } else {
             tn
         };
-        let (p, p_error, g, sh) = if tri { (tp, te, tn, ts) } else { (sp, se, sn, sn) };
+        let (p, p_error, g, sh) = if SPHERES {
+            let (sp, se, sn) = sphere_point(get(&self.center, j), self.radius[j], get(&self.hit, j));
+            if self.triangle[j] { (tp, te, tn, ts) } else { (sp, se, sn, sn) }
+        } else {
+            (tp, te, tn, ts)
+        };
         let (ng, ns, _) = orient(g, sh, get(&self.dir, j));
         ShadingPoint { p, p_error, ng, ns }
     }
@@ -155,15 +163,20 @@ impl Surfaces {
 
 /// Reconstructs the shading points of all lanes (lane-parallel).
 #[inline(always)]
-fn surface_points(s: &Surfaces, normals: bool, out: &mut Points) {
-    if normals {
-        for j in 0..L {
-            out.set(j, &s.point(j, true));
-        }
-    } else {
-        for j in 0..L {
-            out.set(j, &s.point(j, false));
-        }
+fn surface_points(s: &Surfaces, normals: bool, spheres: bool, out: &mut Points) {
+    // Plain loops, no closures: a closure may be compiled out of line, without AVX2.
+    match (normals, spheres) {
+        (true, true) => points_of::<true, true>(s, out),
+        (true, false) => points_of::<true, false>(s, out),
+        (false, true) => points_of::<false, true>(s, out),
+        (false, false) => points_of::<false, false>(s, out),
+    }
+}
+
+#[inline(always)]
+fn points_of<const NORMALS: bool, const SPHERES: bool>(s: &Surfaces, out: &mut Points) {
+    for j in 0..L {
+        out.set(j, &s.point::<NORMALS, SPHERES>(j));
     }
 }
 
@@ -194,6 +207,18 @@ impl Rays {
     }
 }
 
+/// `u` where `used`, else 0.5 (a lane whose sample is not taken computes on a harmless value).
+#[inline(always)]
+fn unused_half(u: [f32; L], used: &[bool; L]) -> [f32; L] {
+    let mut out = [0.5; L];
+    for j in 0..L {
+        if used[j] {
+            out[j] = u[j];
+        }
+    }
+    out
+}
+
 /// The shadow rays toward light `l` of all lanes (lane-parallel).
 #[inline(always)]
 fn area_rays(pts: &Points, l: &AreaLight, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
@@ -214,19 +239,24 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
     }
 }
 
+/// # Safety
+/// The CPU must have AVX2 (the random numbers are drawn eight streams at a time).
+#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
     let n = q.len().min(hits.len());
     let mut pts = Points::default();
     let mut rays = Rays::default();
     let mut surf = Surfaces::default();
-    let normals = t.scene.mesh.normals.is_some();
+    let corner_normals = t.scene.mesh.normals.as_deref();
+    let normals = corner_normals.is_some();
+    let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays> = Vec::new();
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
-        let mut rng = [Sampler::default(); L];
+        let mut vertex_input = [0u64; L];
         let mut albedo = [Vec3::ZERO; L];
         let mut direct = [false; L];
         let mut cont = [false; L];
@@ -248,8 +278,9 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
             if !F::DIRECT && !F::INDIRECT {
                 continue;
             }
-            rng[j] = t.vertex_sampler(q.key[i], depth);
-            surf.set(t, j, &q.ray[i], &hit);
+            // As `Transport::vertex_sampler`, hashed for all lanes below.
+            vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
+            surf.set(t, corner_normals, j, &q.ray[i], &hit);
             albedo[j] = t.albedo[m];
             // As `Transport::direct_rays` and `Transport::scatter` decide.
             direct[j] = F::DIRECT && t.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
@@ -258,7 +289,13 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
         if !direct.iter().chain(&cont).any(|&b| b) {
             continue;
         }
-        surface_points(&surf, normals, &mut pts);
+        // SAFETY: the caller guarantees AVX2.
+        let keys = unsafe { rng8::splitmix64_x8(&vertex_input) };
+        let mut rng = [Sampler::default(); L];
+        for j in 0..L {
+            rng[j] = Sampler::from_vertex_hash(keys[j]);
+        }
+        surface_points(&surf, normals, spheres, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;
             for (li, light) in t.lights.lights.iter().enumerate() {
@@ -277,35 +314,38 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                     pending.resize_with(ns as usize, Rays::default);
                 }
                 for p in pending.iter_mut().take(ns as usize) {
-                    let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
-                    for j in 0..m {
-                        if direct[j] {
-                            (ua[j], ub[j]) = rng[j].at(dim).next_2d();
-                        }
-                    }
+                    // SAFETY: the caller guarantees AVX2.
+                    let (ua, ub) = unsafe { rng8::next_2d_x8(&rng, dim) };
+                    let (ua, ub) = (unused_half(ua, &direct), unused_half(ub, &direct));
                     dim += 1;
                     area_rays(&pts, al, &ua, &ub, p);
                 }
+                // Every candidate is stored; the cursor moves past the valid ones only.
+                let samples = &pending[..ns as usize];
+                let (rs, ws, os) = shadow.open(m * samples.len());
+                let mut w = 0;
                 for j in 0..m {
                     if !direct[j] {
                         continue;
                     }
                     let tp = q.throughput[base + j];
-                    for p in pending.iter().take(ns as usize) {
-                        if p.valid[j] {
-                            shadow.push(p.ray(j), c[j] * p.g[j] * tp, (base + j) as u32);
-                        }
+                    let owner = (base + j) as u32;
+                    for p in samples {
+                        rs[w] = p.ray(j);
+                        ws[w] = c[j] * p.g[j] * tp;
+                        os[w] = owner;
+                        w += p.valid[j] as usize;
                     }
                 }
+                shadow.commit(w);
             }
         }
         if F::INDIRECT && cont.iter().any(|&c| c) {
-            let (mut ua, mut ub) = ([0.5; L], [0.5; L]);
-            for j in 0..m {
-                if cont[j] {
-                    (ua[j], ub[j]) = rng[j].at(0).next_2d();
-                }
-            }
+            // SAFETY: the caller guarantees AVX2.
+            let (ua, ub) = unsafe { rng8::next_2d_x8(&rng, 0) };
+            let (ua, ub) = (unused_half(ua, &cont), unused_half(ub, &cont));
+            // SAFETY: the caller guarantees AVX2.
+            let rr = if F::ROULETTE { unsafe { rng8::next_f32_x8(&rng, DIM_ROULETTE) } } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..m {
                 if cont[j] {
@@ -315,7 +355,13 @@ fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hi
                     q.throughput[i] *= albedo[j];
                     q.depth[i] = depth + 1;
                     q.alive[i] = true;
-                    super::shade::roulette::<F>(t, q, i, depth, rng[j]);
+                    // As `super::shade::roulette`.
+                    if F::ROULETTE && t.plays_roulette(depth) {
+                        match t.roulette_with(rr[j]) {
+                            Some(f) => q.throughput[i] *= f,
+                            None => q.alive[i] = false,
+                        }
+                    }
                 }
             }
         }
@@ -336,18 +382,22 @@ mod tests {
     fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
         let mut out = vec![Vec::new(); n];
         for k in 0..s.len() {
-            out[s.owner[k] as usize].push((s.ray[k], s.weight[k]));
+            out[s.owner()[k] as usize].push((s.ray()[k], s.weight()[k]));
         }
         out
     }
 
     /// The lane kernel gives every path the same continuation, throughput, radiance and
     /// shadow rays (bit for bit) as the one-path-at-a-time kernel, over five bounces, on
-    /// triangles with and without corner normals and on spheres.
+    /// triangles with and without corner normals, with spheres and without any.
     #[test]
     fn lanes_match_the_scalar_kernel() {
-        for with_normals in [false, true] {
+        for (with_normals, with_spheres) in [(false, true), (true, true), (true, false)] {
             let mut scene = crate::load::default_scene();
+            assert!(!scene.spheres.is_empty());
+            if !with_spheres {
+                scene.spheres.clear();
+            }
             if with_normals {
                 let n = scene.mesh.positions.len();
                 // Unit normals tilted differently at every vertex.

@@ -99,35 +99,80 @@ impl PathQueue {
 }
 
 /// Shadow rays (or hemisphere probes) of one bounce, in the order shading wrote them.
+///
+/// The arrays keep the largest length any bounce needed (entries past [`len`](Self::len)
+/// are stale): a writer gets room with [`open`](Self::open) without filling it first, and
+/// one capacity check per batch instead of three per ray.
 #[derive(Clone, Debug, Default)]
 pub struct ShadowQueue {
-    pub ray: Vec<Ray>,
+    ray: Vec<Ray>,
     /// Contribution if unoccluded (throughput applied); a probe's is multiplied by the
     /// emission it sees.
-    pub weight: Vec<Vec3>,
+    weight: Vec<Vec3>,
     /// Index of the path (in the path queue) the contribution goes to.
-    pub owner: Vec<u32>,
+    owner: Vec<u32>,
+    len: usize,
 }
 
 impl ShadowQueue {
     pub fn len(&self) -> usize {
-        self.ray.len()
+        self.len
     }
 
     pub fn is_empty(&self) -> bool {
-        self.ray.is_empty()
+        self.len == 0
     }
 
     pub fn clear(&mut self) {
-        self.ray.clear();
-        self.weight.clear();
-        self.owner.clear();
+        self.len = 0;
+    }
+
+    pub fn ray(&self) -> &[Ray] {
+        &self.ray[..self.len]
+    }
+
+    pub fn weight(&self) -> &[Vec3] {
+        &self.weight[..self.len]
+    }
+
+    pub fn owner(&self) -> &[u32] {
+        &self.owner[..self.len]
     }
 
     #[inline]
     pub fn push(&mut self, ray: Ray, weight: Vec3, owner: u32) {
-        self.ray.push(ray);
-        self.weight.push(weight);
-        self.owner.push(owner);
+        let (r, w, o) = self.open(1);
+        (r[0], w[0], o[0]) = (ray, weight, owner);
+        self.commit(1);
+    }
+
+    /// Room for `extra` entries after the current ones (stale contents), for a writer that
+    /// fills them in order and then [`commit`](Self::commit)s how many it wrote: it can store
+    /// every candidate and move on past the valid ones only, with no branch per ray.
+    #[inline]
+    pub fn open(&mut self, extra: usize) -> (&mut [Ray], &mut [Vec3], &mut [u32]) {
+        let (start, end) = (self.len, self.len + extra);
+        if self.ray.len() < end {
+            self.grow(end);
+        }
+        (&mut self.ray[start..end], &mut self.weight[start..end], &mut self.owner[start..end])
+    }
+
+    /// The first `n` entries after the current ones (written after [`open`](Self::open))
+    /// join the queue.
+    #[inline]
+    pub fn commit(&mut self, n: usize) {
+        self.len += n;
+        debug_assert!(self.len <= self.ray.len());
+    }
+
+    #[cold]
+    fn grow(&mut self, end: usize) {
+        // At least doubled, so a queue filled by single pushes grows in amortised O(1).
+        let end = end.max(2 * self.ray.len());
+        let zero = Ray { origin: Vec3::ZERO, dir: Vec3::ZERO, tmin: 0.0, tmax: 0.0 };
+        self.ray.resize(end, zero);
+        self.weight.resize(end, Vec3::ZERO);
+        self.owner.resize(end, 0);
     }
 }

@@ -18,17 +18,17 @@ pub fn shadow(
     c: &mut TraceCounters,
 ) {
     if t.hemisphere {
-        for j in 0..q.len() {
-            let hit = accel.closest_hit(&q.ray[j], c);
-            radiance[q.owner[j] as usize] += q.weight[j] * t.probe_radiance(&q.ray[j], hit.as_ref());
+        for ((ray, &owner), &weight) in q.ray().iter().zip(q.owner()).zip(q.weight()) {
+            let hit = accel.closest_hit(ray, c);
+            radiance[owner as usize] += weight * t.probe_radiance(ray, hit.as_ref());
         }
     } else {
-        occluded.clear();
+        // Not cleared first: the intersector writes every entry.
         occluded.resize(q.len(), false);
-        accel.any_hits_packets(&q.ray, occluded, c);
-        for j in 0..q.len() {
-            if !occluded[j] {
-                radiance[q.owner[j] as usize] += q.weight[j];
+        accel.any_hits_packets(q.ray(), occluded, c);
+        for ((&occ, &owner), &weight) in occluded.iter().zip(q.owner()).zip(q.weight()) {
+            if !occ {
+                radiance[owner as usize] += weight;
             }
         }
     }

@@ -6,7 +6,7 @@ use crate::ray::Hit;
 
 /// Traces the whole path queue through the intersector's batch interface.
 pub fn traverse(accel: &dyn Intersector, paths: &PathQueue, hits: &mut Vec<Option<Hit>>, c: &mut TraceCounters) {
-    hits.clear();
+    // Not cleared first: the intersector writes every entry.
     hits.resize(paths.len(), None);
     accel.closest_hits(&paths.ray, hits, c);
 }

@@ -1,0 +1,160 @@
+//! The numbers of eight streams at once, for kernels that shade eight paths in lanes: the
+//! same splitmix64 hashes as [`Sampler`] one lane at a time, on four 64-bit lanes per AVX2
+//! register (AVX2 has no 64-bit multiply: each one is three 32 x 32 -> 64-bit products),
+//! so the bits are those of the scalar streams. The compiler keeps a plain loop of eight
+//! `wrapping_mul`s scalar.
+
+use super::Sampler;
+use super::rng::unit_f32;
+#[cfg(target_arch = "x86_64")]
+use std::arch::x86_64::*;
+
+/// Streams per call.
+pub const LANES: usize = 8;
+
+/// `splitmix64` of each input.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub unsafe fn splitmix64_x8(z: &[u64; LANES]) -> [u64; LANES] {
+    let mut out = [0u64; LANES];
+    // SAFETY: the caller guarantees AVX2; loads and stores are unaligned ones of four u64
+    // inside the arrays `z` and `out`.
+    unsafe {
+        for half in 0..2 {
+            let v = _mm256_loadu_si256(z.as_ptr().add(4 * half).cast());
+            _mm256_storeu_si256(out.as_mut_ptr().add(4 * half).cast(), splitmix4(v));
+        }
+    }
+    out
+}
+
+/// [`Sampler::next_2d`] of each stream at dimension `dim` (the stream's own dimension is
+/// ignored): `(a, b)` per lane.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub unsafe fn next_2d_x8(s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+    let mut z = [0u64; LANES];
+    for j in 0..LANES {
+        z[j] = s[j].dim_input(dim);
+    }
+    let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
+    // SAFETY: the caller guarantees AVX2; loads and stores are unaligned ones of four u64
+    // or eight f32 inside the arrays `z`, `a` and `b`.
+    unsafe {
+        let h0 = splitmix4(_mm256_loadu_si256(z.as_ptr().cast()));
+        let h1 = splitmix4(_mm256_loadu_si256(z.as_ptr().add(4).cast()));
+        let mask = _mm256_set1_epi64x(0xFF_FFFF);
+        let hi = pack_low_dwords(_mm256_srli_epi64::<40>(h0), _mm256_srli_epi64::<40>(h1));
+        let lo = pack_low_dwords(
+            _mm256_and_si256(_mm256_srli_epi64::<16>(h0), mask),
+            _mm256_and_si256(_mm256_srli_epi64::<16>(h1), mask),
+        );
+        // Exact: the integers are below 2^24 and the scale a power of two (as `unit_f32`).
+        let scale = _mm256_set1_ps(unit_f32(1));
+        _mm256_storeu_ps(a.as_mut_ptr(), _mm256_mul_ps(_mm256_cvtepi32_ps(hi), scale));
+        _mm256_storeu_ps(b.as_mut_ptr(), _mm256_mul_ps(_mm256_cvtepi32_ps(lo), scale));
+    }
+    (a, b)
+}
+
+/// [`Sampler::next_f32`] of each stream at dimension `dim`.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub unsafe fn next_f32_x8(s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
+    // SAFETY: the caller guarantees AVX2.
+    unsafe { next_2d_x8(s, dim).0 }
+}
+
+/// The low 64 bits of `a * c` in each 64-bit lane.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn mul64(a: __m256i, c: u64) -> __m256i {
+    // SAFETY: the caller guarantees AVX2.
+    unsafe {
+        let (cl, ch) = (_mm256_set1_epi64x(c as u32 as i64), _mm256_set1_epi64x((c >> 32) as i64));
+        let lo = _mm256_mul_epu32(a, cl);
+        let cross = _mm256_add_epi64(_mm256_mul_epu32(_mm256_srli_epi64::<32>(a), cl), _mm256_mul_epu32(a, ch));
+        _mm256_add_epi64(lo, _mm256_slli_epi64::<32>(cross))
+    }
+}
+
+/// [`splitmix64`](super::splitmix64) of four lanes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn splitmix4(z: __m256i) -> __m256i {
+    // SAFETY: the caller guarantees AVX2.
+    unsafe {
+        let z = _mm256_add_epi64(z, _mm256_set1_epi64x(0x9E37_79B9_7F4A_7C15u64 as i64));
+        let z = mul64(_mm256_xor_si256(z, _mm256_srli_epi64::<30>(z)), 0xBF58_476D_1CE4_E5B9);
+        let z = mul64(_mm256_xor_si256(z, _mm256_srli_epi64::<27>(z)), 0x94D0_49BB_1331_11EB);
+        _mm256_xor_si256(z, _mm256_srli_epi64::<31>(z))
+    }
+}
+
+/// The low 32 bits of the four 64-bit lanes of `x`, then of `y`, as eight 32-bit lanes.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn pack_low_dwords(x: __m256i, y: __m256i) -> __m256i {
+    // SAFETY: the caller guarantees AVX2.
+    unsafe {
+        let idx = _mm256_setr_epi32(0, 2, 4, 6, 0, 2, 4, 6);
+        let (px, py) = (_mm256_permutevar8x32_epi32(x, idx), _mm256_permutevar8x32_epi32(y, idx));
+        _mm256_permute2x128_si256::<0x20>(px, py)
+    }
+}
+
+#[cfg(all(test, target_arch = "x86_64"))]
+mod tests {
+    use super::*;
+    use crate::sampling::splitmix64;
+
+    type Pairs = ([f32; LANES], [f32; LANES]);
+
+    #[target_feature(enable = "avx2")]
+    fn run(keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
+        let s = keys.map(|k| Sampler::for_vertex(k, 3));
+        // SAFETY: AVX2 is enabled for this function (its callers detect it).
+        unsafe { (splitmix64_x8(keys), next_2d_x8(&s, dim), next_f32_x8(&s, dim)) }
+    }
+
+    /// Eight lanes give the scalar streams' numbers, bit for bit, for keys with high, low,
+    /// zero and all-ones halves (the 32 x 32-bit products and their carries).
+    #[test]
+    fn lanes_are_the_scalar_streams() {
+        if !is_x86_feature_detected!("avx2") {
+            return;
+        }
+        let mut state = 0x0123_4567_89AB_CDEFu64;
+        let mut groups = vec![[0, u64::MAX, 1, 1 << 32, (1 << 32) - 1, u64::MAX << 32, 0x8000_0000_0000_0000, 42]];
+        for _ in 0..5000 {
+            let mut g = [0u64; LANES];
+            for k in g.iter_mut() {
+                state = splitmix64(state);
+                *k = state;
+            }
+            groups.push(g);
+        }
+        for (n, keys) in groups.iter().enumerate() {
+            let dim = n as u32 % 11;
+            // SAFETY: AVX2 was detected above.
+            let (h, (a, b), f) = unsafe { run(keys, dim) };
+            for j in 0..LANES {
+                assert_eq!(h[j], splitmix64(keys[j]), "{:#x}", keys[j]);
+                let (mut s2, mut s1) =
+                    (Sampler::for_vertex(keys[j], 3).at(dim), Sampler::for_vertex(keys[j], 3).at(dim));
+                let (wa, wb) = s2.next_2d();
+                assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "{:#x}", keys[j]);
+                assert_eq!(f[j].to_bits(), s1.next_f32().to_bits(), "{:#x}", keys[j]);
+            }
+        }
+    }
+}
