@@ -105,12 +105,11 @@ fn step<B: BoxTest>(bvh: &Bvh, isa: B, rays: &[Ray], w: &mut Walk, st: &mut Stac
         if n != 0 {
             if n > 1 {
                 w.sp += n as usize - 1;
-                for &r in &st.nodes[w.sp + 1 - n as usize..w.sp] {
+                for &r in &st.nodes[w.sp + 1 - n as usize..=w.sp] {
                     prefetch_child(bvh, isa, r);
                 }
             }
             w.cur = one;
-            prefetch_child(bvh, isa, one);
             return false;
         }
     } else {
@@ -121,7 +120,6 @@ fn step<B: BoxTest>(bvh: &Bvh, isa: B, rays: &[Ray], w: &mut Walk, st: &mut Stac
         w.sp -= 1;
         if st.dists[w.sp] <= w.best.t * TIE_SCALE {
             w.cur = st.nodes[w.sp];
-            prefetch_child(bvh, isa, w.cur);
             return false;
         }
     }
