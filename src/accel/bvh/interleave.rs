@@ -101,7 +101,11 @@ fn step<B: BoxTest>(bvh: &Bvh, isa: B, rays: &[Ray], w: &mut Walk, st: &mut Stac
     if w.cur & LEAF_BIT == 0 {
         w.visited += 1;
         let node = &bvh.nodes[w.cur as usize];
-        let (n, one) = isa.visit(node, &w.br, w.br.octant, w.best.t, &mut st.nodes, &mut st.dists, w.sp);
+        // Read the ray's values from memory at each node (as the single-ray loop does): else
+        // LLVM hoists both rays' broadcasts and plane addresses out of the loop and spills
+        // them, and every node reloads twice as much.
+        let br = std::hint::black_box(&w.br);
+        let (n, one) = isa.visit(node, br, br.octant, w.best.t, &mut st.nodes, &mut st.dists, w.sp);
         if n != 0 {
             if n > 1 {
                 w.sp += n as usize - 1;
