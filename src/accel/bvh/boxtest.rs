@@ -193,7 +193,7 @@ pub trait BoxTest: Copy {
     /// pushes them at `sp` in the node's order for the ray's octant, farthest first, so the
     /// nearest is on top: `nodes[sp..]` their references, `dists[sp..]` their entry
     /// distances. Returns the number hit and the nearest of them (when only one is hit,
-    /// it is not pushed).
+    /// it may or may not be pushed: the caller moves past `n - 1` entries either way).
     /// The stack needs [`WIDTH`] free entries at `sp` (the SIMD path stores whole vectors).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
@@ -248,6 +248,13 @@ pub trait BoxTest: Copy {
     #[inline(always)]
     fn prefetch<T>(self, x: &T) {
         let _ = x;
+    }
+
+    /// [`BoxTest::prefetch`] of the four cache lines at `p` (a node or leaf block; a
+    /// prefetch never faults, so `p` may be an address computed for the other kind).
+    #[inline(always)]
+    fn prefetch_at(self, p: *const u8) {
+        let _ = p;
     }
 
     /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).

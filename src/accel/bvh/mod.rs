@@ -24,7 +24,6 @@ macro_rules! on_isa {
 
 mod boxtest;
 mod build;
-mod interleave;
 mod leaf;
 mod order;
 mod packet;
@@ -342,7 +341,6 @@ impl Bvh {
         let mut stacks = packet_closest::Stacks::new(self.stack_need);
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
-        let mut pair = [traverse::Stack::new(self.stack_need), traverse::Stack::new(self.stack_need)];
         macro_rules! run {
             ($isa:expr) => {
                 match &order {
@@ -361,8 +359,6 @@ impl Bvh {
                             );
                         }
                     }
-                    // Incoherent batches: two rays in flight at a time.
-                    None if !PACKETS => interleave::closest_hits(self, $isa, rays, hits, c, &mut pair),
                     None => {
                         // Per group: which rays may enter the tree at all (most primary rays
                         // miss it), then the set-up (three divisions) of those ahead of

@@ -92,18 +92,15 @@ pub fn closest_hit_with<B: BoxTest>(
             visited += 1;
             let node = &bvh.nodes[cur as usize];
             let (n, one) = isa.visit(node, br, br.octant, best.t, nodes, dists, sp);
-            if n == 1 {
-                // One child hit (the common case): no stack traffic.
-                cur = one;
-                continue;
-            }
-            if n > 1 {
-                // The nearest is on top: take it, the others wait.
+            if n != 0 {
+                // The nearest is on top: take it, the others wait. One branch for one and
+                // several hit children (which of the two is a coin toss for diffuse rays).
                 sp += n as usize - 1;
                 cur = one;
-                for &r in &nodes[sp + 1 - n as usize..=sp] {
-                    prefetch_child(bvh, isa, r);
-                }
+                // The next pending entry (the second nearest child, or what the next pop
+                // finds): one prefetch without a branch, instead of a loop over the
+                // pushed children whose length the predictor cannot know.
+                prefetch_ref(bvh, isa, nodes[sp.saturating_sub(1)]);
                 continue;
             }
         } else {
@@ -134,6 +131,16 @@ pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
     } else if let Some(b) = bvh.blocks.get(leaf_range(r).0 / LANES) {
         isa.prefetch(b);
     }
+}
+
+/// [`prefetch_child`] without a branch on the kind of reference (mispredicted 40% of the
+/// time for diffuse rays): both addresses are computed and one is selected. `r` may be any
+/// value (a stale stack entry): a prefetch never faults.
+#[inline(always)]
+pub(super) fn prefetch_ref<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
+    let node = bvh.nodes.as_ptr().wrapping_add(r as usize).cast::<u8>();
+    let block = bvh.blocks.as_ptr().wrapping_add(leaf_range(r).0 / LANES).cast::<u8>();
+    isa.prefetch_at(std::hint::select_unpredictable(r & LEAF_BIT == 0, node, block));
 }
 
 /// Lanes of leaf `r` that need the scalar test (the SIMD kernels drop certain misses), with
