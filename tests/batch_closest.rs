@@ -1,5 +1,6 @@
-//! The batch closest-hit path for incoherent rays (`Intersector::closest_hits`, two traversals
-//! interleaved) against the scalar single-ray `closest_hit`, for every instruction set: rays
+//! The batch closest-hit path for incoherent rays (`Intersector::closest_hits`: root-box
+//! admission and set-up a group at a time, then the node loop that pushes every hit child)
+//! against the scalar single-ray `closest_hit`, for every instruction set: rays
 //! of mixed kinds (diffuse-like bounces from the surface, misses, rays that never enter the
 //! root box, dead rays, vertex chords with tied hits) in batches of every length 1..=70 at
 //! every start, so a ray dropped, traced twice or given another ray's state (stack, set-up,
@@ -36,9 +37,8 @@ fn mixed_rays(scene: &Scene, n: usize) -> Vec<Ray> {
     let (lo, hi) = scene.bounds().unwrap();
     let (mid, size) = (0.5 * (lo + hi), (hi - lo).max_element());
     let mut s = Sampler::for_sample(7, 3, 1);
-    let unit = |s: &mut Sampler| {
-        Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize_or(Vec3::X)
-    };
+    let unit =
+        |s: &mut Sampler| Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5).normalize_or(Vec3::X);
     let mut rays = Vec::with_capacity(n);
     for k in 0..n {
         let t = (s.next_f32() * tris as f32) as usize % tris;
@@ -93,7 +93,12 @@ fn check(scene: &Scene, what: &str) {
             .map(|(i, r)| {
                 let (mut got, mut c) = ([None], TraceCounters::default());
                 bvh.closest_hits(std::slice::from_ref(r), &mut got, &mut c);
-                assert!(same(got[0], want[i]), "{what} {isa:?} ray {i} alone {r:?}: {:?}, scalar {:?}", got[0], want[i]);
+                assert!(
+                    same(got[0], want[i]),
+                    "{what} {isa:?} ray {i} alone {r:?}: {:?}, scalar {:?}",
+                    got[0],
+                    want[i]
+                );
                 c.nodes
             })
             .collect();
@@ -101,7 +106,8 @@ fn check(scene: &Scene, what: &str) {
             let mut start = len % 5;
             while start < rays.len() {
                 let end = (start + len).min(rays.len());
-                let (mut got, mut c) = (vec![Some(Hit { t: -1.0, prim: 7, u: 0.0, v: 0.0 }); end - start], TraceCounters::default());
+                let (mut got, mut c) =
+                    (vec![Some(Hit { t: -1.0, prim: 7, u: 0.0, v: 0.0 }); end - start], TraceCounters::default());
                 bvh.closest_hits(&rays[start..end], &mut got, &mut c);
                 for (k, g) in got.iter().enumerate() {
                     let i = start + k;
