@@ -193,7 +193,7 @@ pub trait BoxTest: Copy {
     /// pushes them at `sp` in the node's order for the ray's octant, farthest first, so the
     /// nearest is on top: `nodes[sp..]` their references, `dists[sp..]` their entry
     /// distances. Returns the number hit and the nearest of them (when only one is hit,
-    /// it may or may not be pushed: the caller moves past `n - 1` entries either way).
+    /// it is not pushed).
     /// The stack needs [`WIDTH`] free entries at `sp` (the SIMD path stores whole vectors).
     #[inline(always)]
     #[allow(clippy::too_many_arguments)]
@@ -226,6 +226,23 @@ pub trait BoxTest: Copy {
             return (n, nodes[top - 1]);
         }
         (n, 0)
+    }
+
+    /// [`BoxTest::visit`], free to push a single hit child too (the caller moves `sp` by
+    /// `n - 1` either way): the AVX2 path then needs no branch on `n`.
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn visit_incoherent(
+        self,
+        node: &Node8,
+        r: &BoxRay,
+        oct: u32,
+        tmax: f32,
+        nodes: &mut [u32],
+        dists: &mut [f32],
+        sp: usize,
+    ) -> (u32, u32) {
+        self.visit(node, r, oct, tmax, nodes, dists, sp)
     }
 
     /// Bit `i` set when ray `i` of `rays` (at most 32) may enter `root`: [`RootBox::admits`]

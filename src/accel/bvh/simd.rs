@@ -147,6 +147,49 @@ impl BoxTest for Avx2 {
             let (enter, hit) = slab8(node, r, tmax);
             let mask = _mm256_movemask_ps(hit) as u32;
             let n = mask.count_ones();
+            if n == 1 {
+                return (1, node.child[mask.trailing_zeros() as usize]);
+            }
+            if n > 1 {
+                let (dn, dd) = (&mut nodes[sp..sp + WIDTH], &mut dists[sp..sp + WIDTH]);
+                // Slots in the octant's order (far to near); `permutevar8x32` reads only the
+                // low three bits of each index, so the other octants' bits need no masking.
+                let order =
+                    _mm256_srl_epi32(_mm256_loadu_si256(node.perm.as_ptr().cast()), _mm_cvtsi32_si128(3 * oct as i32));
+                let sorted_hit = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, order)) as usize;
+                // Then the hit ones packed to the front, keeping that order.
+                let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
+                let idx = _mm256_permutevar8x32_epi32(order, pack);
+                let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
+                _mm256_storeu_si256(dn.as_mut_ptr().cast(), child);
+                _mm256_storeu_ps(dd.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
+                // The nearest (the last pushed) from the register, not back from the stack.
+                let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
+                return (n, _mm256_cvtsi256_si32(top) as u32);
+            }
+            (n, 0)
+        }
+    }
+
+    #[inline(always)]
+    fn visit_incoherent(
+        self,
+        node: &Node8,
+        r: &BoxRay,
+        oct: u32,
+        tmax: f32,
+        nodes: &mut [u32],
+        dists: &mut [f32],
+        sp: usize,
+    ) -> (u32, u32) {
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the loads are unaligned
+        // ones of 8 u32 inside `node`, the stores go to the sub-slices of exactly 8 entries
+        // taken (bounds-checked) at `sp`; `COMPRESS` is indexed by an 8-bit mask.
+        unsafe {
+            debug_assert_eq!(oct, r.octant);
+            let (enter, hit) = slab8(node, r, tmax);
+            let mask = _mm256_movemask_ps(hit) as u32;
+            let n = mask.count_ones();
             // No branch on `n`: a single hit child is pushed too (the caller does not move
             // `sp` for it), as whether a diffuse ray hits one child or several is a coin
             // toss for the branch predictor (40% mispredicted, callgrind's model).
