@@ -228,23 +228,6 @@ pub trait BoxTest: Copy {
         (n, 0)
     }
 
-    /// [`BoxTest::visit`], free to push a single hit child too (the caller moves `sp` by
-    /// `n - 1` either way): the AVX2 path then needs no branch on `n`.
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn visit_incoherent(
-        self,
-        node: &Node8,
-        r: &BoxRay,
-        oct: u32,
-        tmax: f32,
-        nodes: &mut [u32],
-        dists: &mut [f32],
-        sp: usize,
-    ) -> (u32, u32) {
-        self.visit(node, r, oct, tmax, nodes, dists, sp)
-    }
-
     /// Bit `i` set when ray `i` of `rays` (at most 32) may enter `root`: [`RootBox::admits`]
     /// of its box-test values (the AVX2 path computes the same answers eight rays at a time).
     #[inline(always)]
@@ -265,13 +248,6 @@ pub trait BoxTest: Copy {
     #[inline(always)]
     fn prefetch<T>(self, x: &T) {
         let _ = x;
-    }
-
-    /// [`BoxTest::prefetch`] of the four cache lines at `p` (a node or leaf block; a
-    /// prefetch never faults, so `p` may be an address computed for the other kind).
-    #[inline(always)]
-    fn prefetch_at(self, p: *const u8) {
-        let _ = p;
     }
 
     /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).

@@ -387,14 +387,17 @@ impl Bvh {
                                 $isa.trace_group(self, rs, hs, &prep[..n], &slot[..n], starts, c, &mut stacks);
                                 continue;
                             }
-                            let single = &mut stacks.single;
                             for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
-                                let (i, (sn, sd)) = (i as usize, (&mut single.nodes, &mut single.dists));
-                                hs[i] = if PACKETS {
-                                    traverse::closest_hit_with(self, $isa, &rs[i], br, c, sn, sd)
-                                } else {
-                                    traverse::closest_hit_incoherent(self, $isa, &rs[i], br, c, sn, sd)
-                                };
+                                let i = i as usize;
+                                hs[i] = traverse::closest_hit_with(
+                                    self,
+                                    $isa,
+                                    &rs[i],
+                                    br,
+                                    c,
+                                    &mut stacks.single.nodes,
+                                    &mut stacks.single.dists,
+                                );
                             }
                         }
                     }

@@ -50,11 +50,6 @@ impl BoxTest for Sse {
     }
 
     #[inline(always)]
-    fn prefetch_at(self, p: *const u8) {
-        prefetch_four_lines(p);
-    }
-
-    #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected; loads/stores are unaligned ones on
         // in-bounds arrays of 8 f32 at offsets 0 and 4 (`BoxRay` plane indices are < 6).
@@ -103,11 +98,6 @@ impl BoxTest for Avx2 {
     #[inline(always)]
     fn prefetch<T>(self, x: &T) {
         prefetch_lines(x);
-    }
-
-    #[inline(always)]
-    fn prefetch_at(self, p: *const u8) {
-        prefetch_four_lines(p);
     }
 
     #[inline(always)]
@@ -168,48 +158,6 @@ impl BoxTest for Avx2 {
                 return (n, _mm256_cvtsi256_si32(top) as u32);
             }
             (n, 0)
-        }
-    }
-
-    #[inline(always)]
-    fn visit_incoherent(
-        self,
-        node: &Node8,
-        r: &BoxRay,
-        oct: u32,
-        tmax: f32,
-        nodes: &mut [u32],
-        dists: &mut [f32],
-        sp: usize,
-    ) -> (u32, u32) {
-        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the loads are unaligned
-        // ones of 8 u32 inside `node`, the stores go to the sub-slices of exactly 8 entries
-        // taken (bounds-checked) at `sp`; `COMPRESS` is indexed by an 8-bit mask.
-        unsafe {
-            debug_assert_eq!(oct, r.octant);
-            let (enter, hit) = slab8(node, r, tmax);
-            let mask = _mm256_movemask_ps(hit) as u32;
-            let n = mask.count_ones();
-            // No branch on `n`: a single hit child is pushed too (the caller does not move
-            // `sp` for it), as whether a diffuse ray hits one child or several is a coin
-            // toss for the branch predictor (40% mispredicted, callgrind's model).
-            {
-                let (dn, dd) = (&mut nodes[sp..sp + WIDTH], &mut dists[sp..sp + WIDTH]);
-                // Slots in the octant's order (far to near); `permutevar8x32` reads only the
-                // low three bits of each index, so the other octants' bits need no masking.
-                let order =
-                    _mm256_srl_epi32(_mm256_loadu_si256(node.perm.as_ptr().cast()), _mm_cvtsi32_si128(3 * oct as i32));
-                let sorted_hit = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, order)) as usize;
-                // Then the hit ones packed to the front, keeping that order.
-                let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
-                let idx = _mm256_permutevar8x32_epi32(order, pack);
-                let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
-                _mm256_storeu_si256(dn.as_mut_ptr().cast(), child);
-                _mm256_storeu_ps(dd.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
-                // The nearest (the last pushed) from the register, not back from the stack.
-                let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
-                (n, _mm256_cvtsi256_si32(top) as u32)
-            }
         }
     }
 
@@ -571,17 +519,6 @@ unsafe fn box_ray8(ray: &Ray) -> BoxRay {
         let dir_nonzero = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_NEQ_UQ>(v, _mm256_setzero_ps())) & 0x38 != 0;
         out.live = _mm256_movemask_ps(finite(v)) & 0x3f == 0x3f && dir_nonzero && ray.tmin <= ray.tmax;
         out
-    }
-}
-
-/// Prefetches the four cache lines at `p` (a node, or a leaf block and the line after it).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn prefetch_four_lines(p: *const u8) {
-    for off in [0, 64, 128, 192] {
-        // SAFETY: a prefetch is a hint that never faults, whatever the address (computed
-        // with `wrapping_add`, never dereferenced); SSE is part of x86-64.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off).cast::<i8>()) };
     }
 }
 

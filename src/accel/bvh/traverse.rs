@@ -124,67 +124,6 @@ pub fn closest_hit_with<B: BoxTest>(
     }
 }
 
-/// [`closest_hit_with`] for incoherent rays (diffuse bounces): the same steps, so the same
-/// hits, with fewer unpredictable branches per node. Whether a diffuse ray hits one child of a
-/// node or several, and whether a child reference is a leaf, is a coin toss for the branch
-/// predictor (40% mispredicted in callgrind's model on the dragon): one branch on `n != 0`
-/// ([`BoxTest::visit_incoherent`] has none inside), and one prefetch of the next pending
-/// entry with a branch-free address instead of a loop over the pushed children. Coherent
-/// rays (camera rays between packets), whose branches predict well, keep the plain loop.
-#[inline(always)]
-pub fn closest_hit_incoherent<B: BoxTest>(
-    bvh: &Bvh,
-    isa: B,
-    ray: &Ray,
-    br: &BoxRay,
-    c: &mut TraceCounters,
-    nodes: &mut [u32],
-    dists: &mut [f32],
-) -> Option<Hit> {
-    c.rays += 1;
-    if !br.live {
-        return None;
-    }
-    // The shear is set up at the first leaf: many rays never reach one.
-    let mut sr = None;
-    let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
-    let mut sp = 0usize;
-    let mut cur = 0u32;
-    let mut visited = 0u64;
-    loop {
-        if cur & LEAF_BIT == 0 {
-            visited += 1;
-            let node = &bvh.nodes[cur as usize];
-            let (n, one) = isa.visit_incoherent(node, br, br.octant, best.t, nodes, dists, sp);
-            if n != 0 {
-                // The nearest is on top: take it, the others wait. One branch for one and
-                // several hit children (which of the two is a coin toss for diffuse rays).
-                sp += n as usize - 1;
-                cur = one;
-                // The next pending entry (the second nearest child, or what the next pop
-                // finds): one prefetch without a branch, instead of a loop over the
-                // pushed children whose length the predictor cannot know.
-                prefetch_ref(bvh, isa, nodes[sp.saturating_sub(1)]);
-                continue;
-            }
-        } else {
-            leaf_closest(bvh, isa, cur, sr.get_or_insert_with(|| ShearedRay::of(ray)), ray, &mut best, c);
-        }
-        // Pop the nearest pending child that can still hold something closer.
-        loop {
-            if sp == 0 {
-                c.nodes += visited;
-                return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
-            }
-            sp -= 1;
-            if dists[sp] <= best.t * TIE_SCALE {
-                cur = nodes[sp];
-                break;
-            }
-        }
-    }
-}
-
 /// Starts loading the node or leaf block behind child reference `r`.
 #[inline(always)]
 pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
@@ -195,16 +134,6 @@ pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
     } else if let Some(b) = bvh.blocks.get(leaf_range(r).0 / LANES) {
         isa.prefetch(b);
     }
-}
-
-/// [`prefetch_child`] without a branch on the kind of reference (mispredicted 40% of the
-/// time for diffuse rays): both addresses are computed and one is selected. `r` may be any
-/// value (a stale stack entry): a prefetch never faults.
-#[inline(always)]
-pub(super) fn prefetch_ref<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
-    let node = bvh.nodes.as_ptr().wrapping_add(r as usize).cast::<u8>();
-    let block = bvh.blocks.as_ptr().wrapping_add(leaf_range(r).0 / LANES).cast::<u8>();
-    isa.prefetch_at(std::hint::select_unpredictable(r & LEAF_BIT == 0, node, block));
 }
 
 /// Lanes of leaf `r` that need the scalar test (the SIMD kernels drop certain misses), with
