@@ -15,19 +15,6 @@ use wavepath::ray::{Hit, Ray};
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Scene, Sphere};
 
-fn same(a: Option<Hit>, b: Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => {
-            a.t.to_bits() == b.t.to_bits()
-                && a.prim == b.prim
-                && a.u.to_bits() == b.u.to_bits()
-                && a.v.to_bits() == b.v.to_bits()
-        }
-        _ => false,
-    }
-}
-
 /// A shuffled mix: bounces off the surface into random directions (long and short
 /// traversals), rays from outside aimed at or away from the scene, rays far outside that
 /// miss the root box, chords from vertex to vertex ending on the target (ties at `t = 1`),
@@ -94,7 +81,7 @@ fn check(scene: &Scene, what: &str) {
                 let (mut got, mut c) = ([None], TraceCounters::default());
                 bvh.closest_hits(std::slice::from_ref(r), &mut got, &mut c);
                 assert!(
-                    same(got[0], want[i]),
+                    common::same_hit(got[0], want[i]),
                     "{what} {isa:?} ray {i} alone {r:?}: {:?}, scalar {:?}",
                     got[0],
                     want[i]
@@ -111,7 +98,11 @@ fn check(scene: &Scene, what: &str) {
                 bvh.closest_hits(&rays[start..end], &mut got, &mut c);
                 for (k, g) in got.iter().enumerate() {
                     let i = start + k;
-                    assert!(same(*g, want[i]), "{what} {isa:?} ray {i} in {start}..{end}: {g:?}, scalar {:?}", want[i]);
+                    assert!(
+                        common::same_hit(*g, want[i]),
+                        "{what} {isa:?} ray {i} in {start}..{end}: {g:?}, scalar {:?}",
+                        want[i]
+                    );
                 }
                 assert_eq!(c.rays, (end - start) as u64, "{what} {isa:?} rays of {start}..{end}");
                 assert_eq!(c.nodes, nodes[start..end].iter().sum::<u64>(), "{what} {isa:?} nodes of {start}..{end}");

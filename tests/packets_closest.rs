@@ -14,19 +14,6 @@ use wavepath::ray::{Hit, Ray};
 use wavepath::sampling::Sampler;
 use wavepath::scene::Scene;
 
-fn same(a: Option<Hit>, b: Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => {
-            a.t.to_bits() == b.t.to_bits()
-                && a.prim == b.prim
-                && a.u.to_bits() == b.u.to_bits()
-                && a.v.to_bits() == b.v.to_bits()
-        }
-        _ => false,
-    }
-}
-
 fn octant(d: Vec3) -> u32 {
     d.x.is_sign_negative() as u32 | (d.y.is_sign_negative() as u32) << 1 | (d.z.is_sign_negative() as u32) << 2
 }
@@ -189,19 +176,28 @@ fn check(scene: &Scene, rays: &[Ray], what: &str) {
         bvh.closest_hits_packets(rays, &mut got, &mut c);
         assert_eq!(c.rays, rays.len() as u64, "{what} {isa:?}");
         for (i, r) in rays.iter().enumerate() {
-            assert!(same(got[i], want[i]), "{what} {isa:?} ray {i} {r:?}: {:?}, scalar {:?}", got[i], want[i]);
+            assert!(
+                common::same_hit(got[i], want[i]),
+                "{what} {isa:?} ray {i} {r:?}: {:?}, scalar {:?}",
+                got[i],
+                want[i]
+            );
         }
         // Other groupings: shifted by three, and slices of 1..=9 rays (short packets).
         let mut got = vec![None; rays.len() - 3];
         bvh.closest_hits_packets(&rays[3..], &mut got, &mut c);
-        assert!(got.iter().zip(&want[3..]).all(|(a, b)| same(*a, *b)), "{what} {isa:?} shifted");
+        assert!(got.iter().zip(&want[3..]).all(|(a, b)| common::same_hit(*a, *b)), "{what} {isa:?} shifted");
         let (mut i, mut len) = (0, 1);
         while i < rays.len() {
             let n = len.min(rays.len() - i);
             let mut got = vec![None; n];
             bvh.closest_hits_packets(&rays[i..i + n], &mut got, &mut c);
             for k in 0..n {
-                assert!(same(got[k], want[i + k]), "{what} {isa:?} slice {i}+{k} of {n}: {:?}", rays[i + k]);
+                assert!(
+                    common::same_hit(got[k], want[i + k]),
+                    "{what} {isa:?} slice {i}+{k} of {n}: {:?}",
+                    rays[i + k]
+                );
             }
             i += n;
             len = len % 9 + 1;

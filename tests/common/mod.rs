@@ -7,6 +7,21 @@ pub mod chi2;
 pub mod render;
 
 use std::path::PathBuf;
+use wavepath::ray::Hit;
+
+/// Whether two traversals found the same hit, bit for bit (t, primitive, barycentrics).
+pub fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.t.to_bits() == b.t.to_bits()
+                && a.prim == b.prim
+                && a.u.to_bits() == b.u.to_bits()
+                && a.v.to_bits() == b.v.to_bits()
+        }
+        _ => false,
+    }
+}
 
 /// The shared scenes folder: `WAVEPATH_SCENES`, else `../shared/scenes` beside the repo.
 ///
