@@ -31,6 +31,19 @@ pub unsafe fn splitmix64_x8(z: &[u64; LANES]) -> [u64; LANES] {
     out
 }
 
+/// [`Sampler::for_vertex`] of eight paths: the streams whose keys are `splitmix64` of the
+/// [`Sampler::vertex_input`]s `inputs`.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub unsafe fn for_vertex_x8(inputs: &[u64; LANES]) -> [Sampler; LANES] {
+    // SAFETY: the caller guarantees AVX2.
+    let keys = unsafe { splitmix64_x8(inputs) };
+    keys.map(Sampler::from_vertex_hash)
+}
+
 /// [`Sampler::next_2d`] of each stream at dimension `dim` (the stream's own dimension is
 /// ignored): `(a, b)` per lane.
 ///

@@ -89,11 +89,7 @@ fn pinhole_avx2(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, hei
                     inputs[j] = Sampler::vertex_input(keys[j], 0);
                 }
                 // SAFETY: as above.
-                let hashed = unsafe { rng8::splitmix64_x8(&inputs) };
-                let mut streams = [Sampler::default(); L];
-                for j in 0..L {
-                    streams[j] = Sampler::from_vertex_hash(hashed[j]);
-                }
+                let streams = unsafe { rng8::for_vertex_x8(&inputs) };
                 // SAFETY: as above.
                 unsafe { rng8::next_2d_x8(&streams, 0) }
             };

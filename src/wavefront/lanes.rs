@@ -290,11 +290,7 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
             continue;
         }
         // SAFETY: the caller guarantees AVX2.
-        let keys = unsafe { rng8::splitmix64_x8(&vertex_input) };
-        let mut rng = [Sampler::default(); L];
-        for j in 0..L {
-            rng[j] = Sampler::from_vertex_hash(keys[j]);
-        }
+        let rng = unsafe { rng8::for_vertex_x8(&vertex_input) };
         surface_points(&surf, normals, spheres, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;
