@@ -27,6 +27,10 @@ pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 
 /// costs nothing measurable (a node entering within it beyond the closest hit is rare).
 pub const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 
+/// Bytes a prefetch asks for: a whole node (a leaf block is 192 of them).
+pub const PREFETCH_BYTES: usize = std::mem::size_of::<Node8>();
+const _: () = assert!(PREFETCH_BYTES >= std::mem::size_of::<Tri4>());
+
 /// Index into `Node8::b` of the near plane on `axis` for rays of octant `oct` (below 6 for
 /// any `oct`, as the SIMD kernels index node planes with it unchecked).
 #[inline(always)]
@@ -190,22 +194,20 @@ pub trait BoxTest: Copy {
     fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
 
     /// Tests the children of `node` (as [`BoxTest::test`]) and, when two or more are hit,
-    /// pushes them at `sp` in the node's order for the ray's octant, farthest first, so the
-    /// nearest is on top: `nodes[sp..]` their references, `dists[sp..]` their entry
-    /// distances. Returns the number hit and the nearest of them (when only one is hit,
+    /// pushes them in the node's order for the ray's octant, farthest first, so the nearest
+    /// is on top: `nodes` their references, `dists` their entry distances. Returns the number hit and the nearest of them (when only one is hit,
     /// it is not pushed).
-    /// The stack needs [`WIDTH`] free entries at `sp` (the SIMD path stores whole vectors).
+    /// `nodes` and `dists` are the eight free stack entries above the top (the SIMD path
+    /// stores whole vectors).
     #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
     fn visit(
         self,
         node: &Node8,
         r: &BoxRay,
         oct: u32,
         tmax: f32,
-        nodes: &mut [u32],
-        dists: &mut [f32],
-        sp: usize,
+        nodes: &mut [u32; WIDTH],
+        dists: &mut [f32; WIDTH],
     ) -> (u32, u32) {
         let mut tnear = [0f32; WIDTH];
         let mask = self.test(node, r, oct, tmax, &mut tnear);
@@ -213,7 +215,7 @@ pub trait BoxTest: Copy {
         if n == 1 {
             return (1, node.child[mask.trailing_zeros() as usize]);
         }
-        let mut top = sp;
+        let mut top = 0;
         if n > 1 {
             for k in node.perm {
                 let slot = (k >> (3 * oct) & 7) as usize;
@@ -242,12 +244,12 @@ pub trait BoxTest: Copy {
         BoxRay::new(ray)
     }
 
-    /// Asks the cache for the memory of `x` (a node or leaf block the traversal will read
-    /// soon), so several misses overlap instead of following one another. No effect on
-    /// results; the reference path does nothing.
+    /// Asks the cache for the [`PREFETCH_BYTES`] at `p` (a node or leaf block the traversal
+    /// will read soon), so several misses overlap instead of following one another. No
+    /// effect on results; the reference path does nothing. `p` need not be valid.
     #[inline(always)]
-    fn prefetch<T>(self, x: &T) {
-        let _ = x;
+    fn prefetch_at(self, p: *const u8) {
+        let _ = p;
     }
 
     /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).

@@ -173,6 +173,7 @@ impl Bvh {
         };
         let mut nodes = nodes;
         let leaves = leaf::pad_leaves(&mut nodes, &prims, &ids, tri_count as u32);
+        assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
         let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), nodes: nodes.len(), depth, sah_cost };
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         if let Some(root) = nodes.first() {
@@ -298,7 +299,7 @@ impl Intersector for Bvh {
             return;
         }
         let order = self.batch_order(rays);
-        let mut stack = vec![0u32; self.stack_need];
+        let mut stack = traverse::BigAnyStack::boxed();
         macro_rules! run {
             ($isa:expr) => {
                 match &order {
@@ -349,15 +350,7 @@ impl Bvh {
                         for &i in order {
                             let (i, isa) = (i as usize, $isa);
                             let br = BoxRay::new(&rays[i]);
-                            hits[i] = traverse::closest_hit_with(
-                                self,
-                                isa,
-                                &rays[i],
-                                &br,
-                                c,
-                                &mut stacks.single.nodes,
-                                &mut stacks.single.dists,
-                            );
+                            hits[i] = traverse::closest_hit_with(self, isa, &rays[i], &br, c, &mut stacks.single);
                         }
                     }
                     None => {
@@ -390,15 +383,7 @@ impl Bvh {
                             }
                             for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
                                 let i = i as usize;
-                                hs[i] = traverse::closest_hit_with(
-                                    self,
-                                    $isa,
-                                    &rs[i],
-                                    br,
-                                    c,
-                                    &mut stacks.single.nodes,
-                                    &mut stacks.single.dists,
-                                );
+                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, c, &mut stacks.single);
                             }
                         }
                     }

@@ -33,6 +33,7 @@ pub const PACKET: usize = 8;
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
 pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
     let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need] };
+    let mut single = traverse::BigAnyStack::boxed();
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
     // left out of line would be compiled outside the AVX2 context (see `Bvh::closest_hits`).
     macro_rules! run {
@@ -41,7 +42,7 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCou
             while i < rays.len() {
                 let n = run_len(&rays[i..]);
                 if n == 1 {
-                    occluded[i] = traverse::any_hit_with(bvh, $isa, &rays[i], c, &mut stack.nodes);
+                    occluded[i] = traverse::any_hit_with(bvh, $isa, &rays[i], c, &mut single);
                 } else {
                     packet_any(bvh, $isa, &rays[i..i + n], &mut occluded[i..i + n], c, &mut stack);
                 }

@@ -295,13 +295,13 @@ impl Stack {
 
 /// The stacks of a batch: single rays' and packets'.
 pub struct Stacks {
-    pub single: super::traverse::Stack,
+    pub single: Box<super::traverse::BigStack>,
     pub packet: Stack,
 }
 
 impl Stacks {
     pub fn new(len: usize) -> Stacks {
-        Stacks { single: super::traverse::Stack::new(len), packet: Stack::new(len) }
+        Stacks { single: super::traverse::BigStack::boxed(), packet: Stack::new(len) }
     }
 }
 
@@ -508,8 +508,7 @@ pub fn trace_group<B: PacketTest>(
         let next = if pending == 0 { n } else { pending.trailing_zeros() as usize };
         for k in j..next {
             let i = slot[k] as usize;
-            hs[i] =
-                super::traverse::closest_hit_with(bvh, isa, &rs[i], &prep[k], c, &mut stack.nodes, &mut stack.dists);
+            hs[i] = super::traverse::closest_hit_with(bvh, isa, &rs[i], &prep[k], c, stack);
         }
         if next >= n {
             break;
@@ -528,8 +527,7 @@ pub fn trace_group<B: PacketTest>(
             j = next + len;
         } else {
             let i = slot[next] as usize;
-            hs[i] =
-                super::traverse::closest_hit_with(bvh, isa, &rs[i], &prep[next], c, &mut stack.nodes, &mut stack.dists);
+            hs[i] = super::traverse::closest_hit_with(bvh, isa, &rs[i], &prep[next], c, stack);
             j = next + 1;
         }
     }

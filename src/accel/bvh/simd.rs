@@ -1,6 +1,8 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a token whose constructor checked the CPU at run time.
-use super::boxtest::{BoxRay, BoxTest, EXIT_SCALE, PLANES, RootBox, TIE_SCALE, admit_mask_scalar, far, near};
+use super::boxtest::{
+    BoxRay, BoxTest, EXIT_SCALE, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, admit_mask_scalar, far, near,
+};
 use super::leaf::Tri4;
 use super::packet::{PACKET, PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH};
@@ -45,8 +47,8 @@ impl Avx2 {
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Sse {
     #[inline(always)]
-    fn prefetch<T>(self, x: &T) {
-        prefetch_lines(x);
+    fn prefetch_at(self, p: *const u8) {
+        prefetch_lines(p);
     }
 
     #[inline(always)]
@@ -96,8 +98,8 @@ impl BoxTest for Sse {
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Avx2 {
     #[inline(always)]
-    fn prefetch<T>(self, x: &T) {
-        prefetch_lines(x);
+    fn prefetch_at(self, p: *const u8) {
+        prefetch_lines(p);
     }
 
     #[inline(always)]
@@ -125,13 +127,12 @@ impl BoxTest for Avx2 {
         r: &BoxRay,
         oct: u32,
         tmax: f32,
-        nodes: &mut [u32],
-        dists: &mut [f32],
-        sp: usize,
+        nodes: &mut [u32; WIDTH],
+        dists: &mut [f32; WIDTH],
     ) -> (u32, u32) {
         // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the loads are unaligned
-        // ones of 8 u32 inside `node`, the stores go to the sub-slices of exactly 8 entries
-        // taken (bounds-checked) at `sp`; `COMPRESS` is indexed by an 8-bit mask.
+        // ones of 8 u32 inside `node`, the stores go to arrays of exactly 8 entries;
+        // `COMPRESS` is indexed by an 8-bit mask.
         unsafe {
             debug_assert_eq!(oct, r.octant);
             let (enter, hit) = slab8(node, r, tmax);
@@ -141,7 +142,6 @@ impl BoxTest for Avx2 {
                 return (1, node.child[mask.trailing_zeros() as usize]);
             }
             if n > 1 {
-                let (dn, dd) = (&mut nodes[sp..sp + WIDTH], &mut dists[sp..sp + WIDTH]);
                 // Slots in the octant's order (far to near); `permutevar8x32` reads only the
                 // low three bits of each index, so the other octants' bits need no masking.
                 let order =
@@ -151,8 +151,8 @@ impl BoxTest for Avx2 {
                 let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
                 let idx = _mm256_permutevar8x32_epi32(order, pack);
                 let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
-                _mm256_storeu_si256(dn.as_mut_ptr().cast(), child);
-                _mm256_storeu_ps(dd.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
+                _mm256_storeu_si256(nodes.as_mut_ptr().cast(), child);
+                _mm256_storeu_ps(dists.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
                 // The nearest (the last pushed) from the register, not back from the stack.
                 let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
                 return (n, _mm256_cvtsi256_si32(top) as u32);
@@ -522,16 +522,15 @@ unsafe fn box_ray8(ray: &Ray) -> BoxRay {
     }
 }
 
-/// Prefetches every cache line of `x` into all cache levels.
+/// Prefetches the [`PREFETCH_BYTES`] from `p` into all cache levels.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn prefetch_lines<T>(x: &T) {
-    let p = (x as *const T).cast::<i8>();
+fn prefetch_lines(p: *const u8) {
     let mut off = 0;
-    while off < std::mem::size_of::<T>() {
-        // SAFETY: a prefetch is a hint that never faults; the address is inside `x`, and
-        // SSE (which has the instruction) is part of x86-64.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.add(off)) };
+    while off < PREFETCH_BYTES {
+        // SAFETY: a prefetch is a hint that never faults, whatever the address; SSE (which
+        // has the instruction) is part of x86-64.
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off).cast::<i8>()) };
         off += 64;
     }
 }

@@ -9,22 +9,99 @@ use crate::accel::{TraceCounters, sphere};
 use crate::ray::{Hit, Ray};
 use glam::Vec3;
 
-/// Stack entries for trees up to this depth live in a fixed array; deeper trees (only
-/// possible for adversarial inputs) use a heap stack.
+/// Stack entries for trees up to this depth live in a small array; deeper trees use a
+/// [`BIG_STACK`] one on the heap.
 pub const FIXED_STACK: usize = 128;
 
-/// The closest-hit stack, node references and entry distances in separate arrays (the SIMD
-/// path stores a node's hit children as one vector each).
-pub struct Stack {
-    pub nodes: Vec<u32>,
-    pub dists: Vec<f32>,
+/// Entries of the largest stack: enough for any tree [`Bvh::build`] makes (SAH splits stop
+/// at 48 levels and median splits below halve the count, so fewer than 80 levels of
+/// [`WIDTH`] entries each; the build asserts it).
+pub const BIG_STACK: usize = 1024;
+
+/// Stack positions are taken modulo `N - WIDTH` (a power of two), which never wraps (a
+/// traversal only uses a stack that holds its tree's `stack_need`) but lets the compiler
+/// drop every bounds check in the loop: the eight entries above any position are inside.
+const fn mask(n: usize) -> usize {
+    assert!(n > WIDTH && (n - WIDTH).is_power_of_two());
+    n - WIDTH - 1
 }
 
-impl Stack {
-    pub fn new(len: usize) -> Stack {
-        Stack { nodes: vec![0; len], dists: vec![0.0; len] }
+/// A closest-hit stack of `N - WIDTH` entries: node references and entry distances in
+/// separate arrays (the SIMD path stores a node's hit children as one vector each).
+pub struct Stack<const N: usize> {
+    pub nodes: [u32; N],
+    pub dists: [f32; N],
+}
+
+impl<const N: usize> Stack<N> {
+    const MASK: usize = mask(N);
+
+    pub fn new() -> Self {
+        Stack { nodes: [0; N], dists: [0.0; N] }
+    }
+
+    pub fn boxed() -> Box<Self> {
+        Box::new(Self::new())
+    }
+
+    /// Whether a tree needing `need` entries fits.
+    pub const fn holds(need: usize) -> bool {
+        need <= N - WIDTH
+    }
+
+    /// The eight entries from position `sp` on.
+    #[inline(always)]
+    fn above(&mut self, sp: usize) -> (&mut [u32; WIDTH], &mut [f32; WIDTH]) {
+        let at = sp & Self::MASK;
+        let n = (&mut self.nodes[at..at + WIDTH]).try_into().expect("eight entries");
+        let d = (&mut self.dists[at..at + WIDTH]).try_into().expect("eight entries");
+        (n, d)
     }
 }
+
+impl<const N: usize> Default for Stack<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The closest-hit stack of single rays in shallow trees.
+pub type SmallStack = Stack<{ FIXED_STACK + WIDTH }>;
+/// The closest-hit stack of batches (and of single rays in deep trees).
+pub type BigStack = Stack<{ BIG_STACK + WIDTH }>;
+
+/// An any-hit stack of `N - WIDTH` node references (no distances: any hit ends the ray).
+pub struct AnyStack<const N: usize> {
+    nodes: [u32; N],
+}
+
+impl<const N: usize> AnyStack<N> {
+    const MASK: usize = mask(N);
+
+    pub fn new() -> Self {
+        AnyStack { nodes: [0; N] }
+    }
+
+    pub fn boxed() -> Box<Self> {
+        Box::new(Self::new())
+    }
+
+    /// Whether a tree needing `need` entries fits.
+    pub const fn holds(need: usize) -> bool {
+        need <= N - WIDTH
+    }
+}
+
+impl<const N: usize> Default for AnyStack<N> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The any-hit stack of single rays in shallow trees.
+pub type SmallAnyStack = AnyStack<{ FIXED_STACK + WIDTH }>;
+/// The any-hit stack of batches (and of single rays in deep trees).
+pub type BigAnyStack = AnyStack<{ BIG_STACK + WIDTH }>;
 
 /// The closest hit so far.
 pub(super) struct Best {
@@ -50,17 +127,15 @@ impl Best {
 
 #[inline(always)]
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
-    if bvh.stack_need <= FIXED_STACK {
-        let (mut nodes, mut dists) = ([0u32; FIXED_STACK], [0f32; FIXED_STACK]);
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut nodes, &mut dists)
+    if SmallStack::holds(bvh.stack_need) {
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut SmallStack::new())
     } else {
-        let mut s = Stack::new(bvh.stack_need);
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut s.nodes, &mut s.dists)
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut *BigStack::boxed())
     }
 }
 
 /// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a caller-provided
-/// stack of at least `bvh.stack_need` entries (batches set up their rays ahead, so the
+/// stack that [`Stack::holds`] `bvh.stack_need` (batches set up their rays ahead, so the
 /// divisions of one ray overlap the traversal of the one before, and reuse one stack instead
 /// of clearing a fresh one per ray).
 ///
@@ -68,15 +143,15 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounte
 /// their entry corner, not by the ray's entry distance): no sort per node. The entry
 /// distances still go on the stack, so a pop skips children beyond the closest hit so far.
 #[inline(always)]
-pub fn closest_hit_with<B: BoxTest>(
+pub fn closest_hit_with<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
     br: &BoxRay,
     c: &mut TraceCounters,
-    nodes: &mut [u32],
-    dists: &mut [f32],
+    stack: &mut Stack<N>,
 ) -> Option<Hit> {
+    debug_assert!(Stack::<N>::holds(bvh.stack_need));
     c.rays += 1;
     if !br.live {
         return None;
@@ -91,7 +166,8 @@ pub fn closest_hit_with<B: BoxTest>(
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
-            let (n, one) = isa.visit(node, br, br.octant, best.t, nodes, dists, sp);
+            let (pushed, dists) = stack.above(sp);
+            let (n, one) = isa.visit(node, br, br.octant, best.t, pushed, dists);
             if n == 1 {
                 // One child hit (the common case): no stack traffic.
                 cur = one;
@@ -101,7 +177,7 @@ pub fn closest_hit_with<B: BoxTest>(
                 // The nearest is on top: take it, the others wait.
                 sp += n as usize - 1;
                 cur = one;
-                for &r in &nodes[sp + 1 - n as usize..=sp] {
+                for &r in pushed.iter().take(n as usize) {
                     prefetch_child(bvh, isa, r);
                 }
                 continue;
@@ -116,24 +192,25 @@ pub fn closest_hit_with<B: BoxTest>(
                 return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
             }
             sp -= 1;
-            if dists[sp] <= best.t * TIE_SCALE {
-                cur = nodes[sp];
+            let at = sp & Stack::<N>::MASK;
+            if stack.dists[at] <= best.t * TIE_SCALE {
+                cur = stack.nodes[at];
                 break;
             }
         }
     }
 }
 
-/// Starts loading the node or leaf block behind child reference `r`.
+/// Starts loading the node or leaf block behind child reference `r`. Branch-free: both
+/// addresses are formed and one is picked by mask (a branch on leaf-or-node here was
+/// mispredicted about three times per diffuse ray); a prefetch never faults, so an address
+/// past either array is harmless.
 #[inline(always)]
 pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
-    if r & LEAF_BIT == 0 {
-        if let Some(n) = bvh.nodes.get(r as usize) {
-            isa.prefetch(n);
-        }
-    } else if let Some(b) = bvh.blocks.get(leaf_range(r).0 / LANES) {
-        isa.prefetch(b);
-    }
+    let leaf = 0usize.wrapping_sub((r >> 31) as usize);
+    let node = bvh.nodes.as_ptr().wrapping_add(r as usize) as usize;
+    let block = bvh.blocks.as_ptr().wrapping_add(leaf_range(r).0 / LANES) as usize;
+    isa.prefetch_at((block & leaf | node & !leaf) as *const u8);
 }
 
 /// Lanes of leaf `r` that need the scalar test (the SIMD kernels drop certain misses), with
@@ -206,21 +283,27 @@ fn sphere_hit(ray: &Ray, tmax: f32, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
 
 #[inline(always)]
 pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
-    if bvh.stack_need <= FIXED_STACK {
-        let mut fixed = [0u32; FIXED_STACK];
-        any_hit_with(bvh, isa, ray, c, &mut fixed)
+    if SmallAnyStack::holds(bvh.stack_need) {
+        any_hit_with(bvh, isa, ray, c, &mut SmallAnyStack::new())
     } else {
-        any_hit_with(bvh, isa, ray, c, &mut vec![0u32; bvh.stack_need])
+        any_hit_with(bvh, isa, ray, c, &mut *BigAnyStack::boxed())
     }
 }
 
-/// Any hit with a caller-provided stack of at least `bvh.stack_need` entries.
+/// Any hit with a caller-provided stack that [`AnyStack::holds`] `bvh.stack_need`.
 ///
 /// Leaf children of a node are tested as soon as the node is (before any inner child is
 /// entered): a shadow ray ends at its first hit, and a leaf costs one filter while an inner
 /// child costs at least another node. Only inner children go on the stack, in no order.
 #[inline(always)]
-pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters, stack: &mut [u32]) -> bool {
+pub fn any_hit_with<B: BoxTest, const N: usize>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    c: &mut TraceCounters,
+    stack: &mut AnyStack<N>,
+) -> bool {
+    debug_assert!(AnyStack::<N>::holds(bvh.stack_need));
     let br = &isa.box_ray(ray);
     c.rays += 1;
     if !br.live {
@@ -247,7 +330,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
             mask &= mask - 1;
             let child = node.child[i];
             if child & LEAF_BIT == 0 {
-                stack[sp] = child;
+                stack.nodes[sp & AnyStack::<N>::MASK] = child;
                 sp += 1;
                 continue;
             }
@@ -261,7 +344,7 @@ pub fn any_hit_with<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCount
             break false;
         }
         sp -= 1;
-        cur = stack[sp];
+        cur = stack.nodes[sp & AnyStack::<N>::MASK];
     };
     c.nodes += visited;
     c.prim_tests += tests;
