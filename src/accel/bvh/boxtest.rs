@@ -193,22 +193,33 @@ pub trait BoxTest: Copy {
     /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
     fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
 
+    /// [`BoxTest::test`] told the ray's form of the test (`fma` is [`BoxRay::fma`]), so a
+    /// caller can compile its loop once per form instead of branching on it per node.
+    #[inline(always)]
+    fn test_form(self, node: &Node8, r: &BoxRay, oct: u32, fma: bool, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+        debug_assert_eq!(fma, r.fma);
+        self.test(node, r, oct, tmax, tnear)
+    }
+
     /// Tests the children of `node` (as [`BoxTest::test`]) and, when two or more are hit,
     /// pushes them in the node's order for the ray's octant, farthest first, so the nearest
-    /// is on top: `nodes` their references, `dists` their entry distances. Returns the number hit and the nearest of them (when only one is hit,
-    /// it is not pushed).
-    /// `nodes` and `dists` are the eight free stack entries above the top (the SIMD path
-    /// stores whole vectors).
+    /// is on top: `nodes` their references, `dists` their entry distances (the eight free
+    /// stack entries above the top: the SIMD path stores whole vectors). Returns the number
+    /// hit and the nearest of them (when only one is hit, it is not pushed). `oct` and `fma`
+    /// as in [`BoxTest::test_form`].
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn visit(
         self,
         node: &Node8,
         r: &BoxRay,
         oct: u32,
+        fma: bool,
         tmax: f32,
         nodes: &mut [u32; WIDTH],
         dists: &mut [f32; WIDTH],
     ) -> (u32, u32) {
+        debug_assert_eq!(fma, r.fma);
         let mut tnear = [0f32; WIDTH];
         let mask = self.test(node, r, oct, tmax, &mut tnear);
         let n = mask.count_ones();

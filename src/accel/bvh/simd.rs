@@ -108,7 +108,18 @@ impl BoxTest for Avx2 {
         // an array of exactly 8 f32.
         unsafe {
             debug_assert_eq!(oct, r.octant);
-            let (enter, hit) = slab8(node, r, tmax);
+            let (enter, hit) = slab8(node, r, tmax, r.fma);
+            _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
+            _mm256_movemask_ps(hit) as u32
+        }
+    }
+
+    #[inline(always)]
+    fn test_form(self, node: &Node8, r: &BoxRay, oct: u32, fma: bool, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
+        // SAFETY: as in `test`.
+        unsafe {
+            debug_assert_eq!((oct, fma), (r.octant, r.fma));
+            let (enter, hit) = slab8(node, r, tmax, fma);
             _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
             _mm256_movemask_ps(hit) as u32
         }
@@ -121,11 +132,13 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn visit(
         self,
         node: &Node8,
         r: &BoxRay,
         oct: u32,
+        fma: bool,
         tmax: f32,
         nodes: &mut [u32; WIDTH],
         dists: &mut [f32; WIDTH],
@@ -134,8 +147,8 @@ impl BoxTest for Avx2 {
         // ones of 8 u32 inside `node`, the stores go to arrays of exactly 8 entries;
         // `COMPRESS` is indexed by an 8-bit mask.
         unsafe {
-            debug_assert_eq!(oct, r.octant);
-            let (enter, hit) = slab8(node, r, tmax);
+            debug_assert_eq!((oct, fma), (r.octant, r.fma));
+            let (enter, hit) = slab8(node, r, tmax, fma);
             let mask = _mm256_movemask_ps(hit) as u32;
             let n = mask.count_ones();
             if n == 1 {
@@ -397,13 +410,14 @@ unsafe fn admit8(root: &RootBox, rays: &[Ray; 8]) -> u32 {
     }
 }
 
-/// Entry distances and hit lanes of the eight children of `node` (AVX2 + FMA slab test).
+/// Entry distances and hit lanes of the eight children of `node` (AVX2 + FMA slab test; `fma`
+/// is `r.fma`: the fused form when its terms are finite).
 ///
 /// # Safety
 /// The CPU must have AVX2 and FMA.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32) -> (__m256, __m256) {
+unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32, fma: bool) -> (__m256, __m256) {
     // SAFETY: the caller guarantees AVX2 and FMA; each load reads 8 f32 of `node.b` at a
     // byte offset `32 * plane` with plane < 6 (`BoxRay::planes` is always `PLANES[octant]`),
     // unaligned loads.
@@ -411,7 +425,7 @@ unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32) -> (__m256, __m256) {
         let base = node.b.as_ptr().cast::<u8>();
         let plane = |k: usize| _mm256_loadu_ps(base.add(r.planes[k] as usize).cast::<f32>());
         let (t0, t1, t2, u0, u1, u2);
-        if r.fma {
+        if fma {
             // One fused op per plane (see `boxtest::fma_terms` for why this stays safe).
             let d = |k: usize, axis: usize, oi: &[f32; 3]| {
                 _mm256_fmsub_ps(plane(k), _mm256_set1_ps(r.inv[axis]), _mm256_set1_ps(oi[axis]))

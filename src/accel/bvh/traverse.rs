@@ -156,6 +156,21 @@ pub fn closest_hit_with<B: BoxTest, const N: usize>(
     if !br.live {
         return None;
     }
+    // The loop compiled once per form of the box test (no branch on it per node).
+    if br.fma { walk(bvh, isa, ray, br, true, c, stack) } else { walk(bvh, isa, ray, br, false, c, stack) }
+}
+
+/// The loop of [`closest_hit_with`] for a live ray; `fma` is `br.fma`.
+#[inline(always)]
+fn walk<B: BoxTest, const N: usize>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    br: &BoxRay,
+    fma: bool,
+    c: &mut TraceCounters,
+    stack: &mut Stack<N>,
+) -> Option<Hit> {
     // The shear is set up at the first leaf: many rays never reach one.
     let mut sr = None;
     let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
@@ -167,7 +182,7 @@ pub fn closest_hit_with<B: BoxTest, const N: usize>(
             visited += 1;
             let node = &bvh.nodes[cur as usize];
             let (pushed, dists) = stack.above(sp);
-            let (n, one) = isa.visit(node, br, br.octant, best.t, pushed, dists);
+            let (n, one) = isa.visit(node, br, br.octant, fma, best.t, pushed, dists);
             if n == 1 {
                 // One child hit (the common case): no stack traffic.
                 cur = one;
@@ -309,6 +324,21 @@ pub fn any_hit_with<B: BoxTest, const N: usize>(
     if !br.live {
         return false;
     }
+    // The loop compiled once per form of the box test (no branch on it per node).
+    if br.fma { walk_any(bvh, isa, ray, br, true, c, stack) } else { walk_any(bvh, isa, ray, br, false, c, stack) }
+}
+
+/// The loop of [`any_hit_with`] for a live ray; `fma` is `br.fma`.
+#[inline(always)]
+fn walk_any<B: BoxTest, const N: usize>(
+    bvh: &Bvh,
+    isa: B,
+    ray: &Ray,
+    br: &BoxRay,
+    fma: bool,
+    c: &mut TraceCounters,
+    stack: &mut AnyStack<N>,
+) -> bool {
     let mut sr = None;
     let mut sp = 0usize;
     let mut cur = 0u32;
@@ -317,7 +347,7 @@ pub fn any_hit_with<B: BoxTest, const N: usize>(
     let hit = 'trace: loop {
         visited += 1;
         let node = &bvh.nodes[cur as usize];
-        let mut mask = isa.test(node, br, br.octant, ray.tmax, &mut tnear);
+        let mut mask = isa.test_form(node, br, br.octant, fma, ray.tmax, &mut tnear);
         if mask.count_ones() > 1 {
             let mut m = mask;
             while m != 0 {
