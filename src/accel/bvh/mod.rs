@@ -299,7 +299,7 @@ impl Intersector for Bvh {
             return;
         }
         let order = self.batch_order(rays);
-        let mut stack = traverse::BigAnyStack::boxed();
+        let mut stack = traverse::BigStack::boxed();
         macro_rules! run {
             ($isa:expr) => {
                 match &order {

@@ -18,23 +18,23 @@ pub const FIXED_STACK: usize = 128;
 /// [`WIDTH`] entries each; the build asserts it).
 pub const BIG_STACK: usize = 1024;
 
-/// Stack positions are taken modulo `N - WIDTH` (a power of two), which never wraps (a
-/// traversal only uses a stack that holds its tree's `stack_need`) but lets the compiler
-/// drop every bounds check in the loop: the eight entries above any position are inside.
-const fn mask(n: usize) -> usize {
-    assert!(n > WIDTH && (n - WIDTH).is_power_of_two());
-    n - WIDTH - 1
-}
-
-/// A closest-hit stack of `N - WIDTH` entries: node references and entry distances in
-/// separate arrays (the SIMD path stores a node's hit children as one vector each).
+/// A traversal stack of `N - WIDTH` entries: node references and (closest hit only) entry
+/// distances, in separate arrays (the SIMD path stores a node's hit children as one vector
+/// each).
 pub struct Stack<const N: usize> {
     pub nodes: [u32; N],
     pub dists: [f32; N],
 }
 
 impl<const N: usize> Stack<N> {
-    const MASK: usize = mask(N);
+    /// Positions are taken modulo `N - WIDTH` (a power of two), which never wraps (a
+    /// traversal only uses a stack that [`Stack::holds`] its tree's `stack_need`) but lets the
+    /// compiler drop every bounds check in the loop: the eight entries above any position
+    /// are inside the arrays.
+    const MASK: usize = {
+        assert!(N > WIDTH && (N - WIDTH).is_power_of_two());
+        N - WIDTH - 1
+    };
 
     pub fn new() -> Self {
         Stack { nodes: [0; N], dists: [0.0; N] }
@@ -65,43 +65,10 @@ impl<const N: usize> Default for Stack<N> {
     }
 }
 
-/// The closest-hit stack of single rays in shallow trees.
+/// The stack of single rays in shallow trees.
 pub type SmallStack = Stack<{ FIXED_STACK + WIDTH }>;
-/// The closest-hit stack of batches (and of single rays in deep trees).
+/// The stack of batches (and of single rays in deep trees).
 pub type BigStack = Stack<{ BIG_STACK + WIDTH }>;
-
-/// An any-hit stack of `N - WIDTH` node references (no distances: any hit ends the ray).
-pub struct AnyStack<const N: usize> {
-    nodes: [u32; N],
-}
-
-impl<const N: usize> AnyStack<N> {
-    const MASK: usize = mask(N);
-
-    pub fn new() -> Self {
-        AnyStack { nodes: [0; N] }
-    }
-
-    pub fn boxed() -> Box<Self> {
-        Box::new(Self::new())
-    }
-
-    /// Whether a tree needing `need` entries fits.
-    pub const fn holds(need: usize) -> bool {
-        need <= N - WIDTH
-    }
-}
-
-impl<const N: usize> Default for AnyStack<N> {
-    fn default() -> Self {
-        Self::new()
-    }
-}
-
-/// The any-hit stack of single rays in shallow trees.
-pub type SmallAnyStack = AnyStack<{ FIXED_STACK + WIDTH }>;
-/// The any-hit stack of batches (and of single rays in deep trees).
-pub type BigAnyStack = AnyStack<{ BIG_STACK + WIDTH }>;
 
 /// The closest hit so far.
 pub(super) struct Best {
@@ -298,14 +265,14 @@ fn sphere_hit(ray: &Ray, tmax: f32, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
 
 #[inline(always)]
 pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
-    if SmallAnyStack::holds(bvh.stack_need) {
-        any_hit_with(bvh, isa, ray, c, &mut SmallAnyStack::new())
+    if SmallStack::holds(bvh.stack_need) {
+        any_hit_with(bvh, isa, ray, c, &mut SmallStack::new())
     } else {
-        any_hit_with(bvh, isa, ray, c, &mut *BigAnyStack::boxed())
+        any_hit_with(bvh, isa, ray, c, &mut *BigStack::boxed())
     }
 }
 
-/// Any hit with a caller-provided stack that [`AnyStack::holds`] `bvh.stack_need`.
+/// Any hit with a caller-provided stack that [`Stack::holds`] `bvh.stack_need`.
 ///
 /// Leaf children of a node are tested as soon as the node is (before any inner child is
 /// entered): a shadow ray ends at its first hit, and a leaf costs one filter while an inner
@@ -316,9 +283,9 @@ pub fn any_hit_with<B: BoxTest, const N: usize>(
     isa: B,
     ray: &Ray,
     c: &mut TraceCounters,
-    stack: &mut AnyStack<N>,
+    stack: &mut Stack<N>,
 ) -> bool {
-    debug_assert!(AnyStack::<N>::holds(bvh.stack_need));
+    debug_assert!(Stack::<N>::holds(bvh.stack_need));
     let br = &isa.box_ray(ray);
     c.rays += 1;
     if !br.live {
@@ -337,7 +304,7 @@ fn walk_any<B: BoxTest, const N: usize>(
     br: &BoxRay,
     fma: bool,
     c: &mut TraceCounters,
-    stack: &mut AnyStack<N>,
+    stack: &mut Stack<N>,
 ) -> bool {
     let mut sr = None;
     let mut sp = 0usize;
@@ -360,7 +327,7 @@ fn walk_any<B: BoxTest, const N: usize>(
             mask &= mask - 1;
             let child = node.child[i];
             if child & LEAF_BIT == 0 {
-                stack.nodes[sp & AnyStack::<N>::MASK] = child;
+                stack.nodes[sp & Stack::<N>::MASK] = child;
                 sp += 1;
                 continue;
             }
@@ -374,7 +341,7 @@ fn walk_any<B: BoxTest, const N: usize>(
             break false;
         }
         sp -= 1;
-        cur = stack.nodes[sp & AnyStack::<N>::MASK];
+        cur = stack.nodes[sp & Stack::<N>::MASK];
     };
     c.nodes += visited;
     c.prim_tests += tests;
