@@ -2,10 +2,11 @@
 mod common;
 mod meshgen;
 
+use common::same_hit;
 use glam::Vec3;
 use meshgen::{icosphere, scene_of};
 use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters, build};
-use wavepath::ray::{Hit, Ray};
+use wavepath::ray::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Mesh, Sphere};
 
@@ -13,14 +14,6 @@ fn random_ray(s: &mut Sampler, scale: f32) -> Ray {
     let o = Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5) * 4.0 * scale;
     let d = Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, s.next_f32() - 0.5);
     Ray::new(o, d)
-}
-
-fn same(a: Option<Hit>, b: Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => a.t.to_bits() == b.t.to_bits() && a.prim == b.prim,
-        _ => false,
-    }
 }
 
 #[test]
@@ -61,7 +54,7 @@ fn bvh_equals_brute_force_on_random_rays() {
     for _ in 0..20_000 {
         let r = random_ray(&mut s, 1.0);
         let (a, b) = (brute.closest_hit(&r, &mut c1), bvh.closest_hit(&r, &mut c2));
-        assert!(same(a, b), "{r:?}: brute {a:?} bvh {b:?}");
+        assert!(same_hit(a, b), "{r:?}: brute {a:?} bvh {b:?}");
         assert_eq!(brute.any_hit(&r, &mut c1), a.is_some());
         assert_eq!(bvh.any_hit(&r, &mut c2), a.is_some());
         let short = Ray { tmax: a.map_or(1.0, |h| h.t * 0.999), ..r };
@@ -97,8 +90,8 @@ fn every_isa_gives_identical_hits() {
         bvh.closest_hits(&rays, &mut batch, &mut c);
         for (i, r) in rays.iter().enumerate() {
             let got = bvh.closest_hit(r, &mut c);
-            assert!(same(got, want[i]), "{isa:?} {r:?}: {got:?} vs scalar {:?}", want[i]);
-            assert!(same(batch[i], want[i]), "{isa:?} batch {r:?}");
+            assert!(same_hit(got, want[i]), "{isa:?} {r:?}: {got:?} vs scalar {:?}", want[i]);
+            assert!(same_hit(batch[i], want[i]), "{isa:?} batch {r:?}");
             assert_eq!(bvh.any_hit(r, &mut c), want[i].is_some());
         }
     }
@@ -130,7 +123,7 @@ fn batches_in_any_order_and_isa_match_single_rays() {
             bvh.any_hits(&rays, &mut occluded, &mut c2);
             for i in 0..rays.len() {
                 assert!(
-                    same(hits[i], want_hit[i]),
+                    same_hit(hits[i], want_hit[i]),
                     "{isa:?} sorted={sorted} ray {i}: {:?} vs {:?}",
                     hits[i],
                     want_hit[i]
@@ -152,7 +145,7 @@ fn accel_build_switches_between_bvh_and_brute_force() {
     assert!(info.nodes > 0 && binfo.nodes == 0);
     let r = Ray::new(Vec3::new(0.01, 0.02, 5.0), Vec3::new(0.0, 0.0, -1.0));
     let mut c = TraceCounters::default();
-    assert!(same(bvh.closest_hit(&r, &mut c), brute.closest_hit(&r, &mut c)));
+    assert!(same_hit(bvh.closest_hit(&r, &mut c), brute.closest_hit(&r, &mut c)));
 }
 
 #[test]
@@ -233,7 +226,7 @@ fn every_isa_agrees_on_rays_ending_on_vertices() {
         let brute = BruteForce::new(scene);
         for (r, w) in rays.iter().zip(&want) {
             let b = brute.closest_hit(r, &mut c);
-            assert!(same(b, *w), "{r:?}: bvh {w:?}, brute force {b:?}");
+            assert!(same_hit(b, *w), "{r:?}: bvh {w:?}, brute force {b:?}");
         }
         for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
             let bvh = Bvh::build(scene).with_isa(isa);
@@ -243,8 +236,8 @@ fn every_isa_agrees_on_rays_ending_on_vertices() {
             bvh.any_hits(&rays, &mut occ, &mut c);
             for (i, r) in rays.iter().enumerate() {
                 let got = bvh.closest_hit(r, &mut c);
-                assert!(same(got, want[i]), "{isa:?} {r:?}: {got:?}, scalar {:?}", want[i]);
-                assert!(same(batch[i], want[i]), "{isa:?} batch {r:?}: scalar {:?}", want[i]);
+                assert!(same_hit(got, want[i]), "{isa:?} {r:?}: {got:?}, scalar {:?}", want[i]);
+                assert!(same_hit(batch[i], want[i]), "{isa:?} batch {r:?}: scalar {:?}", want[i]);
                 assert_eq!(occ[i], want[i].is_some(), "{isa:?} any-hit {r:?}");
             }
         }
