@@ -20,6 +20,8 @@ pub struct ShearedRay {
     pub sx: f32,
     pub sy: f32,
     pub sz: f32,
+    /// `org` in the order `kx`, `ky`, `kz` (the SIMD filter broadcasts these at every leaf).
+    pub org_k: [f32; 3],
 }
 
 impl ShearedRay {
@@ -48,7 +50,17 @@ impl ShearedRay {
         let y_wins = !x_wins & (a.y >= a.z);
         let kz = 2 - 2 * x_wins as usize - y_wins as usize;
         let [kx, ky] = AXES[2 * kz + (d[kz] < 0.0) as usize];
-        ShearedRay { org: ray.origin, kx, ky, kz, sx: d[kx] / d[kz], sy: d[ky] / d[kz], sz: 1.0 / d[kz] }
+        let o = ray.origin.to_array();
+        ShearedRay {
+            org: ray.origin,
+            kx,
+            ky,
+            kz,
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
+            org_k: [o[kx], o[ky], o[kz]],
+        }
     }
 }
 

@@ -211,6 +211,7 @@ impl PacketShear {
             sx: self.shear[0][k],
             sy: self.shear[1][k],
             sz: self.shear[2][k],
+            org_k: [self.org[0][k], self.org[1][k], self.org[2][k]],
         }
     }
 }

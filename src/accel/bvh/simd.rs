@@ -563,8 +563,8 @@ unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 
     // each lane array is 16 bytes at a multiple of 16).
     unsafe {
         let (kx, ky, kz) = (sr.kx, sr.ky, sr.kz);
-        let org = sr.org.to_array();
-        let (ox, oy, oz) = (_mm_set1_ps(org[kx]), _mm_set1_ps(org[ky]), _mm_set1_ps(org[kz]));
+        let [okx, oky, okz] = sr.org_k;
+        let (ox, oy, oz) = (_mm_set1_ps(okx), _mm_set1_ps(oky), _mm_set1_ps(okz));
         let (sx, sy, sz) = (_mm_set1_ps(sr.sx), _mm_set1_ps(sr.sy), _mm_set1_ps(sr.sz));
         // Sheared corner: (x, y, z) = (p[kx] - o[kx] - sx * az, p[ky] - o[ky] - sy * az, p[kz] - o[kz]).
         let corner = |c: usize| {
@@ -685,8 +685,12 @@ unsafe fn filter4_tail(a: [__m128; 3], b: [__m128; 3], c: [__m128; 3], sz: __m12
         let w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
         let zero = _mm_setzero_ps();
         let on_edge = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)), _mm_cmpeq_ps(w, zero));
-        let neg = _mm_or_ps(_mm_or_ps(_mm_cmplt_ps(u, zero), _mm_cmplt_ps(v, zero)), _mm_cmplt_ps(w, zero));
-        let pos = _mm_or_ps(_mm_or_ps(_mm_cmpgt_ps(u, zero), _mm_cmpgt_ps(v, zero)), _mm_cmpgt_ps(w, zero));
+        // Signs mixed: some edge function below zero and some above. By min and max: a result
+        // that is not NaN is one of u, v, w, so "min < 0" implies the scalar "u < 0 || v < 0 ||
+        // w < 0" (likewise max), and a NaN compares false: never a rejection the scalar test
+        // would not make.
+        let neg = _mm_cmplt_ps(_mm_min_ps(_mm_min_ps(u, v), w), zero);
+        let pos = _mm_cmpgt_ps(_mm_max_ps(_mm_max_ps(u, v), w), zero);
         let det = _mm_add_ps(_mm_add_ps(u, v), w);
         let sign = _mm_set1_ps(-0.0);
         let det_abs = _mm_andnot_ps(sign, det);
@@ -743,7 +747,65 @@ pub fn with_avx2<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
+    use crate::accel::triangle::intersect_sheared;
+    use crate::sampling::Sampler;
     use glam::Vec3;
+
+    /// The SIMD triangle filter never drops a lane the scalar watertight test hits: rays
+    /// through shared vertices and along edges (edge functions exactly zero), triangles with
+    /// zero, tiny, huge and overflowing coordinates (edge functions of inf and NaN), rays
+    /// starting on the triangle, and ranges that end on it.
+    #[test]
+    fn triangle_filter_keeps_every_scalar_hit() {
+        let Some(_) = Sse::new() else { return };
+        let special = [0.0, -0.0, 1.0, -1.0, 0.5, 1e-30, -1e-30, 1e-40, 1e20, -1e20, 3e38, -3e38];
+        let mut s = Sampler::for_sample(11, 0, 0);
+        let pick = |s: &mut Sampler| -> f32 {
+            if s.next_f32() < 0.3 {
+                special[(s.next_f32() * special.len() as f32) as usize % special.len()]
+            } else {
+                (s.next_f32() - 0.5) * 4.0
+            }
+        };
+        let (mut hits, mut checked) = (0, 0);
+        for _ in 0..40_000 {
+            let tris: [[Vec3; 3]; 4] =
+                std::array::from_fn(|_| std::array::from_fn(|_| Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s))));
+            let mut blk = Tri4 { tri_lanes: 0b1111, ..Default::default() };
+            for (lane, t) in tris.iter().enumerate() {
+                for (corner, p) in t.iter().enumerate() {
+                    for axis in 0..3 {
+                        blk.c[corner][axis][lane] = p[axis];
+                    }
+                }
+            }
+            // Aimed at a corner, at an edge's midpoint, or anywhere; from anywhere or from
+            // the triangle's first corner.
+            let t = &tris[(s.next_f32() * 4.0) as usize % 4];
+            let target = match (s.next_f32() * 3.0) as u32 {
+                0 => t[1],
+                1 => (t[1] + t[2]) * 0.5,
+                _ => Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)),
+            };
+            let origin = if s.next_f32() < 0.2 { t[0] } else { Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)) };
+            let ray = Ray::new(origin, target - origin);
+            if !crate::accel::triangle::ShearedRay::traceable(&ray) {
+                continue;
+            }
+            let sr = ShearedRay::of(&ray);
+            let tmax = if s.next_f32() < 0.3 { 1.0 } else { f32::INFINITY };
+            // SAFETY: SSE4.1 was detected above.
+            let kept = unsafe { tri_filter4(&blk, &sr, 0.0, tmax) };
+            for (lane, t) in tris.iter().enumerate() {
+                checked += 1;
+                if intersect_sheared(&sr, 0.0, tmax, t[0], t[1], t[2]).is_some() {
+                    hits += 1;
+                    assert!(kept >> lane & 1 == 1, "lane {lane} of {tris:?} dropped for {ray:?} (tmax {tmax})");
+                }
+            }
+        }
+        assert!(hits > 4_000 && checked > 100_000, "{hits} hits in {checked} tests: the rays miss too often");
+    }
 
     /// Every field of the AVX2 set-up equals the scalar one (bit for bit, any NaN matching
     /// any NaN), including zero, negative zero, denormal, huge, infinite and NaN components.
