@@ -104,19 +104,13 @@ impl BoxTest for Avx2 {
 
     #[inline(always)]
     fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the store is unaligned on
-        // an array of exactly 8 f32.
-        unsafe {
-            debug_assert_eq!(oct, r.octant);
-            let (enter, hit) = slab8(node, r, tmax, r.fma);
-            _mm256_storeu_ps(tnear.as_mut_ptr(), enter);
-            _mm256_movemask_ps(hit) as u32
-        }
+        self.test_form(node, r, oct, r.fma, tmax, tnear)
     }
 
     #[inline(always)]
     fn test_form(self, node: &Node8, r: &BoxRay, oct: u32, fma: bool, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        // SAFETY: as in `test`.
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; the store is unaligned on
+        // an array of exactly 8 f32.
         unsafe {
             debug_assert_eq!((oct, fma), (r.octant, r.fma));
             let (enter, hit) = slab8(node, r, tmax, fma);
