@@ -6,7 +6,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Duration;
 use wavepath::accel::{Bvh, Intersector, TraceCounters};
-use wavepath::ray::Ray;
+use wavepath::geometry::Ray;
 use wavepath::rays::{diffuse_rays, primary_rays};
 use wavepath::scene::{Mesh, Scene};
 

@@ -6,13 +6,14 @@
 pub mod accel;
 pub mod bsdf;
 pub mod cli;
+pub mod cpu;
 pub mod effects;
 pub mod film;
+pub mod geometry;
 pub mod integrator;
 pub mod lights;
 pub mod load;
 pub mod parts;
-pub mod ray;
 pub mod rays;
 pub mod render;
 pub mod sampling;

@@ -63,6 +63,9 @@ pub struct Settings {
     /// Run every stage and kernel feature even when the scene does not need it
     /// (`--all-effects`, for benchmarking what [`crate::effects::Effects`] saves).
     pub all_effects: bool,
+    /// The widest SIMD instruction set the kernels may use (`--isa`); every set gives the
+    /// same image, so this only changes speed.
+    pub isa: crate::cpu::Isa,
 }
 
 impl Default for Settings {
@@ -85,6 +88,7 @@ impl Default for Settings {
             integrator: IntegratorKind::Wavefront,
             sample_range: None,
             all_effects: false,
+            isa: crate::cpu::Isa::default(),
         }
     }
 }

@@ -11,7 +11,7 @@ mod meshgen;
 use glam::Vec3;
 use meshgen::{icosphere, scene_of};
 use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
-use wavepath::ray::{Hit, Ray};
+use wavepath::geometry::{Hit, Ray};
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Scene, Sphere};
 

@@ -6,7 +6,7 @@ use common::same_hit;
 use glam::Vec3;
 use meshgen::{icosphere, scene_of};
 use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters, build};
-use wavepath::ray::Ray;
+use wavepath::geometry::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Mesh, Sphere};
 

@@ -8,8 +8,8 @@
 
 use glam::{Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
-use wavepath::integrator::{offset_origin, shadow_ray};
-use wavepath::ray::Ray;
+use wavepath::geometry::Ray;
+use wavepath::geometry::offset::{offset_origin, shadow_ray};
 use wavepath::sampling::{Frame, Sampler};
 use wavepath::scene::{Material, Mesh, Scene, Sphere, SurfacePoint};
 

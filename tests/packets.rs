@@ -6,7 +6,7 @@ mod common;
 
 use glam::Vec3;
 use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters};
-use wavepath::ray::Ray;
+use wavepath::geometry::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::Scene;
 

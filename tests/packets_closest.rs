@@ -10,7 +10,7 @@ mod meshgen;
 use glam::Vec3;
 use meshgen::{icosphere, scene_of};
 use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
-use wavepath::ray::Ray;
+use wavepath::geometry::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::Scene;
 

@@ -6,7 +6,7 @@ use glam::Vec3;
 use meshgen::{icosphere, scene_of};
 use std::process::Command;
 use wavepath::accel::{Bvh, Intersector, TraceCounters};
-use wavepath::ray::Ray;
+use wavepath::geometry::Ray;
 use wavepath::rays::file::{HitRecord, parse_rays, read_hits, read_rays, write_rays};
 use wavepath::rays::{diffuse_rays, primary_rays, trace_all};
 

@@ -59,7 +59,7 @@ fn render_white_furnace(scene: &mut Scene) -> wavepath::film::Film {
     film
 }
 
-fn pixel_ray(scene: &Scene, x: usize, y: usize) -> wavepath::ray::Ray {
+fn pixel_ray(scene: &Scene, x: usize, y: usize) -> wavepath::geometry::Ray {
     scene.camera.generate_ray((x as f32 + 0.5) / W as f32, (y as f32 + 0.5) / H as f32)
 }
 

@@ -1,6 +1,6 @@
 use super::triangle::{ShearedRay, intersect_sheared};
 use super::{Intersector, TraceCounters, sphere};
-use crate::ray::{Hit, Ray};
+use crate::geometry::{Hit, Ray};
 use crate::scene::{Scene, Sphere};
 use glam::Vec3;
 

@@ -7,9 +7,9 @@ pub mod sphere;
 pub mod triangle;
 
 pub use brute::BruteForce;
-pub use bvh::{Bvh, Isa};
+pub use bvh::Bvh;
 
-use crate::ray::{Hit, Ray};
+use crate::geometry::{Hit, Ray};
 
 /// Work counters for one thread, merged into the render statistics.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -47,13 +47,6 @@ pub trait Intersector: Sync + Send {
         }
     }
 
-    /// [`Intersector::closest_hits`] for a queue of coherent rays (camera rays in pixel
-    /// blocks): accelerators may trace runs of neighbouring rays as packets. The results are
-    /// exactly those of `closest_hits`.
-    fn closest_hits_packets(&self, rays: &[Ray], hits: &mut [Option<Hit>], counters: &mut TraceCounters) {
-        self.closest_hits(rays, hits, counters)
-    }
-
     /// Any-hit for a whole queue of shadow rays (`occluded[i]`: ray i hits something).
     fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
         for (r, o) in rays.iter().zip(occluded.iter_mut()) {
@@ -78,10 +71,11 @@ pub struct BuildInfo {
     pub sah_cost: f64,
 }
 
-/// Builds the intersector the settings ask for: the BVH, or brute force for `--no-bvh`.
-pub fn build(scene: &crate::scene::Scene, use_bvh: bool) -> (Box<dyn Intersector>, BuildInfo) {
+/// Builds the intersector the settings ask for: the BVH (box tests of at most `isa`), or
+/// brute force for `--no-bvh`.
+pub fn build(scene: &crate::scene::Scene, use_bvh: bool, isa: crate::cpu::Isa) -> (Box<dyn Intersector>, BuildInfo) {
     if use_bvh {
-        let bvh = Bvh::build(scene);
+        let bvh = Bvh::build(scene).with_isa(isa);
         let info = bvh.info();
         return (Box::new(bvh), info);
     }

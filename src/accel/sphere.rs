@@ -1,5 +1,5 @@
 //! Ray–sphere intersection in the numerically stable form.
-use crate::ray::Ray;
+use crate::geometry::Ray;
 use glam::Vec3;
 
 /// Nearest root of |o + t d - c|^2 = r^2 inside [tmin, tmax].

@@ -6,7 +6,7 @@
 //! share an edge (same operands, same order), so a ray can never slip between them. Edge
 //! functions that round to exactly zero are recomputed in f64, where the products of the f32
 //! inputs are exact, which settles rays through edges and vertices.
-use crate::ray::Ray;
+use crate::geometry::Ray;
 use glam::Vec3;
 
 /// The per-ray part of the watertight test: the shear that maps the ray onto +z.
@@ -151,7 +151,7 @@ pub fn intersect_sheared(
 /// rejects real hits (a 1e-4 mesh traced with unnormalised rays) or leaves too little margin.
 #[inline(always)]
 fn t_error_bound(x: [f32; 3], y: [f32; 3], z: [f32; 3], e: [f32; 3], inv_det: f32, r: &ShearedRay) -> f32 {
-    use crate::scene::error_bound::gamma;
+    use crate::geometry::error_bound::gamma;
     let amax = |a: [f32; 3]| a[0].abs().max(a[1].abs()).max(a[2].abs());
     let (max_x, max_y, max_z, max_e) = (amax(x), amax(y), amax(z), amax(e));
     let max_z_world = max_z / r.sz.abs();

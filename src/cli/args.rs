@@ -1,5 +1,6 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
+use crate::cpu::Isa;
 use crate::film::Tonemap;
 use crate::load::CameraMode;
 use crate::settings::{IntegratorKind, Shading};
@@ -131,6 +132,10 @@ pub struct RenderArgs {
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,
+    /// Widest SIMD instruction set the kernels may use: scalar, sse, avx2, avx512 (capped by
+    /// what the CPU has; every choice gives the same image).
+    #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
+    pub isa: Isa,
     /// Base seed of all random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -160,4 +165,9 @@ pub struct RenderArgs {
     /// How parts divide the render: bands of rows (exact merge) or sample ranges.
     #[arg(long, value_enum, default_value_t = crate::parts::Split::Tiles)]
     pub split: crate::parts::Split,
+}
+
+/// `--isa`: one of the instruction-set names.
+pub fn parse_isa(s: &str) -> Result<Isa, String> {
+    Isa::parse(s).ok_or_else(|| format!("unknown instruction set '{s}' (scalar, sse, avx2, avx512)"))
 }

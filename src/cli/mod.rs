@@ -9,7 +9,7 @@ mod render_cmd;
 mod settings_from_args;
 pub mod study_cmd;
 
-pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs};
+pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs, parse_isa};
 
 use clap::Parser;
 

@@ -22,7 +22,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let scene = prepare_scene(a, &s)?;
     let scene_hash = identity::scene_hash(&scene);
     let (acc, mut stats) = crate::render::with_threads(s.threads, || -> Result<_> {
-        let (accel, build) = crate::accel::build(&scene, s.use_bvh);
+        let (accel, build) = crate::accel::build(&scene, s.use_bvh, s.isa);
         let (acc, mut stats) = crate::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
         stats.build_s = build.build_s;
         stats.threads = rayon::current_num_threads();

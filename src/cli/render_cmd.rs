@@ -54,7 +54,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     let (film, build) = crate::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
-        let (accel, build) = crate::accel::build(&scene, s.use_bvh);
+        let (accel, build) = crate::accel::build(&scene, s.use_bvh, s.isa);
         eprintln!(
             "[wavepath] Built {} in {:.4} s ({} nodes, depth {})",
             accel.name(),

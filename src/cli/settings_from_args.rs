@@ -54,6 +54,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.rr_continue = a.rr as f32;
     s.hemisphere = a.hemisphere;
     s.use_bvh = !a.no_bvh;
+    s.isa = a.isa;
     s.seed = a.seed;
     s.integrator = a.integrator;
     s.all_effects = a.all_effects;

@@ -118,7 +118,7 @@ pub fn run(a: &StudyArgs) -> Result<()> {
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
     let result = crate::render::with_threads(cfg.base.threads, || -> Result<_> {
-        let (accel, _) = crate::accel::build(&scene, true);
+        let (accel, _) = crate::accel::build(&scene, true, cfg.base.isa);
         crate::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
     })??;
     crate::study::report::write_all(&result, &out, &stem, &command)?;

@@ -28,7 +28,7 @@ impl PixelSums {
         let d = l.as_dvec3();
         self.sum += d;
         self.sum_sq += d * d;
-        let y = crate::integrator::illuminance(l) as f64;
+        let y = crate::geometry::illuminance(l) as f64;
         self.s1 += y;
         self.s2 += y * y;
         self.valid += 1;

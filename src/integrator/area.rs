@@ -3,8 +3,8 @@
 //! lane kernel: the lane kernel calls these same functions on each of 8 lanes in a
 //! fixed-size loop that the compiler vectorises, so both give the same bits.
 
-use super::offset::{offset_origin, shadow_tmax_at};
-use crate::ray::Ray;
+use crate::geometry::Ray;
+use crate::geometry::offset::{offset_origin, shadow_tmax_at};
 use crate::sampling::{Frame, warp};
 use glam::Vec3;
 
@@ -25,7 +25,7 @@ pub struct AreaLight {
     pub dim_x: Vec3,
     pub dim_y: Vec3,
     pub area: f32,
-    /// [`shadow_margin`](super::offset::shadow_margin) of the light's points.
+    /// [`shadow_margin`](crate::geometry::offset::shadow_margin) of the light's points.
     pub margin: f32,
 }
 

@@ -17,8 +17,8 @@
 
 use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin};
 use crate::bsdf::{Kind, Lambert, Model, power_heuristic, to_local};
+use crate::geometry::{Hit, Ray};
 use crate::lights::Seen;
-use crate::ray::{Hit, Ray};
 use crate::sampling::{Frame, Sampler, warp};
 use glam::Vec3;
 

@@ -9,17 +9,17 @@
 
 pub mod area;
 mod material;
-mod offset;
+
 pub mod recursive;
 
 pub use material::{Bounce, ShadingFrame};
 
-pub use offset::{offset_origin, shadow_margin, shadow_ray, shadow_tmax};
+use crate::geometry::offset::{self, offset_origin, shadow_margin};
 
 use area::{AreaLight, ShadingPoint};
 
+use crate::geometry::{Hit, Ray};
 use crate::lights::{LightSet, SampledLight};
-use crate::ray::{Hit, Ray};
 use crate::sampling::{Frame, Sampler, warp};
 use crate::scene::{Scene, Textures};
 use crate::settings::{Settings, Shading};
@@ -62,6 +62,9 @@ pub struct Transport<'a> {
     pub area_lights: Vec<Option<AreaLight>>,
     /// Per light: [`shadow_margin`] of its points.
     shadow_margins: Vec<f32>,
+    /// The AVX2 token when the settings' [`crate::cpu::Isa`] allows it and the CPU has it:
+    /// the kernels that run eight paths in lanes take it.
+    pub avx2: Option<crate::cpu::Avx2>,
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -143,6 +146,7 @@ impl<'a> Transport<'a> {
             })
             .collect();
         Transport {
+            avx2: s.isa.avx2(),
             area_lights,
             shadow_margins,
             scene,
@@ -397,10 +401,4 @@ impl<'a> Transport<'a> {
         let d = Vec3::new((px - 0.5) * 2.0 * tw, (py - 0.5) * 2.0 * th, -1.0);
         Ray { origin: cam.position, dir: (cam.c2w * d).normalize(), tmin: cam.nclip, tmax: cam.fclip }
     }
-}
-
-/// Luminance weights the reference uses for adaptive sampling (`illum()`).
-#[inline]
-pub fn illuminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
 }

@@ -6,7 +6,7 @@
 use super::{Bounce, DirectRay, Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::{Accumulator, PixelSums};
-use crate::ray::Ray;
+use crate::geometry::Ray;
 use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::stats::RenderStats;

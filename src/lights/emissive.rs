@@ -1,7 +1,7 @@
 use super::{LightSample, area_to_solid_angle};
+use crate::geometry::error_bound::gamma;
 use crate::sampling::warp;
 use crate::scene::Scene;
-use crate::scene::error_bound::gamma;
 use glam::Vec3;
 
 /// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its

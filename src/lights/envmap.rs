@@ -75,7 +75,7 @@ impl EnvMap {
             .enumerate()
             .map(|(i, t)| {
                 let theta = ((i / width) as f32 + 0.5) / height as f32 * PI;
-                crate::integrator::illuminance(*t) * theta.sin()
+                crate::geometry::illuminance(*t) * theta.sin()
             })
             .collect();
         let dist = Distribution2D::with_payload(&weights, &texels, width, height);

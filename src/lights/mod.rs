@@ -19,7 +19,7 @@ pub use emissive::EmissiveTriangles;
 pub use envmap::EnvMap;
 pub use infinite::Infinite;
 
-use crate::scene::error_bound::gamma;
+use crate::geometry::error_bound::gamma;
 use crate::scene::{Environment, Light, Scene};
 use glam::Vec3;
 
@@ -187,7 +187,7 @@ impl SampledLight {
                     return None;
                 }
                 if let Seen::Hit { t: th, .. } = seen
-                    && th < crate::integrator::shadow_tmax(p, q, self.point_error())
+                    && th < crate::geometry::offset::shadow_tmax(p, q, self.point_error())
                 {
                     return None;
                 }

@@ -47,6 +47,6 @@ pub fn scene_hash(scene: &Scene) -> String {
 /// The settings that decide the image, as text: everything except what only decides how
 /// it is computed (threads) or which part is computed (cell, sample range).
 pub fn settings_key(s: &Settings) -> String {
-    let canonical = Settings { threads: 0, cell: None, sample_range: None, ..s.clone() };
+    let canonical = Settings { threads: 0, cell: None, sample_range: None, isa: Default::default(), ..s.clone() };
     format!("{canonical:?}")
 }

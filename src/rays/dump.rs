@@ -2,8 +2,8 @@
 use super::DumpArgs;
 use super::file::write_rays;
 use crate::accel::{Bvh, Intersector, TraceCounters};
+use crate::geometry::Ray;
 use crate::load::{LoadOptions, load};
-use crate::ray::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
 use anyhow::{Result, bail};

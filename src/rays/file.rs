@@ -1,5 +1,5 @@
 //! Ray and hit files in the format of ../shared/peers (little-endian, see DESIGN.md).
-use crate::ray::{Hit, Ray};
+use crate::geometry::{Hit, Ray};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

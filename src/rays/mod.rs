@@ -53,6 +53,9 @@ pub struct TraceArgs {
     /// Variant label printed in the JSON line.
     #[arg(long, default_value = "bvh")]
     pub variant: String,
+    /// Widest SIMD instruction set of the box tests: scalar, sse, avx2, avx512.
+    #[arg(long, value_name = "ISA", value_parser = crate::cli::parse_isa, default_value = "avx2")]
+    pub isa: crate::cpu::Isa,
 }
 
 pub fn dump(args: &DumpArgs) -> Result<()> {

@@ -2,8 +2,8 @@
 use super::TraceArgs;
 use super::file::{HitRecord, read_rays, write_hits};
 use crate::accel::{Bvh, Intersector, TraceCounters};
+use crate::geometry::{Hit, Ray};
 use crate::load::{LoadOptions, load};
-use crate::ray::{Hit, Ray};
 use anyhow::Result;
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -28,8 +28,7 @@ pub fn trace_all(accel: &dyn Intersector, rays: &[Ray], out: &mut [HitRecord], t
         while let Some((start, mut dst)) = claim() {
             let rs = &rays[start..start + dst.len()];
             let hs = &mut buf[..rs.len()];
-            // The peers' primary rays come in 4x4 pixel blocks (packets where runs allow).
-            accel.closest_hits_packets(rs, hs, &mut c);
+            accel.closest_hits(rs, hs, &mut c);
             for (d, h) in dst.iter_mut().zip(hs.iter()) {
                 *d = HitRecord::from_hit(*h);
             }
@@ -56,7 +55,7 @@ pub fn trace(args: &TraceArgs) -> Result<()> {
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
     let scene = load(&args.mesh, &LoadOptions::default())?;
-    let bvh = Bvh::build(&scene);
+    let bvh = Bvh::build(&scene).with_isa(args.isa);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];
     for _ in 0..args.warmup {

@@ -6,6 +6,7 @@
 
 use super::Sampler;
 use super::rng::unit_f32;
+use crate::cpu::Avx2;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
@@ -13,14 +14,12 @@ use std::arch::x86_64::*;
 pub const LANES: usize = 8;
 
 /// `splitmix64` of each input.
-///
-/// # Safety
-/// The CPU must have AVX2.
+/// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub unsafe fn splitmix64_x8(z: &[u64; LANES]) -> [u64; LANES] {
+pub fn splitmix64_x8(_: Avx2, z: &[u64; LANES]) -> [u64; LANES] {
     let mut out = [0u64; LANES];
-    // SAFETY: the caller guarantees AVX2; loads and stores are unaligned ones of four u64
+    // SAFETY: the token proves AVX2; loads and stores are unaligned ones of four u64
     // inside the arrays `z` and `out`.
     unsafe {
         for half in 0..2 {
@@ -33,31 +32,26 @@ pub unsafe fn splitmix64_x8(z: &[u64; LANES]) -> [u64; LANES] {
 
 /// [`Sampler::for_vertex`] of eight paths: the streams whose keys are `splitmix64` of the
 /// [`Sampler::vertex_input`]s `inputs`.
-///
-/// # Safety
-/// The CPU must have AVX2.
+/// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub unsafe fn for_vertex_x8(inputs: &[u64; LANES]) -> [Sampler; LANES] {
-    // SAFETY: the caller guarantees AVX2.
-    let keys = unsafe { splitmix64_x8(inputs) };
+pub fn for_vertex_x8(avx: Avx2, inputs: &[u64; LANES]) -> [Sampler; LANES] {
+    let keys = splitmix64_x8(avx, inputs);
     keys.map(Sampler::from_vertex_hash)
 }
 
 /// [`Sampler::next_2d`] of each stream at dimension `dim` (the stream's own dimension is
 /// ignored): `(a, b)` per lane.
-///
-/// # Safety
-/// The CPU must have AVX2.
+/// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub unsafe fn next_2d_x8(s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+pub fn next_2d_x8(_: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
     let mut z = [0u64; LANES];
     for j in 0..LANES {
         z[j] = s[j].dim_input(dim);
     }
     let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
-    // SAFETY: the caller guarantees AVX2; loads and stores are unaligned ones of four u64
+    // SAFETY: the token proves AVX2; loads and stores are unaligned ones of four u64
     // or eight f32 inside the arrays `z`, `a` and `b`.
     unsafe {
         let h0 = splitmix4(_mm256_loadu_si256(z.as_ptr().cast()));
@@ -77,14 +71,11 @@ pub unsafe fn next_2d_x8(s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32;
 }
 
 /// [`Sampler::next_f32`] of each stream at dimension `dim`.
-///
-/// # Safety
-/// The CPU must have AVX2.
+/// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub unsafe fn next_f32_x8(s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
-    // SAFETY: the caller guarantees AVX2.
-    unsafe { next_2d_x8(s, dim).0 }
+pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
+    next_2d_x8(avx, s, dim).0
 }
 
 /// The low 64 bits of `a * c` in each 64-bit lane.
@@ -132,20 +123,16 @@ mod tests {
 
     type Pairs = ([f32; LANES], [f32; LANES]);
 
-    #[target_feature(enable = "avx2")]
-    fn run(keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
+    fn run(avx: Avx2, keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
         let s = keys.map(|k| Sampler::for_vertex(k, 3));
-        // SAFETY: AVX2 is enabled for this function (its callers detect it).
-        unsafe { (splitmix64_x8(keys), next_2d_x8(&s, dim), next_f32_x8(&s, dim)) }
+        (splitmix64_x8(avx, keys), next_2d_x8(avx, &s, dim), next_f32_x8(avx, &s, dim))
     }
 
     /// Eight lanes give the scalar streams' numbers, bit for bit, for keys with high, low,
     /// zero and all-ones halves (the 32 x 32-bit products and their carries).
     #[test]
     fn lanes_are_the_scalar_streams() {
-        if !is_x86_feature_detected!("avx2") {
-            return;
-        }
+        let Some(avx) = Avx2::new() else { return };
         let mut state = 0x0123_4567_89AB_CDEFu64;
         let mut groups = vec![[0, u64::MAX, 1, 1 << 32, (1 << 32) - 1, u64::MAX << 32, 0x8000_0000_0000_0000, 42]];
         for _ in 0..5000 {
@@ -158,8 +145,7 @@ mod tests {
         }
         for (n, keys) in groups.iter().enumerate() {
             let dim = n as u32 % 11;
-            // SAFETY: AVX2 was detected above.
-            let (h, (a, b), f) = unsafe { run(keys, dim) };
+            let (h, (a, b), f) = crate::cpu::with_avx2(avx, |avx| run(avx, keys, dim));
             for j in 0..LANES {
                 assert_eq!(h[j], splitmix64(keys[j]), "{:#x}", keys[j]);
                 let (mut s2, mut s1) =

@@ -1,4 +1,4 @@
-use crate::ray::Ray;
+use crate::geometry::Ray;
 use glam::{Mat3, Vec3};
 
 /// A pinhole (or thin-lens) camera with the CS184 conventions: the image plane sits at

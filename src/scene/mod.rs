@@ -5,7 +5,7 @@
 
 mod camera;
 mod camera_file;
-pub mod error_bound;
+
 mod material;
 mod mesh;
 mod normals;

@@ -1,6 +1,6 @@
 use super::Scene;
-use super::error_bound::{sphere_error, triangle_error};
-use crate::ray::{Hit, Ray};
+use crate::geometry::error_bound::{sphere_error, triangle_error};
+use crate::geometry::{Hit, Ray};
 use glam::{Vec2, Vec3};
 
 /// What shading needs to know about a hit point.

@@ -1,6 +1,7 @@
 //! Stage 1: camera rays for every (pixel, sample) slot of a wave.
 
 use super::queues::PathQueue;
+use crate::cpu::Avx2;
 use crate::integrator::Transport;
 use crate::sampling::{Sampler, rng8};
 use glam::Vec3;
@@ -40,9 +41,12 @@ pub fn generate(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, hei
     q.ray.reserve(n);
     q.key.reserve(n);
     #[cfg(target_arch = "x86_64")]
-    if t.pinhole() && is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        // SAFETY: AVX2 and FMA were detected on this CPU just above.
-        unsafe { pinhole_avx2(t, q, wave, width, height, spp) };
+    if let (true, Some(avx)) = (t.pinhole(), t.avx2) {
+        crate::cpu::with_avx2(
+            avx,
+            #[inline(always)]
+            |avx| pinhole_lanes(avx, t, q, wave, width, height, spp),
+        );
         q.start_camera_paths(n);
         return;
     }
@@ -65,8 +69,8 @@ const L: usize = 8;
 /// The pinhole camera's rays of the wave, eight samples of a pixel at a time; the same rays
 /// as [`Transport::camera_ray_keyed`] (the same functions, per lane).
 #[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn pinhole_avx2(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+#[inline(always)]
+fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
         let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
@@ -80,20 +84,17 @@ fn pinhole_avx2(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, hei
             for (j, input) in inputs.iter_mut().enumerate() {
                 *input = Sampler::sample_input(pixel_key, (sample + j as u32) as u64);
             }
-            // SAFETY: this function is compiled with AVX2 and runs only where it was detected.
-            let keys = unsafe { rng8::splitmix64_x8(&inputs) };
+            let keys = rng8::splitmix64_x8(avx, &inputs);
             let (jx, jy) = if spp <= 1 {
                 ([0.5f32; L], [0.5f32; L])
             } else {
                 for j in 0..L {
                     inputs[j] = Sampler::vertex_input(keys[j], 0);
                 }
-                // SAFETY: as above.
-                let streams = unsafe { rng8::for_vertex_x8(&inputs) };
-                // SAFETY: as above.
-                unsafe { rng8::next_2d_x8(&streams, 0) }
+                let streams = rng8::for_vertex_x8(avx, &inputs);
+                rng8::next_2d_x8(avx, &streams, 0)
             };
-            let mut rays = [crate::ray::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
+            let mut rays = [crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
             for j in 0..L {
                 rays[j] = t.pinhole_ray(x, y, width, height, jx[j], jy[j]);
             }

@@ -13,10 +13,11 @@
 
 use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
+use crate::cpu::Avx2;
+use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, orient};
 use crate::lights::SampledLight;
-use crate::ray::{Hit, Ray};
 use crate::sampling::{Sampler, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::Vec3;
@@ -40,20 +41,16 @@ pub fn shade_lanes<F: Features>(
     shadow: &mut ShadowQueue,
 ) -> bool {
     #[cfg(target_arch = "x86_64")]
-    if is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma") {
-        // SAFETY: AVX2 and FMA were detected on this CPU just above.
-        unsafe { shade_avx2::<F>(t, q, hits, shadow) };
+    if let Some(avx) = t.avx2 {
+        crate::cpu::with_avx2(
+            avx,
+            #[inline(always)]
+            |avx| shade_groups::<F>(avx, t, q, hits, shadow),
+        );
         return true;
     }
     let _ = (t, q, hits, shadow);
     false
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn shade_avx2<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
-    // SAFETY: this function is compiled with AVX2 and runs only where it was detected.
-    unsafe { shade_groups::<F>(t, q, hits, shadow) };
 }
 
 /// The shading points of a group, one array per component.
@@ -239,11 +236,17 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
     }
 }
 
-/// # Safety
-/// The CPU must have AVX2 (the random numbers are drawn eight streams at a time).
+/// The lanes of a wave, eight paths at a time; the random numbers are drawn eight streams
+/// at a time (hence the token).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+fn shade_groups<F: Features>(
+    avx: Avx2,
+    t: &Transport,
+    q: &mut PathQueue,
+    hits: &[Option<Hit>],
+    shadow: &mut ShadowQueue,
+) {
     shadow.clear();
     let sees_emission = t.counts_emission();
     let n = q.len().min(hits.len());
@@ -289,8 +292,7 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
         if !direct.iter().chain(&cont).any(|&b| b) {
             continue;
         }
-        // SAFETY: the caller guarantees AVX2.
-        let rng = unsafe { rng8::for_vertex_x8(&vertex_input) };
+        let rng = rng8::for_vertex_x8(avx, &vertex_input);
         surface_points(&surf, normals, spheres, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;
@@ -310,8 +312,7 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
                     pending.resize_with(ns as usize, Rays::default);
                 }
                 for p in pending.iter_mut().take(ns as usize) {
-                    // SAFETY: the caller guarantees AVX2.
-                    let (ua, ub) = unsafe { rng8::next_2d_x8(&rng, dim) };
+                    let (ua, ub) = rng8::next_2d_x8(avx, &rng, dim);
                     let (ua, ub) = (unused_half(ua, &direct), unused_half(ub, &direct));
                     dim += 1;
                     area_rays(&pts, al, &ua, &ub, p);
@@ -337,11 +338,9 @@ unsafe fn shade_groups<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Op
             }
         }
         if F::INDIRECT && cont.iter().any(|&c| c) {
-            // SAFETY: the caller guarantees AVX2.
-            let (ua, ub) = unsafe { rng8::next_2d_x8(&rng, 0) };
+            let (ua, ub) = rng8::next_2d_x8(avx, &rng, 0);
             let (ua, ub) = (unused_half(ua, &cont), unused_half(ub, &cont));
-            // SAFETY: the caller guarantees AVX2.
-            let rr = if F::ROULETTE { unsafe { rng8::next_f32_x8(&rng, DIM_ROULETTE) } } else { [0.0; L] };
+            let rr = if F::ROULETTE { rng8::next_f32_x8(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..m {
                 if cont[j] {

@@ -3,8 +3,8 @@
 //! allocates nothing. Rays are kept whole (`Ray`) because that is what the intersector's
 //! batch interface consumes.
 
+use crate::geometry::Ray;
 use crate::integrator::Bounce;
-use crate::ray::Ray;
 use glam::Vec3;
 
 /// Paths in flight: the ray each traces next and the path's state.

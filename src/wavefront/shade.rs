@@ -2,8 +2,8 @@
 
 use super::Features;
 use super::queues::{PathQueue, ShadowQueue};
+use crate::geometry::Hit;
 use crate::integrator::Transport;
-use crate::ray::Hit;
 use crate::sampling::Sampler;
 use glam::Vec3;
 

@@ -2,7 +2,7 @@
 
 use super::queues::PathQueue;
 use crate::accel::{Intersector, TraceCounters};
-use crate::ray::Hit;
+use crate::geometry::Hit;
 
 /// Traces the whole path queue through the intersector's batch interface.
 pub fn traverse(accel: &dyn Intersector, paths: &PathQueue, hits: &mut Vec<Option<Hit>>, c: &mut TraceCounters) {

@@ -7,7 +7,7 @@ pub mod chi2;
 pub mod render;
 
 use std::path::PathBuf;
-use wavepath::ray::Hit;
+use wavepath::geometry::Hit;
 
 /// Whether two traversals found the same hit, bit for bit (t, primitive, barycentrics).
 pub fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {

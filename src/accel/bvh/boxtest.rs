@@ -12,20 +12,11 @@ use super::leaf::Tri4;
 use super::packet::{PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
-use crate::ray::Ray;
+use crate::geometry::Ray;
+pub(super) use crate::geometry::error_bound::TIE_SCALE;
 
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
-
-/// The margin on the far end of the ray's range (its `tmax`, or the closest hit so far) in
-/// box tests and stack pops. A hit on a box's boundary (a ray through a shared vertex or
-/// edge, or ending on a surface) has a `t` that rounds independently of the box's entry
-/// distance, by a few ulps each way; without a margin the leaf holding the tied triangle with
-/// the lower id could be culled or not depending on the order leaves are visited in, so the
-/// ISAs (different visiting orders) would report different triangles. 2^-16 relative is ~100
-/// ulps: it covers the rounding of both for coordinates of the order of the distances and
-/// costs nothing measurable (a node entering within it beyond the closest hit is rare).
-pub const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 
 /// Bytes a prefetch asks for: a whole node (a leaf block is 192 of them).
 pub const PREFETCH_BYTES: usize = std::mem::size_of::<Node8>();

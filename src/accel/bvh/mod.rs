@@ -8,7 +8,7 @@
 macro_rules! on_isa {
     ($bvh:expr, |$t:ident| $body:expr) => {
         match $bvh.tokens() {
-            (_, Some(avx)) => $crate::accel::bvh::simd::with_avx2(
+            (_, Some(avx)) => $crate::cpu::with_avx2(
                 avx,
                 #[inline(always)]
                 |$t| $body,
@@ -25,82 +25,22 @@ macro_rules! on_isa {
 mod boxtest;
 mod build;
 mod leaf;
-mod order;
 mod packet;
-mod packet_closest;
 mod simd;
 mod traverse;
 mod wide;
 
 use super::{BuildInfo, Intersector, TraceCounters};
-use crate::ray::{Hit, Ray};
+use crate::geometry::{Hit, Ray};
 use crate::scene::Scene;
-pub use boxtest::TIE_SCALE;
+
+use crate::cpu::{Avx2, Isa, Sse};
 use boxtest::{BoxRay, BoxTest, RootBox};
 use build::PrimRef;
 use glam::Vec3;
-use packet_closest::PacketTest;
 use rayon::prelude::*;
-use simd::{Avx2, Sse};
 use std::time::Instant;
 pub use wide::Node8;
-
-/// Instruction set of the box test.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Isa {
-    Scalar,
-    Sse,
-    Avx2,
-    /// Accepted for `WAVEPATH_ISA=avx512`; runs the AVX2 kernel (8 boxes fill one 256-bit
-    /// register, so 512-bit lanes would sit half empty).
-    Avx512,
-}
-
-impl Isa {
-    /// The best instruction set this CPU supports.
-    pub fn detect() -> Isa {
-        if Avx2::new().is_some() {
-            Isa::Avx2
-        } else if Sse::new().is_some() {
-            Isa::Sse
-        } else {
-            Isa::Scalar
-        }
-    }
-
-    /// `WAVEPATH_ISA=scalar|sse|avx2|avx512` if set and valid, else [`Isa::detect`].
-    pub fn from_env() -> Isa {
-        std::env::var("WAVEPATH_ISA").ok().and_then(|s| Isa::parse(&s)).unwrap_or_else(Isa::detect)
-    }
-
-    pub fn parse(s: &str) -> Option<Isa> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "scalar" => Some(Isa::Scalar),
-            "sse" | "sse4" | "sse4.1" => Some(Isa::Sse),
-            "avx2" => Some(Isa::Avx2),
-            "avx512" => Some(Isa::Avx512),
-            _ => None,
-        }
-    }
-
-    /// The path that actually runs for this request on this CPU (never one it lacks).
-    pub fn effective(self) -> Isa {
-        match self {
-            Isa::Avx512 | Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
-            Isa::Avx512 | Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
-            _ => Isa::Scalar,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Isa::Scalar => "scalar",
-            Isa::Sse => "sse",
-            Isa::Avx2 => "avx2",
-            Isa::Avx512 => "avx512",
-        }
-    }
-}
 
 /// An 8-wide BVH over the triangles and spheres of a scene.
 pub struct Bvh {
@@ -115,25 +55,13 @@ pub struct Bvh {
     blocks: Vec<leaf::Tri4>,
     stack_need: usize,
     isa: Isa,
-    /// Trace batches in [`order::coherent`] order (else queue order).
-    sort_batches: bool,
-    /// Bounds of everything in the tree (the grid of the ray-order key).
-    lo: Vec3,
-    hi: Vec3,
     /// The quick test of batched closest-hit rays (None: every ray is traversed).
     root: Option<RootBox>,
     info: BuildInfo,
 }
 
-/// `WAVEPATH_RAY_ORDER=sorted` traces batches in [`order::coherent`] order. Off by default:
-/// measured on CBbunny and CBlucy (BENCHMARKS.md) it cost more than it saved, as this
-/// machine's caches hold those trees whatever the order.
-fn ray_order_from_env() -> bool {
-    std::env::var("WAVEPATH_RAY_ORDER").is_ok_and(|v| v.trim() == "sorted")
-}
-
 impl Bvh {
-    /// Builds the tree; the box test is the best the CPU has (or `WAVEPATH_ISA`).
+    /// Builds the tree; the box test is the best the CPU has (see [`Bvh::with_isa`]).
     pub fn build(scene: &Scene) -> Bvh {
         let start = Instant::now();
         let mesh = &scene.mesh;
@@ -183,16 +111,13 @@ impl Bvh {
             }
         }
         Bvh {
-            sort_batches: ray_order_from_env(),
             root: RootBox::new(lo, hi),
-            lo,
-            hi,
             nodes,
             prims: leaves.prims,
             ids: leaves.ids,
             blocks: leaves.blocks,
             stack_need: WIDTH_STACK * (depth + 1),
-            isa: Isa::from_env().effective(),
+            isa: Isa::detect(),
             info,
         }
     }
@@ -201,17 +126,6 @@ impl Bvh {
     pub fn with_isa(mut self, isa: Isa) -> Bvh {
         self.isa = isa.effective();
         self
-    }
-
-    /// The same tree tracing batches in sorted (`true`) or queue order.
-    pub fn with_sorted_batches(mut self, sorted: bool) -> Bvh {
-        self.sort_batches = sorted;
-        self
-    }
-
-    /// The batch order, when batches are sorted and this one is big enough to pay.
-    fn batch_order(&self, rays: &[Ray]) -> Option<Vec<u32>> {
-        (self.sort_batches && rays.len() >= order::MIN_RAYS).then(|| order::coherent(rays, self.lo, self.hi))
     }
 
     pub fn isa(&self) -> Isa {
@@ -270,19 +184,7 @@ impl Intersector for Bvh {
     }
 
     fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
-        self.closest_batch::<false>(rays, hits, c)
-    }
-
-    /// Packets only here, not in `closest_hits` (the wavefront's traverse stage): on CBbunny
-    /// the camera rays' traverse stage was not faster with them (BENCHMARKS.md, session 12).
-    /// A batch whose neighbouring rays are mostly incoherent (diffuse bounces) takes the
-    /// plain loop: checking every group for packets that never form cost it 2-5%.
-    fn closest_hits_packets(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
-        if packet_closest::mostly_coherent(rays) {
-            self.closest_batch::<true>(rays, hits, c)
-        } else {
-            self.closest_batch::<false>(rays, hits, c)
-        }
+        self.closest_batch(rays, hits, c)
     }
 
     fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
@@ -298,22 +200,11 @@ impl Intersector for Bvh {
             occluded.iter_mut().for_each(|o| *o = false);
             return;
         }
-        let order = self.batch_order(rays);
         let mut stack = traverse::BigStack::boxed();
         macro_rules! run {
             ($isa:expr) => {
-                match &order {
-                    Some(order) => {
-                        for &i in order {
-                            let i = i as usize;
-                            occluded[i] = traverse::any_hit_with(self, $isa, &rays[i], c, &mut stack);
-                        }
-                    }
-                    None => {
-                        for (r, o) in rays.iter().zip(occluded.iter_mut()) {
-                            *o = traverse::any_hit_with(self, $isa, r, c, &mut stack);
-                        }
-                    }
+                for (r, o) in rays.iter().zip(occluded.iter_mut()) {
+                    *o = traverse::any_hit_with(self, $isa, r, c, &mut stack);
                 }
             };
         }
@@ -322,10 +213,8 @@ impl Intersector for Bvh {
 }
 
 impl Bvh {
-    /// Closest hits of a batch; with `PACKETS`, runs of coherent rays are traced as packets
-    /// ([`packet_closest`]), with the same results (a constant, so the plain loop compiles
-    /// as if packets did not exist).
-    fn closest_batch<const PACKETS: bool>(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
+    /// Closest hits of a batch.
+    fn closest_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
         if self.nodes.is_empty() {
             c.rays += rays.len() as u64;
             hits.iter_mut().for_each(|h| *h = None);
@@ -339,56 +228,36 @@ impl Bvh {
         // Every closure given to `with_avx2` is `#[inline(always)]` for the same reason: a
         // larger body (set-up of the shear added to this loop) was left out of line by the
         // inliner, outside the AVX2 context, and ran six times slower.
-        let order = self.batch_order(rays);
-        let mut stacks = packet_closest::Stacks::new(self.stack_need);
+        let mut stack = traverse::BigStack::boxed();
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
-            ($isa:expr) => {
-                match &order {
-                    Some(order) => {
-                        for &i in order {
-                            let (i, isa) = (i as usize, $isa);
-                            let br = BoxRay::new(&rays[i]);
-                            hits[i] = traverse::closest_hit_with(self, isa, &rays[i], &br, c, &mut stacks.single);
-                        }
+            ($isa:expr) => {{
+                // Per group: which rays may enter the tree at all (most primary rays miss
+                // it), then the set-up (three divisions) of those ahead of their traversal;
+                // the others are misses without further work.
+                let mut slot = [0u8; SETUP_GROUP];
+                for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
+                    let mut todo = match &self.root {
+                        Some(root) => $isa.admit_mask(root, rs),
+                        None => u32::MAX >> (SETUP_GROUP - rs.len()),
+                    };
+                    let mut n = 0;
+                    while todo != 0 {
+                        let i = todo.trailing_zeros() as usize;
+                        todo &= todo - 1;
+                        prep[n] = $isa.box_ray(&rs[i]);
+                        slot[n] = i as u8;
+                        n += 1;
                     }
-                    None => {
-                        // Per group: which rays may enter the tree at all (most primary rays
-                        // miss it), then the set-up (three divisions) of those ahead of
-                        // their traversal; the others are misses without further work.
-                        let mut slot = [0u8; SETUP_GROUP];
-                        for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
-                            let mut todo = match &self.root {
-                                Some(root) => $isa.admit_mask(root, rs),
-                                None => u32::MAX >> (SETUP_GROUP - rs.len()),
-                            };
-                            let mut n = 0;
-                            while todo != 0 {
-                                let i = todo.trailing_zeros() as usize;
-                                todo &= todo - 1;
-                                prep[n] = $isa.box_ray(&rs[i]);
-                                slot[n] = i as u8;
-                                n += 1;
-                            }
-                            c.rays += (rs.len() - n) as u64;
-                            hs.fill(None);
-                            // Groups where coherent rays may form packets (camera rays)
-                            // go to the packet path; the others stay in this tight loop.
-                            let starts =
-                                if PACKETS { packet_closest::coherent_starts(&prep[..n], rs, &slot[..n]) } else { 0 };
-                            if starts != 0 {
-                                $isa.trace_group(self, rs, hs, &prep[..n], &slot[..n], starts, c, &mut stacks);
-                                continue;
-                            }
-                            for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
-                                let i = i as usize;
-                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, c, &mut stacks.single);
-                            }
-                        }
+                    c.rays += (rs.len() - n) as u64;
+                    hs.fill(None);
+                    for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
+                        let i = i as usize;
+                        hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, c, &mut stack);
                     }
                 }
-            };
+            }};
         }
         on_isa!(self, |t| run!(t))
     }

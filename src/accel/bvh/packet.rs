@@ -24,7 +24,7 @@ use super::traverse::{self, lane_hit, prefetch_child};
 use super::wide::{LEAF_BIT, leaf_range};
 use crate::accel::TraceCounters;
 use crate::accel::triangle::{ShearedRay, range_end};
-use crate::ray::Ray;
+use crate::geometry::Ray;
 
 /// Rays per packet at most (one byte of a ray mask per child; 8 x 8 masks transpose in a u64).
 pub const PACKET: usize = 8;

@@ -1,5 +1,5 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
-//! through a token whose constructor checked the CPU at run time.
+//! through a [`crate::cpu`] token whose constructor checked the CPU at run time.
 use super::boxtest::{
     BoxRay, BoxTest, EXIT_SCALE, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, admit_mask_scalar, far, near,
 };
@@ -7,42 +7,10 @@ use super::leaf::Tri4;
 use super::packet::{PACKET, PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::{ShearedRay, range_end};
-use crate::ray::Ray;
+use crate::cpu::{Avx2, Sse};
+use crate::geometry::Ray;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
-
-/// Proof that the CPU has SSE4.1 (constructed only after detection).
-#[derive(Clone, Copy, Debug)]
-pub struct Sse(());
-
-/// Proof that the CPU has AVX2, FMA, BMI1 and POPCNT (constructed only after detection;
-/// every AVX2 CPU has the last two, and without them a popcount is five instructions).
-#[derive(Clone, Copy, Debug)]
-pub struct Avx2(());
-
-impl Sse {
-    pub fn new() -> Option<Self> {
-        #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("sse4.1") {
-            return Some(Sse(()));
-        }
-        None
-    }
-}
-
-impl Avx2 {
-    pub fn new() -> Option<Self> {
-        #[cfg(target_arch = "x86_64")]
-        if is_x86_feature_detected!("avx2")
-            && is_x86_feature_detected!("fma")
-            && is_x86_feature_detected!("bmi1")
-            && is_x86_feature_detected!("popcnt")
-        {
-            return Some(Avx2(()));
-        }
-        None
-    }
-}
 
 #[cfg(target_arch = "x86_64")]
 impl BoxTest for Sse {
@@ -719,23 +687,6 @@ impl BoxTest for Avx2 {
     fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
         super::boxtest::Scalar.test(node, r, oct, tmax, tnear)
     }
-}
-
-/// Runs `f` compiled with AVX2, FMA, BMI1 and POPCNT enabled, so the inlined kernels use them.
-#[cfg(target_arch = "x86_64")]
-#[inline]
-pub fn with_avx2<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
-    #[target_feature(enable = "avx2,fma,bmi1,popcnt")]
-    fn inner<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
-        f(tok)
-    }
-    // SAFETY: the token proves AVX2 and FMA were detected on this CPU.
-    unsafe { inner(tok, f) }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-pub fn with_avx2<R>(tok: Avx2, f: impl FnOnce(Avx2) -> R) -> R {
-    f(tok)
 }
 
 #[cfg(all(test, target_arch = "x86_64"))]

@@ -6,7 +6,7 @@ use super::leaf::{LANES, Tri4};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
 use crate::accel::{TraceCounters, sphere};
-use crate::ray::{Hit, Ray};
+use crate::geometry::{Hit, Ray};
 use glam::Vec3;
 
 /// Stack entries for trees up to this depth live in a small array; deeper trees use a
@@ -82,13 +82,8 @@ pub(super) struct Best {
 impl Best {
     /// Nothing found yet within `[tmin, tmax]`.
     #[inline(always)]
-    pub(super) fn new(tmax: f32) -> Best {
+    fn new(tmax: f32) -> Best {
         Best { t: tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false }
-    }
-
-    #[inline(always)]
-    pub(super) fn hit(&self) -> Option<Hit> {
-        self.found.then_some(Hit { t: self.t, prim: self.prim, u: self.u, v: self.v })
     }
 }
 
@@ -140,7 +135,7 @@ fn walk<B: BoxTest, const N: usize>(
 ) -> Option<Hit> {
     // The shear is set up at the first leaf: many rays never reach one.
     let mut sr = None;
-    let mut best = Best { t: ray.tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false };
+    let mut best = Best::new(ray.tmax);
     let mut sp = 0usize;
     let mut cur = 0u32;
     let mut visited = 0u64;

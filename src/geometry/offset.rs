@@ -8,8 +8,8 @@
 //! thus as small as the point's own error allows: no fixed fraction of |p| that is too small
 //! for large triangles and too large for small features far from the origin.
 
-use crate::accel::bvh::TIE_SCALE;
-use crate::ray::Ray;
+use super::Ray;
+use crate::geometry::error_bound::TIE_SCALE;
 use glam::Vec3;
 
 /// Absolute offset added to every error bound before it is used. Bounds are relative to

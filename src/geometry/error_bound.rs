@@ -34,3 +34,13 @@ pub fn triangle_error(a: Vec3, b: Vec3, c: Vec3, u: f32, v: f32) -> Vec3 {
 pub fn sphere_error(center: Vec3, local: Vec3) -> Vec3 {
     gamma(8) * local.abs() + gamma(1) * center.abs()
 }
+
+/// The margin on the far end of the ray's range (its `tmax`, or the closest hit so far) in
+/// box tests and stack pops. A hit on a box's boundary (a ray through a shared vertex or
+/// edge, or ending on a surface) has a `t` that rounds independently of the box's entry
+/// distance, by a few ulps each way; without a margin the leaf holding the tied triangle with
+/// the lower id could be culled or not depending on the order leaves are visited in, so the
+/// ISAs (different visiting orders) would report different triangles. 2^-16 relative is ~100
+/// ulps: it covers the rounding of both for coordinates of the order of the distances and
+/// costs nothing measurable (a node entering within it beyond the closest hit is rare).
+pub const TIE_SCALE: f32 = 1.0 + 1.0 / 65536.0;
