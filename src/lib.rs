@@ -5,7 +5,7 @@
 
 pub mod accel;
 pub mod bsdf;
-pub mod cli;
+
 pub mod cpu;
 pub mod effects;
 pub mod film;
@@ -21,4 +21,3 @@ pub mod scene;
 pub mod settings;
 pub mod stats;
 pub mod study;
-pub mod wavefront;

@@ -7,9 +7,9 @@ use std::f32::consts::PI;
 use wavepath::accel::BruteForce;
 use wavepath::film::Accumulator;
 use wavepath::integrator::recursive::render_recursive;
+use wavepath::integrator::wavefront::render_wavefront;
 use wavepath::scene::{Camera, Environment, Light, Material, Mesh, Scene, Sphere};
 use wavepath::settings::{Settings, Shading};
-use wavepath::wavefront::render_wavefront;
 
 const W: usize = 32;
 const H: usize = 24;

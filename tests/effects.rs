@@ -9,11 +9,11 @@ use glam::Vec3;
 use wavepath::accel::{self, BruteForce};
 use wavepath::effects::Effects;
 
+use wavepath::integrator::wavefront::render_wavefront;
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
 use wavepath::settings::{Settings, Shading};
 use wavepath::stats::RenderStats;
-use wavepath::wavefront::render_wavefront;
 
 fn settings(max_depth: u32, spp: u32) -> Settings {
     common::render::small_settings(24, 18, max_depth, spp)

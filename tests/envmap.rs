@@ -7,8 +7,9 @@ use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
 use std::sync::Arc;
 use wavepath::accel::BruteForce;
-use wavepath::lights::{EnvMap, Infinite};
+use wavepath::lights::Infinite;
 use wavepath::sampling::{Frame, Sampler, warp};
+use wavepath::scene::EnvMap;
 use wavepath::scene::{Camera, Environment, Material, Mesh, Scene, Sphere};
 use wavepath::settings::{Settings, Shading};
 

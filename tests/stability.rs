@@ -9,12 +9,12 @@ use glam::{DVec3, Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
 use wavepath::film::{Accumulator, Film};
 use wavepath::geometry::Ray;
+use wavepath::integrator::wavefront::render_wavefront;
 use wavepath::load::{LoadOptions, default_scene, load};
 use wavepath::render::render_normals;
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Camera, Light, Material, Mesh, Scene};
 use wavepath::settings::{Settings, Shading};
-use wavepath::wavefront::render_wavefront;
 
 fn settings(w: usize, h: usize, spp: u32, max_depth: u32) -> Settings {
     Settings {

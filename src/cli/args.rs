@@ -1,11 +1,11 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use crate::cpu::Isa;
-use crate::film::Tonemap;
-use crate::load::CameraMode;
-use crate::settings::{IntegratorKind, Shading};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
+use wavepath::cpu::Isa;
+use wavepath::film::Tonemap;
+use wavepath::load::CameraMode;
+use wavepath::settings::{IntegratorKind, Shading};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -72,9 +72,9 @@ pub struct InfoArgs {
 #[derive(Subcommand, Debug)]
 pub enum RaysCommand {
     /// Write the renderer's camera rays or first diffuse bounces as a ray file.
-    Dump(crate::rays::DumpArgs),
+    Dump(DumpArgs),
     /// Build the BVH for MESH and trace RAYS, printing one JSON line (peer harness interface).
-    Trace(crate::rays::TraceArgs),
+    Trace(TraceArgs),
 }
 
 #[derive(Args, Debug, Clone)]
@@ -163,8 +163,55 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N")]
     pub parts: Option<u32>,
     /// How parts divide the render: bands of rows (exact merge) or sample ranges.
-    #[arg(long, value_enum, default_value_t = crate::parts::Split::Tiles)]
-    pub split: crate::parts::Split,
+    #[arg(long, value_enum, default_value_t = wavepath::parts::Split::Tiles)]
+    pub split: wavepath::parts::Split,
+}
+
+#[derive(Args, Debug, Clone)]
+pub struct DumpArgs {
+    /// Scene file.
+    pub scene: PathBuf,
+    /// primary: camera rays; diffuse: first diffuse bounces of the primary hits.
+    #[arg(long, value_parser = ["primary", "diffuse"])]
+    pub kind: String,
+    /// Output ray file.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Resolution of the camera rays.
+    #[arg(short = 'r', num_args = 2, value_names = ["W", "H"])]
+    pub resolution: Option<Vec<u32>>,
+    /// Seed of the diffuse directions.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+#[derive(Args, Debug, Clone)]
+#[command(allow_negative_numbers = true)]
+pub struct TraceArgs {
+    /// Mesh or scene file.
+    pub mesh: PathBuf,
+    /// Ray file.
+    pub rays: PathBuf,
+    /// Threads (positional form of -t).
+    pub threads_pos: Option<usize>,
+    /// Timed passes (positional form of -r).
+    pub reps_pos: Option<usize>,
+    #[arg(short = 't')]
+    pub threads: Option<usize>,
+    #[arg(short = 'r')]
+    pub reps: Option<usize>,
+    /// Untimed warm-up passes.
+    #[arg(short = 'w', default_value_t = 1)]
+    pub warmup: usize,
+    /// Write the hits file here.
+    #[arg(short = 'o')]
+    pub hits: Option<PathBuf>,
+    /// Variant label printed in the JSON line.
+    #[arg(long, default_value = "bvh")]
+    pub variant: String,
+    /// Widest SIMD instruction set of the box tests: scalar, sse, avx2, avx512.
+    #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
+    pub isa: Isa,
 }
 
 /// `--isa`: one of the instruction-set names.

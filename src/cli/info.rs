@@ -1,19 +1,19 @@
 //! `wavepath info SCENE [--json]`.
 
 use super::args::InfoArgs;
-use crate::effects::Effects;
-use crate::load::{LoadOptions, load};
-use crate::scene::{Environment, Scene};
-use crate::settings::Settings;
 use anyhow::Result;
 use serde_json::json;
 use std::time::Instant;
+use wavepath::effects::Effects;
+use wavepath::load::{LoadOptions, load};
+use wavepath::scene::{Environment, Scene};
+use wavepath::settings::Settings;
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
     let mut scene = load(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
     if let Some(e) = &a.envmap {
-        scene.env = Environment::Map(std::sync::Arc::new(crate::lights::EnvMap::load(e)?));
+        scene.env = Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
     }
     let load_s = t0.elapsed().as_secs_f64();
     let effects = Effects::of(&scene, &Settings::default());

@@ -5,11 +5,12 @@ mod args;
 mod info;
 mod merge_cmd;
 mod part_cmd;
+mod rays_cmd;
 mod render_cmd;
 mod settings_from_args;
 pub mod study_cmd;
 
-pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs, parse_isa};
+pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs};
 
 use clap::Parser;
 
@@ -32,8 +33,8 @@ pub fn main() -> i32 {
     };
     let result = match &cli.command {
         Some(Command::Info(a)) => info::run(a),
-        Some(Command::Rays(RaysCommand::Dump(a))) => crate::rays::dump(a),
-        Some(Command::Rays(RaysCommand::Trace(a))) => crate::rays::trace(a),
+        Some(Command::Rays(RaysCommand::Dump(a))) => rays_cmd::run_dump(a),
+        Some(Command::Rays(RaysCommand::Trace(a))) => rays_cmd::run_trace(a),
         Some(Command::Merge(a)) => merge_cmd::run(a),
         Some(Command::Study(a)) => study_cmd::run(a),
         None if cli.render.part.is_some() => part_cmd::run(&cli.render),

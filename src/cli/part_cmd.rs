@@ -3,10 +3,10 @@
 use super::RenderArgs;
 use super::render_cmd::prepare_scene;
 use super::settings_from_args::settings;
-use crate::parts::{PartMeta, PartSpec, PartStats, identity};
 use anyhow::{Result, bail};
 use std::path::PathBuf;
 use std::time::Instant;
+use wavepath::parts::{PartMeta, PartSpec, PartStats, identity};
 
 pub fn run(a: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -21,17 +21,17 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     };
     let scene = prepare_scene(a, &s)?;
     let scene_hash = identity::scene_hash(&scene);
-    let (acc, mut stats) = crate::render::with_threads(s.threads, || -> Result<_> {
-        let (accel, build) = crate::accel::build(&scene, s.use_bvh, s.isa);
-        let (acc, mut stats) = crate::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
+    let (acc, mut stats) = wavepath::render::with_threads(s.threads, || -> Result<_> {
+        let (accel, build) = wavepath::accel::build(&scene, s.use_bvh, s.isa);
+        let (acc, mut stats) = wavepath::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
         stats.build_s = build.build_s;
         stats.threads = rayon::current_num_threads();
         Ok((acc, stats))
     })??;
-    stats.host = crate::parts::stats::host_name();
+    stats.host = wavepath::parts::stats::host_name();
     stats.wall_s = t0.elapsed().as_secs_f64();
     let meta = PartMeta {
-        format: crate::parts::file::FORMAT,
+        format: wavepath::parts::file::FORMAT,
         part: spec,
         scene: scene.name.clone(),
         scene_hash,
@@ -41,7 +41,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         spp: s.spp,
         stats: stats.clone(),
     };
-    crate::parts::file::write(&out, &meta, &acc)?;
+    wavepath::parts::file::write(&out, &meta, &acc)?;
     let _: &PartStats = &stats;
     eprintln!(
         "[wavepath] Part {} ({} split) of {}: {} rays in {:.3} s render, {:.3} s wall; wrote {}",

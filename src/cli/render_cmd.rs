@@ -2,14 +2,14 @@
 
 use super::RenderArgs;
 use super::settings_from_args::settings;
-use crate::effects::Effects;
-use crate::load::{LoadOptions, default_scene, load};
-use crate::scene::{Scene, read_camera_file};
-use crate::settings::Settings;
-use crate::stats::RenderStats;
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use wavepath::effects::Effects;
+use wavepath::load::{LoadOptions, default_scene, load};
+use wavepath::scene::{Scene, read_camera_file};
+use wavepath::settings::Settings;
+use wavepath::stats::RenderStats;
 
 /// Loads the scene the arguments name (or the default) with the camera adjustments applied.
 pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
@@ -28,7 +28,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
         scene.camera.focal_distance = d as f32;
     }
     if let Some(e) = &a.envmap {
-        scene.env = crate::scene::Environment::Map(std::sync::Arc::new(crate::lights::EnvMap::load(e)?));
+        scene.env = wavepath::scene::Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
     }
     Ok(scene)
 }
@@ -52,9 +52,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
     }
-    let (film, build) = crate::render::with_threads(s.threads, || -> Result<_> {
+    let (film, build) = wavepath::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
-        let (accel, build) = crate::accel::build(&scene, s.use_bvh, s.isa);
+        let (accel, build) = wavepath::accel::build(&scene, s.use_bvh, s.isa);
         eprintln!(
             "[wavepath] Built {} in {:.4} s ({} nodes, depth {})",
             accel.name(),
@@ -68,18 +68,18 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                 b.inc(n);
             }
         };
-        let result = crate::render::render_with_progress(&scene, accel.as_ref(), &s, &tick)?;
+        let result = wavepath::render::render_with_progress(&scene, accel.as_ref(), &s, &tick)?;
         if let Some(b) = &bar {
             b.finish_and_clear();
         }
         Ok((result, build))
     })??;
-    let crate::render::RenderOutput { film, stats, samples } = film;
-    crate::film::write_image(&film, &out, a.tonemap)?;
-    if s.shading != crate::settings::Shading::Normals {
+    let wavepath::render::RenderOutput { film, stats, samples } = film;
+    wavepath::film::write_image(&film, &out, a.tonemap)?;
+    if s.shading != wavepath::settings::Shading::Normals {
         let rate_path = rate_image_path(&out);
-        let rate = crate::film::rate_film(film.width, film.height, &samples, s.spp);
-        crate::film::write_rate_image(&rate, &rate_path)?;
+        let rate = wavepath::film::rate_film(film.width, film.height, &samples, s.spp);
+        wavepath::film::write_rate_image(&rate, &rate_path)?;
         eprintln!("[wavepath] Wrote sample-rate image {}", rate_path.display());
     }
     for line in stats.log_lines() {
@@ -87,7 +87,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     eprintln!("[wavepath] Wrote {}", out.display());
     if let Some(p) = &a.stats {
-        let json = crate::stats::to_json(&scene, &s, &effects, &build, &stats);
+        let json = wavepath::stats::to_json(&scene, &s, &effects, &build, &stats);
         write_atomic(p, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     let _: &RenderStats = &stats;
@@ -103,7 +103,7 @@ pub fn rate_image_path(out: &Path) -> PathBuf {
 /// A progress bar over camera samples, only when stderr is a terminal.
 fn progress_bar(s: &Settings) -> Option<indicatif::ProgressBar> {
     use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() || s.shading == crate::settings::Shading::Normals {
+    if !std::io::stderr().is_terminal() || s.shading == wavepath::settings::Shading::Normals {
         return None;
     }
     let r = s.region();

@@ -1,8 +1,8 @@
 //! Checks every flag's range and turns the arguments into [`Settings`].
 
 use super::RenderArgs;
-use crate::settings::{Cell, Settings, Shading};
 use anyhow::{Result, bail};
+use wavepath::settings::{Cell, Settings, Shading};
 
 /// Largest image side accepted; beyond this a typo is far more likely than a real render.
 pub const MAX_SIDE: i64 = 1 << 15;

@@ -1,11 +1,11 @@
-//! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`crate::study`]).
+//! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`wavepath::study`]).
 
-use crate::load::{CameraMode, LoadOptions, default_scene, load};
-use crate::settings::{Settings, Shading};
-use crate::study::{StudyConfig, SweepKind};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
+use wavepath::load::{CameraMode, LoadOptions, default_scene, load};
+use wavepath::settings::{Settings, Shading};
+use wavepath::study::{StudyConfig, SweepKind};
 
 #[derive(Args, Debug, Clone)]
 #[command(long_about = "Sweeps one setting and, for each value, renders at samples per pixel \
@@ -111,17 +111,17 @@ pub fn run(a: &StudyArgs) -> Result<()> {
         None => default_scene(),
     };
     scene.camera.fit_aspect(cfg.base.width as f32 / cfg.base.height as f32);
-    let identity = crate::study::reference::scene_identity(a.scene.as_deref())?;
+    let identity = wavepath::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
     let camera_label = format!("{:?}", a.camera);
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
-    let result = crate::render::with_threads(cfg.base.threads, || -> Result<_> {
-        let (accel, _) = crate::accel::build(&scene, true, cfg.base.isa);
-        crate::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
+    let result = wavepath::render::with_threads(cfg.base.threads, || -> Result<_> {
+        let (accel, _) = wavepath::accel::build(&scene, true, cfg.base.isa);
+        wavepath::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
     })??;
-    crate::study::report::write_all(&result, &out, &stem, &command)?;
+    wavepath::study::report::write_all(&result, &out, &stem, &command)?;
     log(&format!("wrote {}/report.md, study.csv, error_vs_time.png and .svg", out.display()));
     Ok(())
 }

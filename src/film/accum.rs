@@ -80,6 +80,18 @@ pub struct Accumulator {
 }
 
 impl Accumulator {
+    /// Samples taken per pixel of `region` (row-major, bottom row first).
+    pub fn samples_taken_in(&self, region: crate::settings::Cell) -> Vec<u32> {
+        let r = region;
+        let mut out = Vec::with_capacity(r.w * r.h);
+        for y in r.y..r.y + r.h {
+            for x in r.x..r.x + r.w {
+                out.push(self.pixels[y * self.width + x].taken);
+            }
+        }
+        out
+    }
+
     pub fn new(width: usize, height: usize) -> Self {
         Accumulator { width, height, pixels: vec![PixelSums::default(); width * height] }
     }

@@ -11,6 +11,7 @@ pub mod area;
 mod material;
 
 pub mod recursive;
+pub mod wavefront;
 
 pub use material::{Bounce, ShadingFrame};
 

@@ -143,18 +143,6 @@ pub fn render_recursive(
     }
     stats.render_s = start.elapsed().as_secs_f64();
     stats.invalid_samples = acc.invalid_samples();
-    stats.samples_per_pixel = region_samples(&acc, s);
+    stats.samples_per_pixel = acc.samples_taken_in(s.region());
     (acc, stats)
-}
-
-/// Samples taken per pixel of the rendered region (row-major, bottom row first).
-pub fn region_samples(acc: &Accumulator, s: &Settings) -> Vec<u32> {
-    let r = s.region();
-    let mut out = Vec::with_capacity(r.w * r.h);
-    for y in r.y..r.y + r.h {
-        for x in r.x..r.x + r.w {
-            out.push(acc.pixels[y * acc.width + x].taken);
-        }
-    }
-    out
 }

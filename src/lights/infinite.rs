@@ -1,6 +1,6 @@
 use super::LightSample;
-use super::envmap::EnvMap;
 use crate::sampling::{Frame, warp};
+use crate::scene::EnvMap;
 use glam::Vec3;
 use std::sync::Arc;
 
@@ -55,7 +55,8 @@ impl Infinite {
         let f = self.map_fraction();
         if f == 1.0 {
             // The map alone: its own density and the texel drawn, no second lookup.
-            return map.sample(u);
+            let (wi, pdf, l) = map.sample_texel(u)?;
+            return Some(LightSample { wi, target: None, weight: l / pdf });
         }
         let wi = if u[0] < f {
             map.sample_dir([u[0] / f, u[1]])?.0

@@ -12,11 +12,9 @@
 //!   and hemisphere-sampling rays see; sampling both would count that light twice).
 
 mod emissive;
-pub mod envmap;
 mod infinite;
 
 pub use emissive::EmissiveTriangles;
-pub use envmap::EnvMap;
 pub use infinite::Infinite;
 
 use crate::geometry::error_bound::gamma;

@@ -1,12 +1,9 @@
-//! `wavepath rays dump`: the renderer's own camera rays or first diffuse bounces.
-use super::DumpArgs;
-use super::file::write_rays;
-use crate::accel::{Bvh, Intersector, TraceCounters};
+//! The rays `wavepath rays dump` writes: the renderer's own camera rays or first diffuse
+//! bounces.
+use crate::accel::{Intersector, TraceCounters};
 use crate::geometry::Ray;
-use crate::load::{LoadOptions, load};
 use crate::sampling::Sampler;
 use crate::scene::Scene;
-use anyhow::{Result, bail};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -23,10 +20,10 @@ pub fn primary_rays(scene: &Scene, w: usize, h: usize) -> Vec<Ray> {
         .collect()
 }
 
-/// Moves a surface point off the surface along `n`, by an amount proportional to the
-/// point's magnitude (the rounding error of a computed hit point grows with it), so the new
-/// ray does not hit the surface it starts on.
-pub fn offset_origin(p: Vec3, n: Vec3) -> Vec3 {
+/// Moves a surface point off the surface along `n` by 1e-5 of the point's magnitude: the
+/// simple rule of the peers' own ray generator, kept so dumped ray files stay comparable
+/// (the renderer uses the error-bound offsets of `geometry::offset`).
+fn relative_offset(p: Vec3, n: Vec3) -> Vec3 {
     let scale = p.abs().max_element().max(1e-6);
     p + n * (scale * 1e-5)
 }
@@ -55,27 +52,7 @@ pub fn diffuse_rays(scene: &Scene, accel: &dyn Intersector, primary: &[Ray], see
                 n = -n;
             }
             let (u1, u2) = Sampler::for_sample(seed, i as u64, 0).next_2d();
-            Some(Ray::new(offset_origin(sp.position, n), cosine_direction(n, u1, u2)))
+            Some(Ray::new(relative_offset(sp.position, n), cosine_direction(n, u1, u2)))
         })
         .collect()
-}
-
-pub fn dump(args: &DumpArgs) -> Result<()> {
-    let (w, h) = match args.resolution.as_deref() {
-        None => (800, 600),
-        Some([w, h]) if *w > 0 && *h > 0 => (*w as usize, *h as usize),
-        Some(_) => bail!("{}: -r needs a width and a height above 0", args.scene.display()),
-    };
-    let scene = load(&args.scene, &LoadOptions::default())?;
-    let primary = primary_rays(&scene, w, h);
-    let rays = match args.kind.as_str() {
-        "primary" => primary,
-        _ => {
-            let bvh = Bvh::build(&scene);
-            diffuse_rays(&scene, &bvh, &primary, args.seed)
-        }
-    };
-    write_rays(&args.out, &rays)?;
-    eprintln!("{}: wrote {} {} rays", args.out.display(), rays.len(), args.kind);
-    Ok(())
 }

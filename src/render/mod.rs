@@ -7,10 +7,10 @@ pub use normals::render_normals;
 use crate::accel::Intersector;
 use crate::film::{Accumulator, Film};
 use crate::integrator::recursive::render_recursive;
+use crate::integrator::wavefront::render_wavefront;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, Settings, Shading};
 use crate::stats::RenderStats;
-use crate::wavefront::render_wavefront;
 use anyhow::Result;
 
 /// A finished render: the image, its statistics, and the camera samples taken per pixel

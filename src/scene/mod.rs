@@ -5,6 +5,7 @@
 
 mod camera;
 mod camera_file;
+pub mod envmap;
 
 mod material;
 mod mesh;
@@ -14,6 +15,7 @@ pub mod texture;
 
 pub use camera::Camera;
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
+pub use envmap::EnvMap;
 pub use material::{Bsdf, Material, Texture};
 pub use mesh::{Mesh, Sphere};
 pub use normals::area_weighted_vertex_normals;
@@ -67,8 +69,8 @@ pub enum Environment {
     /// The same radiance from every direction.
     Constant(Vec3),
     /// An equirectangular (lat-long) map, linear RGB, row 0 at the top (+Y); loaded once
-    /// with its sampling distribution (orientation: see `lights::envmap`).
-    Map(std::sync::Arc<crate::lights::EnvMap>),
+    /// with its sampling distribution (orientation: see [`envmap`]).
+    Map(std::sync::Arc<EnvMap>),
 }
 
 /// Everything needed to render: geometry, appearance, lights and the view.

@@ -123,7 +123,7 @@ pub fn run(
     });
     // One untimed render first, so thread start-up and cold caches do not land on the
     // first measured point.
-    let _ = crate::wavefront::render_wavefront(scene, accel, &cfg.base, &|_| {});
+    let _ = crate::integrator::wavefront::render_wavefront(scene, accel, &cfg.base, &|_| {});
     let mut points = Vec::new();
     for (ci, c) in curves.iter().enumerate() {
         let runs: Vec<(Settings, Option<f32>)> = match &c.ladder {
@@ -171,7 +171,7 @@ pub fn measure(
     reference: &Reference,
 ) -> Point {
     let t0 = Instant::now();
-    let (acc, stats) = crate::wavefront::render_wavefront(scene, accel, s, &|_| {});
+    let (acc, stats) = crate::integrator::wavefront::render_wavefront(scene, accel, s, &|_| {});
     let seconds = t0.elapsed().as_secs_f64();
     Point {
         curve,

@@ -125,7 +125,7 @@ pub fn reference(
     std::fs::create_dir_all(cache_dir)
         .with_context(|| format!("{}: cannot create cache folder", cache_dir.display()))?;
     let t0 = std::time::Instant::now();
-    let (acc, _) = crate::wavefront::render_wavefront(scene, accel, settings, &|_| {});
+    let (acc, _) = crate::integrator::wavefront::render_wavefront(scene, accel, settings, &|_| {});
     let seconds = t0.elapsed().as_secs_f64();
     let r = Reference::from_accumulator(&acc);
     write_image(&r.mean, &mean_p, Tonemap::Cs184)?;

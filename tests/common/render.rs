@@ -4,10 +4,10 @@
 use wavepath::accel::BruteForce;
 use wavepath::film::Accumulator;
 use wavepath::integrator::recursive::render_recursive;
+use wavepath::integrator::wavefront::render_wavefront;
 use wavepath::scene::Scene;
 use wavepath::settings::{Settings, Shading};
 use wavepath::stats::RenderStats;
-use wavepath::wavefront::render_wavefront;
 
 /// A `width` x `height` render at depth `max_depth` (direct light at 1, global above) with
 /// `spp` samples and two light samples.

@@ -9,7 +9,6 @@
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
 use super::leaf::Tri4;
-use super::packet::{PacketBoxRays, PacketShear};
 use super::wide::{Node8, WIDTH, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::geometry::Ray;
@@ -252,34 +251,6 @@ pub trait BoxTest: Copy {
     #[inline(always)]
     fn prefetch_at(self, p: *const u8) {
         let _ = p;
-    }
-
-    /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).
-    #[inline(always)]
-    fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
-        PacketBoxRays::each(self, rays)
-    }
-
-    /// [`BoxTest::test`] of `node` for lane `k` of `p` (with that ray's `tmax`), without the
-    /// entry distances.
-    #[inline(always)]
-    fn test_lane(self, node: &Node8, p: &PacketBoxRays, k: usize) -> u32 {
-        let b = p.lane(k);
-        let mut tnear = [0f32; WIDTH];
-        self.test(node, &b, b.octant, p.tmax[k], &mut tnear)
-    }
-
-    /// The leaf-test set-up of up to [`PACKET`] rays ([`PacketShear::set`] of each).
-    #[inline(always)]
-    fn packet_shear(self, rays: &[Ray]) -> PacketShear {
-        PacketShear::each(rays)
-    }
-
-    /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`); the SIMD paths start from the
-    /// set-up's values instead of deriving them again at every leaf.
-    #[inline(always)]
-    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
-        self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
     }
 
     /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in

@@ -20,14 +20,49 @@
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
 use super::leaf::LANES;
+use super::leaf::Tri4;
 use super::traverse::{self, lane_hit, prefetch_child};
-use super::wide::{LEAF_BIT, leaf_range};
+use super::wide::{LEAF_BIT, Node8, WIDTH, leaf_range};
 use crate::accel::TraceCounters;
 use crate::accel::triangle::{ShearedRay, range_end};
 use crate::geometry::Ray;
 
 /// Rays per packet at most (one byte of a ray mask per child; 8 x 8 masks transpose in a u64).
 pub const PACKET: usize = 8;
+
+/// The packet kernels of an instruction set, beside its single-ray [`BoxTest`] (the scalar
+/// versions here, set up ray by ray; the SIMD ones in `simd`).
+pub(super) trait PacketTest: BoxTest {
+    /// The box-test values of up to [`PACKET`] rays ([`BoxTest::box_ray`] of each, in its lane).
+    #[inline(always)]
+    fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
+        PacketBoxRays::each(self, rays)
+    }
+
+    /// [`BoxTest::test`] of `node` for lane `k` of `p` (with that ray's `tmax`), without the
+    /// entry distances.
+    #[inline(always)]
+    fn test_lane(self, node: &Node8, p: &PacketBoxRays, k: usize) -> u32 {
+        let b = p.lane(k);
+        let mut tnear = [0f32; WIDTH];
+        self.test(node, &b, b.octant, p.tmax[k], &mut tnear)
+    }
+
+    /// The leaf-test set-up of up to [`PACKET`] rays ([`PacketShear::set`] of each).
+    #[inline(always)]
+    fn packet_shear(self, rays: &[Ray]) -> PacketShear {
+        PacketShear::each(rays)
+    }
+
+    /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`); the SIMD paths start from the
+    /// set-up's values instead of deriving them again at every leaf.
+    #[inline(always)]
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+        self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
+    }
+}
+
+impl PacketTest for super::boxtest::Scalar {}
 
 /// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
@@ -263,7 +298,7 @@ pub(super) fn transpose8(mut x: u64) -> u64 {
 
 /// Any-hit for 2..=[`PACKET`] rays at once (see the module comment).
 #[inline(always)]
-fn packet_any<B: BoxTest>(
+fn packet_any<B: PacketTest>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
@@ -457,8 +492,8 @@ mod tests {
                 let scalar_test = |b: &BoxRay, tmax: f32| Scalar.test(&node, b, b.octant, tmax, &mut [0.0; WIDTH]);
                 check("scalar", group, &p, &|k| Scalar.test_lane(&node, &p, k), &scalar_test);
                 #[cfg(target_arch = "x86_64")]
-                if let Some(avx) = super::super::simd::Avx2::new() {
-                    use super::super::simd::with_avx2;
+                if let Some(avx) = crate::cpu::Avx2::new() {
+                    use crate::cpu::with_avx2;
                     let p = with_avx2(avx, |t| t.packet_box_rays(group));
                     let avx_test =
                         |b: &BoxRay, tmax: f32| with_avx2(avx, |t| t.test(&node, b, b.octant, tmax, &mut [0.0; WIDTH]));
@@ -474,12 +509,12 @@ mod tests {
     #[test]
     fn packet_shear_is_the_single_rays() {
         #[cfg(target_arch = "x86_64")]
-        if let Some(avx) = super::super::simd::Avx2::new() {
+        if let Some(avx) = crate::cpu::Avx2::new() {
             let bits = |x: f32| if x.is_nan() { u32::MAX } else { x.to_bits() };
             let mut n = 0;
             for group in hard_rays().chunks_exact(PACKET) {
                 let want = Scalar.packet_shear(group);
-                let got = super::super::simd::with_avx2(avx, |t| t.packet_shear(group));
+                let got = crate::cpu::with_avx2(avx, |t| t.packet_shear(group));
                 for (k, r) in group.iter().enumerate() {
                     for role in 0..3 {
                         assert_eq!(bits(want.org[role][k]), bits(got.org[role][k]), "{r:?}");

@@ -4,7 +4,7 @@ use super::boxtest::{
     BoxRay, BoxTest, EXIT_SCALE, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, admit_mask_scalar, far, near,
 };
 use super::leaf::Tri4;
-use super::packet::{PACKET, PacketBoxRays, PacketShear};
+use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest};
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::{ShearedRay, range_end};
 use crate::cpu::{Avx2, Sse};
@@ -54,7 +54,10 @@ impl BoxTest for Sse {
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
         unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
     }
+}
 
+#[cfg(target_arch = "x86_64")]
+impl PacketTest for Sse {
     #[inline(always)]
     fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
         let _ = ray;
@@ -154,7 +157,10 @@ impl BoxTest for Avx2 {
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
         unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
     }
+}
 
+#[cfg(target_arch = "x86_64")]
+impl PacketTest for Avx2 {
     #[inline(always)]
     fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
         let _ = ray;
@@ -689,10 +695,17 @@ impl BoxTest for Avx2 {
     }
 }
 
+#[cfg(not(target_arch = "x86_64"))]
+impl PacketTest for Sse {}
+
+#[cfg(not(target_arch = "x86_64"))]
+impl PacketTest for Avx2 {}
+
 #[cfg(all(test, target_arch = "x86_64"))]
 mod tests {
     use super::*;
     use crate::accel::triangle::intersect_sheared;
+    use crate::cpu::with_avx2;
     use crate::sampling::Sampler;
     use glam::Vec3;
 

@@ -228,7 +228,7 @@ fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
     };
     stats.render_s = start.elapsed().as_secs_f64();
     stats.invalid_samples = acc.invalid_samples();
-    stats.samples_per_pixel = crate::integrator::recursive::region_samples(&acc, s);
+    stats.samples_per_pixel = acc.samples_taken_in(s.region());
     (acc, stats)
 }
 

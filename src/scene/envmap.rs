@@ -1,6 +1,6 @@
-//! An equirectangular (lat-long) environment map as a light: radiance by direction, and
-//! importance sampling by luminance x sin(theta) through a 2D piecewise-constant
-//! distribution over its texels.
+//! An equirectangular (lat-long) environment map: radiance by direction, and the
+//! distribution that draws directions by luminance x sin(theta) (a 2D piecewise-constant
+//! distribution over its texels; the light built on it lives in `lights`).
 //!
 //! Orientation follows the CS184 reference (`EnvironmentLight::dir_to_theta_phi`):
 //! theta = acos(y) is measured from world +Y (row 0, the top of the image, is straight up),
@@ -11,7 +11,6 @@
 //! are the texels, so the sampling density is exactly proportional to luminance x sin(theta)
 //! of what [`EnvMap::radiance`] returns, and no texel with light has zero density.
 
-use super::LightSample;
 use crate::sampling::distribution::Distribution2D;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
@@ -146,13 +145,6 @@ impl EnvMap {
             return 0.0;
         }
         self.dist.pdf(uv) / (2.0 * PI * PI * sin_theta)
-    }
-
-    /// A sample toward the map alone: weight = radiance / density.
-    #[inline]
-    pub fn sample(&self, u: [f32; 2]) -> Option<LightSample> {
-        let (wi, pdf, l) = self.sample_texel(u)?;
-        Some(LightSample { wi, target: None, weight: l / pdf })
     }
 }
 

@@ -367,9 +367,9 @@ fn shade_groups<F: Features>(
 mod tests {
     use super::*;
     use crate::accel::{BruteForce, Intersector, TraceCounters};
+    use crate::integrator::wavefront::generate::{Wave, generate};
+    use crate::integrator::wavefront::{Kernel, compact, shade};
     use crate::settings::{Settings, Shading};
-    use crate::wavefront::generate::{Wave, generate};
-    use crate::wavefront::{Kernel, compact, shade};
 
     type K = Kernel<true, false, true, true, true, false>;
 
