@@ -52,185 +52,274 @@ pub struct Effects {
     pub microfacet: bool,
     /// Any of the three: the kernel shades through the BSDF models.
     pub non_diffuse: bool,
-    // --- Environment map, textures, lens (issue 7) ---
     /// An environment map lights the scene (importance-sampled) and camera misses see it.
     pub environment_map: bool,
     /// Some material takes its albedo from an image through the mesh's uv coordinates.
     pub textures: bool,
     /// The camera has an aperture (`-b R > 0`): camera rays start on the lens disk.
     pub thin_lens: bool,
-    // --- end environment map, textures, lens ---
     /// Every flag was forced on by `--all-effects`.
     pub forced: bool,
     /// The effects that are on, in a fixed order, with their reasons.
     pub on: Vec<Effect>,
 }
 
-impl Effects {
-    pub fn of(scene: &Scene, settings: &Settings) -> Effects {
-        let mut e = Effects::default();
-        let count = |k: &str| scene.lights.iter().filter(|l| l.kind() == k).count();
+/// What the rules look at: the settings and counts of the scene, gathered once.
+struct Facts<'a> {
+    scene: &'a Scene,
+    settings: &'a Settings,
+    /// `--shading normals`: no light transport at all.
+    normals: bool,
+    /// The depth light transport runs to (`-m`, at most 1 with `--shading direct`).
+    depth: u32,
+    /// Light transport runs and reaches at least one surface.
+    lit: bool,
+    /// Emission found by camera rays enters the image (`-o 1`, or `-m 0`).
+    sees_emission: bool,
+    emissive_triangles: usize,
+    emissive_spheres: usize,
+    /// The environment light, described, when there is one.
+    environment: Option<String>,
+    mirrors: usize,
+    glasses: usize,
+    metals: usize,
+}
+
+impl<'a> Facts<'a> {
+    fn of(scene: &'a Scene, settings: &'a Settings) -> Facts<'a> {
         let normals = settings.shading == Shading::Normals;
         let depth = if settings.shading == Shading::Direct { settings.max_depth.min(1) } else { settings.max_depth };
-        let lit = !normals && depth >= 1;
-        let force = settings.all_effects;
-        let forced = |why: Option<String>| why.or_else(|| force.then(|| "forced on by --all-effects".to_string()));
-        let mut f = [false; 15];
-        // Not forceable: it chooses a different renderer, not a kernel feature.
-        if normals {
-            f[0] = true;
-            e.on.push(Effect { name: "normal-shading", reason: "--shading normals".into() });
-        }
-        let mut add = |flag: &mut bool, name: &'static str, why: Option<String>| {
-            if let Some(reason) = forced(why) {
-                *flag = true;
-                e.on.push(Effect { name, reason });
-            }
-        };
-
-        let ns = scene.spheres.len();
-        add(&mut f[1], "spheres", (ns > 0).then(|| format!("{ns} analytic sphere(s)")));
-        let sees_emission = !normals && (settings.accumulate || depth == 0);
-        let emissive_tris =
-            scene.mesh.material_ids.iter().filter(|&&m| scene.materials[m as usize].is_emissive()).count();
-        let emissive_spheres =
-            scene.spheres.iter().filter(|s| scene.materials[s.material as usize].is_emissive()).count();
-        add(
-            &mut f[2],
-            "emission",
-            (sees_emission && emissive_tris + emissive_spheres > 0)
-                .then(|| format!("{emissive_tris} emissive triangle(s), {emissive_spheres} emissive sphere(s)")),
-        );
-        let env = match &scene.env {
-            Environment::Constant(c) if *c != glam::Vec3::ZERO => Some(format!("constant environment {c}")),
-            Environment::Map(m) => Some(format!("environment map {}", m.path.display())),
-            _ => None,
-        };
-        add(
-            &mut f[3],
-            "environment",
-            env.clone().filter(|_| sees_emission).map(|c| format!("{c} seen by camera misses")),
-        );
-        let areas = count("area");
-        let area_reason = if areas > 0 {
-            Some(format!("{areas} area light(s), {} sample(s) each", settings.light_samples))
-        } else if emissive_tris > 0 {
-            Some(format!("{emissive_tris} emissive triangle(s) sampled by area, {} sample(s)", settings.light_samples))
-        } else {
-            None
-        };
-        add(&mut f[4], "area-lights", area_reason.filter(|_| lit && !settings.hemisphere));
-        let delta = scene.lights.iter().filter(|l| l.is_delta()).count();
-        add(
-            &mut f[5],
-            "delta-lights",
-            (lit && !settings.hemisphere && delta > 0)
-                .then(|| format!("{delta} point/directional/spot light(s), one shadow ray each")),
-        );
-        let hemi_light = scene.lights.iter().any(|l| matches!(l, Light::Hemisphere { .. }));
-        add(
-            &mut f[6],
-            "infinite-light",
-            (lit && !settings.hemisphere && (hemi_light || env.is_some()))
-                .then(|| "hemisphere light or environment sampled".into()),
-        );
-        let direct_reason = if !lit {
-            None
-        } else if settings.hemisphere {
-            Some("-H: uniform hemisphere probes".to_string())
-        } else if f[4] || f[5] || f[6] {
-            Some("light sampling: the scene has lights".to_string())
-        } else {
-            None
-        };
-        add(&mut f[7], "direct-light", direct_reason);
-        let n_of = |kinds: &[&str]| scene.materials.iter().filter(|m| kinds.contains(&m.bsdf.kind())).count();
-        let (mirrors, glasses, metals) = (n_of(&["mirror"]), n_of(&["glass", "refraction"]), n_of(&["microfacet"]));
-        add(
-            &mut f[11],
-            "mirror",
-            (lit && mirrors > 0).then(|| format!("{mirrors} mirror material(s): delta reflection, no shadow rays")),
-        );
-        add(
-            &mut f[12],
-            "glass",
-            (lit && glasses > 0)
-                .then(|| format!("{glasses} glass/refraction material(s): Fresnel reflection and refraction")),
-        );
-        add(
-            &mut f[13],
-            "microfacet",
-            (lit && metals > 0)
-                .then(|| format!("{metals} rough conductor(s): Beckmann microfacets, MIS of light and BSDF samples")),
-        );
-        let any_material = f[11] || f[12] || f[13];
-        add(&mut f[14], "non-diffuse-shading", any_material.then(|| "BSDF models in the shade kernel".to_string()));
-        let indirect = if !normals && settings.shading == Shading::Global && depth > 1 {
-            Some(format!("-m {depth} > 1"))
-        } else if lit && mirrors + glasses + metals > 0 {
-            Some("light found by rays from mirror, glass or glossy surfaces".to_string())
-        } else {
-            None
-        };
-        add(&mut f[8], "indirect", indirect);
-        add(
-            &mut f[9],
-            "russian-roulette",
-            (!normals && settings.shading == Shading::Global && depth > 2 && settings.rr_continue < 1.0)
-                .then(|| format!("-m {depth} > 2 and --rr {} < 1", settings.rr_continue)),
-        );
-        add(&mut f[10], "adaptive-sampling", settings.adaptive.map(|(b, t)| format!("-a {b} {t}")));
-        // --- Environment map, textures, lens (issue 7) ---
-        let mut g = [false; 3];
-        let mut add = |flag: &mut bool, name: &'static str, why: Option<String>| {
-            if let Some(reason) = forced(why) {
-                *flag = true;
-                e.on.push(Effect { name, reason });
-            }
-        };
-        add(
-            &mut g[0],
-            "environment-map",
-            match &scene.env {
-                Environment::Map(m) if !normals => {
-                    Some(format!("{} ({}x{}), importance-sampled by luminance", m.path.display(), m.width, m.height))
-                }
+        let material_count = |kinds: &[&str]| scene.materials.iter().filter(|m| kinds.contains(&m.bsdf.kind())).count();
+        Facts {
+            scene,
+            settings,
+            normals,
+            depth,
+            lit: !normals && depth >= 1,
+            sees_emission: !normals && (settings.accumulate || depth == 0),
+            emissive_triangles: scene
+                .mesh
+                .material_ids
+                .iter()
+                .filter(|&&m| scene.materials[m as usize].is_emissive())
+                .count(),
+            emissive_spheres: scene
+                .spheres
+                .iter()
+                .filter(|s| scene.materials[s.material as usize].is_emissive())
+                .count(),
+            environment: match &scene.env {
+                Environment::Constant(c) if *c != glam::Vec3::ZERO => Some(format!("constant environment {c}")),
+                Environment::Map(m) => Some(format!("environment map {}", m.path.display())),
                 _ => None,
             },
-        );
-        let textured = scene.materials.iter().filter(|m| m.albedo_texture.is_some()).count();
-        add(
-            &mut g[1],
-            "textures",
-            (!normals && textured > 0 && scene.mesh.uvs.is_some())
-                .then(|| format!("{textured} material(s) with an albedo texture")),
-        );
-        let r = scene.camera.lens_radius;
-        add(
-            &mut g[2],
-            "thin-lens",
-            (r > 0.0).then(|| format!("lens radius {r}, focal distance {}", scene.camera.focal_distance)),
-        );
-        [e.environment_map, e.textures, e.thin_lens] = g;
-        // --- end environment map, textures, lens ---
-        [
-            e.normal_shading,
-            e.spheres,
-            e.emission,
-            e.environment,
-            e.area_lights,
-            e.delta_lights,
-            e.infinite_light,
-            e.direct,
-            e.indirect,
-            e.russian_roulette,
-            e.adaptive,
-            e.mirror,
-            e.glass,
-            e.microfacet,
-            e.non_diffuse,
-        ] = f;
-        e.forced = force;
+            mirrors: material_count(&["mirror"]),
+            glasses: material_count(&["glass", "refraction"]),
+            metals: material_count(&["microfacet"]),
+        }
+    }
+
+    /// Light sampling (not `-H` hemisphere probes) runs.
+    fn samples_lights(&self) -> bool {
+        self.lit && !self.settings.hemisphere
+    }
+
+    /// Full global illumination to depth `d` or more.
+    fn global_to(&self, d: u32) -> bool {
+        !self.normals && self.settings.shading == Shading::Global && self.depth >= d
+    }
+}
+
+/// One row of the table: the effect's name (as the log, `info` and the stats show it), the
+/// flag it sets, and its rule: the reason it is on, or `None`. A rule may read the flags of
+/// the rows above it.
+struct Rule {
+    name: &'static str,
+    flag: fn(&mut Effects) -> &mut bool,
+    rule: fn(&Facts, &Effects) -> Option<String>,
+}
+
+/// Every effect, in the order the log lists them. `--all-effects` forces every row but the
+/// first on (normal shading chooses another renderer, not a kernel feature).
+const RULES: &[Rule] = &[
+    Rule {
+        name: "normal-shading",
+        flag: |e| &mut e.normal_shading,
+        rule: |f, _| f.normals.then(|| "--shading normals".into()),
+    },
+    Rule {
+        name: "spheres",
+        flag: |e| &mut e.spheres,
+        rule: |f, _| {
+            let n = f.scene.spheres.len();
+            (n > 0).then(|| format!("{n} analytic sphere(s)"))
+        },
+    },
+    Rule {
+        name: "emission",
+        flag: |e| &mut e.emission,
+        rule: |f, _| {
+            (f.sees_emission && f.emissive_triangles + f.emissive_spheres > 0).then(|| {
+                format!("{} emissive triangle(s), {} emissive sphere(s)", f.emissive_triangles, f.emissive_spheres)
+            })
+        },
+    },
+    Rule {
+        name: "environment",
+        flag: |e| &mut e.environment,
+        rule: |f, _| f.environment.clone().filter(|_| f.sees_emission).map(|c| format!("{c} seen by camera misses")),
+    },
+    Rule {
+        name: "area-lights",
+        flag: |e| &mut e.area_lights,
+        rule: |f, _| {
+            let areas = f.scene.lights.iter().filter(|l| l.kind() == "area").count();
+            let samples = f.settings.light_samples;
+            if !f.samples_lights() {
+                None
+            } else if areas > 0 {
+                Some(format!("{areas} area light(s), {samples} sample(s) each"))
+            } else if f.emissive_triangles > 0 {
+                Some(format!("{} emissive triangle(s) sampled by area, {samples} sample(s)", f.emissive_triangles))
+            } else {
+                None
+            }
+        },
+    },
+    Rule {
+        name: "delta-lights",
+        flag: |e| &mut e.delta_lights,
+        rule: |f, _| {
+            let delta = f.scene.lights.iter().filter(|l| l.is_delta()).count();
+            (f.samples_lights() && delta > 0)
+                .then(|| format!("{delta} point/directional/spot light(s), one shadow ray each"))
+        },
+    },
+    Rule {
+        name: "infinite-light",
+        flag: |e| &mut e.infinite_light,
+        rule: |f, _| {
+            let hemisphere_light = f.scene.lights.iter().any(|l| matches!(l, Light::Hemisphere { .. }));
+            (f.samples_lights() && (hemisphere_light || f.environment.is_some()))
+                .then(|| "hemisphere light or environment sampled".into())
+        },
+    },
+    Rule {
+        name: "direct-light",
+        flag: |e| &mut e.direct,
+        rule: |f, e| {
+            if !f.lit {
+                None
+            } else if f.settings.hemisphere {
+                Some("-H: uniform hemisphere probes".into())
+            } else if e.area_lights || e.delta_lights || e.infinite_light {
+                Some("light sampling: the scene has lights".into())
+            } else {
+                None
+            }
+        },
+    },
+    Rule {
+        name: "mirror",
+        flag: |e| &mut e.mirror,
+        rule: |f, _| {
+            (f.lit && f.mirrors > 0)
+                .then(|| format!("{} mirror material(s): delta reflection, no shadow rays", f.mirrors))
+        },
+    },
+    Rule {
+        name: "glass",
+        flag: |e| &mut e.glass,
+        rule: |f, _| {
+            (f.lit && f.glasses > 0)
+                .then(|| format!("{} glass/refraction material(s): Fresnel reflection and refraction", f.glasses))
+        },
+    },
+    Rule {
+        name: "microfacet",
+        flag: |e| &mut e.microfacet,
+        rule: |f, _| {
+            (f.lit && f.metals > 0).then(|| {
+                format!("{} rough conductor(s): Beckmann microfacets, MIS of light and BSDF samples", f.metals)
+            })
+        },
+    },
+    Rule {
+        name: "non-diffuse-shading",
+        flag: |e| &mut e.non_diffuse,
+        rule: |_, e| (e.mirror || e.glass || e.microfacet).then(|| "BSDF models in the shade kernel".into()),
+    },
+    Rule {
+        name: "indirect",
+        flag: |e| &mut e.indirect,
+        rule: |f, _| {
+            if f.global_to(2) {
+                Some(format!("-m {} > 1", f.depth))
+            } else if f.lit && f.mirrors + f.glasses + f.metals > 0 {
+                Some("light found by rays from mirror, glass or glossy surfaces".into())
+            } else {
+                None
+            }
+        },
+    },
+    Rule {
+        name: "russian-roulette",
+        flag: |e| &mut e.russian_roulette,
+        rule: |f, _| {
+            let p = f.settings.rr_continue;
+            (f.global_to(3) && p < 1.0).then(|| format!("-m {} > 2 and --rr {p} < 1", f.depth))
+        },
+    },
+    Rule {
+        name: "adaptive-sampling",
+        flag: |e| &mut e.adaptive,
+        rule: |f, _| f.settings.adaptive.map(|(b, t)| format!("-a {b} {t}")),
+    },
+    Rule {
+        name: "environment-map",
+        flag: |e| &mut e.environment_map,
+        rule: |f, _| match &f.scene.env {
+            Environment::Map(m) if !f.normals => {
+                Some(format!("{} ({}x{}), importance-sampled by luminance", m.path.display(), m.width, m.height))
+            }
+            _ => None,
+        },
+    },
+    Rule {
+        name: "textures",
+        flag: |e| &mut e.textures,
+        rule: |f, _| {
+            let textured = f.scene.materials.iter().filter(|m| m.albedo_texture.is_some()).count();
+            (!f.normals && textured > 0 && f.scene.mesh.uvs.is_some())
+                .then(|| format!("{textured} material(s) with an albedo texture"))
+        },
+    },
+    Rule {
+        name: "thin-lens",
+        flag: |e| &mut e.thin_lens,
+        rule: |f, _| {
+            let camera = &f.scene.camera;
+            (camera.lens_radius > 0.0)
+                .then(|| format!("lens radius {}, focal distance {}", camera.lens_radius, camera.focal_distance))
+        },
+    },
+];
+
+impl Effects {
+    /// Runs the table: each rule in order, its flag set and its reason listed when it is on.
+    pub fn of(scene: &Scene, settings: &Settings) -> Effects {
+        let facts = Facts::of(scene, settings);
+        let force = settings.all_effects;
+        let mut e = Effects { forced: force, ..Effects::default() };
+        for (i, row) in RULES.iter().enumerate() {
+            let why = (row.rule)(&facts, &e);
+            let why =
+                if i == 0 { why } else { why.or_else(|| force.then(|| "forced on by --all-effects".to_string())) };
+            if let Some(reason) = why {
+                *(row.flag)(&mut e) = true;
+                e.on.push(Effect { name: row.name, reason });
+            }
+        }
         e
     }
 

@@ -64,18 +64,50 @@ pub trait Features {
     const NON_DIFFUSE: bool;
 }
 
-/// The [`Features`] with these flags.
-pub struct Kernel<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool, const N: bool>;
+/// The [`Features`] with these flags (in the order of its constants).
+pub struct Kernel<
+    const EMISSION: bool,
+    const ENVIRONMENT: bool,
+    const DIRECT: bool,
+    const INDIRECT: bool,
+    const ROULETTE: bool,
+    const NON_DIFFUSE: bool,
+>;
 
-impl<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool, const N: bool> Features
-    for Kernel<E, V, D, I, R, N>
+impl<
+    const EMISSION: bool,
+    const ENVIRONMENT: bool,
+    const DIRECT: bool,
+    const INDIRECT: bool,
+    const ROULETTE: bool,
+    const NON_DIFFUSE: bool,
+> Features for Kernel<EMISSION, ENVIRONMENT, DIRECT, INDIRECT, ROULETTE, NON_DIFFUSE>
 {
-    const EMISSION: bool = E;
-    const ENVIRONMENT: bool = V;
-    const DIRECT: bool = D;
-    const INDIRECT: bool = I;
-    const ROULETTE: bool = R;
-    const NON_DIFFUSE: bool = N;
+    const EMISSION: bool = EMISSION;
+    const ENVIRONMENT: bool = ENVIRONMENT;
+    const DIRECT: bool = DIRECT;
+    const INDIRECT: bool = INDIRECT;
+    const ROULETTE: bool = ROULETTE;
+    const NON_DIFFUSE: bool = NON_DIFFUSE;
+}
+
+/// `$run::<Kernel<..>>($arg, ..)` for the kernel whose flags are the run-time values
+/// `$flag, ..`: a tree of `if`s with one monomorphised call per combination at its leaves,
+/// so the choice is made once per render and the kernels themselves test no flag.
+macro_rules! with_kernel {
+    ($run:ident($($arg:expr),*), [$($flag:expr),* $(,)?]) => {
+        with_kernel!(@pick $run($($arg),*), [], [$($flag),*])
+    };
+    (@pick $run:ident($($arg:expr),*), [$($bit:tt),*], []) => {
+        $run::<Kernel<$($bit),*>>($($arg),*)
+    };
+    (@pick $run:ident($($arg:expr),*), [$($bit:tt),*], [$head:expr $(, $rest:expr)*]) => {
+        if $head {
+            with_kernel!(@pick $run($($arg),*), [$($bit,)* true], [$($rest),*])
+        } else {
+            with_kernel!(@pick $run($($arg),*), [$($bit,)* false], [$($rest),*])
+        }
+    };
 }
 
 /// A worker thread's queues, reused by every wave it runs.
@@ -125,46 +157,12 @@ pub fn render_wavefront(
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
     let effects = Effects::of(scene, s);
-    let flags = [
-        effects.emission,
-        effects.environment,
-        effects.direct,
-        effects.indirect,
-        effects.russian_roulette,
-        effects.non_diffuse,
-    ];
     let c = Ctx { t: Transport::new(scene, s), accel, s, effects, progress };
-    pick_e(flags, &c)
-}
-
-// One flag per function: 2^6 monomorphised kernels, chosen once per render.
-fn pick_e(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
-    if f[0] { pick_v::<true>(f, c) } else { pick_v::<false>(f, c) }
-}
-fn pick_v<const E: bool>(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
-    if f[1] { pick_d::<E, true>(f, c) } else { pick_d::<E, false>(f, c) }
-}
-fn pick_d<const E: bool, const V: bool>(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
-    if f[2] { pick_i::<E, V, true>(f, c) } else { pick_i::<E, V, false>(f, c) }
-}
-fn pick_i<const E: bool, const V: bool, const D: bool>(f: [bool; 6], c: &Ctx) -> (Accumulator, RenderStats) {
-    if f[3] { pick_r::<E, V, D, true>(f, c) } else { pick_r::<E, V, D, false>(f, c) }
-}
-fn pick_r<const E: bool, const V: bool, const D: bool, const I: bool>(
-    f: [bool; 6],
-    c: &Ctx,
-) -> (Accumulator, RenderStats) {
-    if f[4] { pick_n::<E, V, D, I, true>(f, c) } else { pick_n::<E, V, D, I, false>(f, c) }
-}
-fn pick_n<const E: bool, const V: bool, const D: bool, const I: bool, const R: bool>(
-    f: [bool; 6],
-    c: &Ctx,
-) -> (Accumulator, RenderStats) {
-    if f[5] {
-        render_frames::<Kernel<E, V, D, I, R, true>>(c)
-    } else {
-        render_frames::<Kernel<E, V, D, I, R, false>>(c)
-    }
+    let e = &c.effects;
+    with_kernel!(
+        render_frames(&c),
+        [e.emission, e.environment, e.direct, e.indirect, e.russian_roulette, e.non_diffuse]
+    )
 }
 
 fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
