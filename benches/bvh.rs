@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 use wavepath::accel::{Bvh, Intersector, TraceCounters};
 use wavepath::geometry::Ray;
-use wavepath::rays::{diffuse_rays, primary_rays};
+use wavepath::rayfile::{diffuse_rays, primary_rays};
 use wavepath::scene::{Mesh, Scene};
 
 fn scenes() -> Vec<(String, Scene)> {

@@ -5,8 +5,8 @@ use anyhow::{Result, bail};
 use std::time::Instant;
 use wavepath::accel::{Bvh, TraceCounters};
 use wavepath::load::{LoadOptions, load};
-use wavepath::rays::file::{HitRecord, read_rays, write_hits, write_rays};
-use wavepath::rays::{diffuse_rays, primary_rays, trace_all};
+use wavepath::rayfile::file::{HitRecord, read_rays, write_hits, write_rays};
+use wavepath::rayfile::{diffuse_rays, primary_rays, trace_all};
 
 pub fn run_dump(args: &DumpArgs) -> Result<()> {
     let (w, h) = match args.resolution.as_deref() {
