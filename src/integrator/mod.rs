@@ -46,7 +46,7 @@ pub struct Transport<'a> {
     pub models: Vec<crate::bsdf::Model>,
     /// Some material is not Lambertian: shading goes through [`ShadingFrame`].
     pub non_diffuse: bool,
-    /// Albedo textures per material (issue 7); empty lookups when the scene has none.
+    /// Albedo textures per material; empty lookups when the scene has none.
     pub textures: Textures,
     pub max_depth: u32,
     pub accumulate: bool,

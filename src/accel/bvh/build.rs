@@ -17,8 +17,8 @@ const SAH_MAX_DEPTH: usize = 48;
 pub const C_TRAV: f32 = 1.0;
 
 /// A set of up to [`MAX_LEAF`] triangles (one SIMD block) is split when the two halves' areas
-/// sum to less than this fraction of the set's area. Measured (BENCHMARKS.md, "Shadow
-/// packets"): 0.7 splits the Cornell boxes' wall blocks (CBbunny 6.08 -> 3.19 triangle tests
+/// sum to less than this fraction of the set's area. Measured (docs/decisions.md, "Leaf cost
+/// for spread triangles"): 0.7 splits the Cornell boxes' wall blocks (CBbunny 6.08 -> 3.19 triangle tests
 /// per ray, shadow stage -10-20%) and leaves the bunny's small triangles in full blocks; 0.5
 /// changed nothing there.
 const SMALL_SPLIT: f32 = 0.7;

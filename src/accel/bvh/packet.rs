@@ -16,7 +16,7 @@
 //! [`PacketShear`] at the first leaf; on AVX2 one ray per lane, with each lane's operations
 //! those of the single-ray set-up, so the same values), and the leaf filter starts from the
 //! set-up instead of deriving the shear's values again at every leaf. On CBbunny that took
-//! the shadow stage from 779 to 640 instructions per ray (BENCHMARKS.md, session 12).
+//! the shadow stage from 779 to 640 instructions per ray (docs/decisions.md, "Shadow packets").
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
 use super::leaf::LANES;
