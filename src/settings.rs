@@ -1,7 +1,7 @@
 //! Render settings: everything the command line can change about a render.
 
 /// What a pixel shows.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
     /// The shading normal as n * 0.5 + 0.5 (the seed's debug mode).
     Normals,
@@ -13,7 +13,7 @@ pub enum Shading {
 }
 
 /// Which light-transport implementation runs.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum IntegratorKind {
     /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
     #[default]

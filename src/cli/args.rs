@@ -1,11 +1,9 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
+use super::choices::{Camera, Integrator, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::cpu::Isa;
-use wavepath::film::Tonemap;
-use wavepath::load::CameraMode;
-use wavepath::settings::{IntegratorKind, Shading};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -62,8 +60,8 @@ pub struct InfoArgs {
     #[arg(long)]
     pub json: bool,
     /// COLLADA camera framing.
-    #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
-    pub camera: CameraMode,
+    #[arg(long, value_enum, default_value_t = Camera::Cs184)]
+    pub camera: Camera,
     /// Environment map (as `render -e`): loaded, its size and effects reported.
     #[arg(short = 'e', value_name = "FILE")]
     pub envmap: Option<PathBuf>,
@@ -143,11 +141,11 @@ pub struct RenderArgs {
     #[arg(long, value_enum, default_value_t = Tonemap::Cs184)]
     pub tonemap: Tonemap,
     /// Light-transport implementation.
-    #[arg(long, value_enum, default_value_t = IntegratorKind::Wavefront)]
-    pub integrator: IntegratorKind,
+    #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
+    pub integrator: Integrator,
     /// COLLADA camera framing: cs184 (the reference renderer's placement) or the file's camera.
-    #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
-    pub camera: CameraMode,
+    #[arg(long, value_enum, default_value_t = Camera::Cs184)]
+    pub camera: Camera,
     /// Force every effect (stage and kernel feature) on, even those the scene does not need;
     /// the image is the same, only slower: for measuring what specialisation saves.
     #[arg(long)]
@@ -163,8 +161,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N")]
     pub parts: Option<u32>,
     /// How parts divide the render: bands of rows (exact merge) or sample ranges.
-    #[arg(long, value_enum, default_value_t = wavepath::parts::Split::Tiles)]
-    pub split: wavepath::parts::Split,
+    #[arg(long, value_enum, default_value_t = Split::Tiles)]
+    pub split: Split,
 }
 
 #[derive(Args, Debug, Clone)]

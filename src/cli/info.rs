@@ -11,7 +11,7 @@ use wavepath::settings::Settings;
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
-    let mut scene = load(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
+    let mut scene = load(&a.scene, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?;
     if let Some(e) = &a.envmap {
         scene.env = Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
     }

@@ -9,7 +9,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
     let merged = wavepath::parts::merge_files(&a.parts)?;
     let m = &merged.parts[0];
     let film = merged.acc.to_film();
-    wavepath::film::write_image(&film, &a.output, a.tonemap)?;
+    wavepath::film::write_image(&film, &a.output, a.tonemap.into())?;
     let rate = wavepath::film::rate_film(film.width, film.height, &merged.acc.samples_taken(), m.spp);
     let rate_path = rate_image_path(&a.output);
     wavepath::film::write_rate_image(&rate, &rate_path)?;

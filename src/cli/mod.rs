@@ -2,6 +2,7 @@
 //! error into one line on stderr and a non-zero exit.
 
 mod args;
+mod choices;
 mod info;
 mod merge_cmd;
 mod part_cmd;

@@ -12,7 +12,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
     let s = settings(a)?;
     let text = a.part.as_deref().unwrap_or("auto");
-    let spec = PartSpec::parse(text, a.parts, a.split, &|k| std::env::var(k).ok())?;
+    let spec = PartSpec::parse(text, a.parts, a.split.into(), &|k| std::env::var(k).ok())?;
     spec.check(&s)?;
     let out: PathBuf = match &a.output {
         Some(p) if p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),

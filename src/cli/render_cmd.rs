@@ -14,7 +14,7 @@ use wavepath::stats::RenderStats;
 /// Loads the scene the arguments name (or the default) with the camera adjustments applied.
 pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     let mut scene = match &a.scene {
-        Some(p) => load(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
+        Some(p) => load(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
         None => default_scene(),
     };
     if let Some(c) = &a.camera_file {
@@ -75,7 +75,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         Ok((result, build))
     })??;
     let wavepath::render::RenderOutput { film, stats, samples } = film;
-    wavepath::film::write_image(&film, &out, a.tonemap)?;
+    wavepath::film::write_image(&film, &out, a.tonemap.into())?;
     if s.shading != wavepath::settings::Shading::Normals {
         let rate_path = rate_image_path(&out);
         let rate = wavepath::film::rate_film(film.width, film.height, &samples, s.spp);

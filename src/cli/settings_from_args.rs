@@ -56,9 +56,9 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.use_bvh = !a.no_bvh;
     s.isa = a.isa;
     s.seed = a.seed;
-    s.integrator = a.integrator;
+    s.integrator = a.integrator.into();
     s.all_effects = a.all_effects;
-    s.shading = a.shading.unwrap_or(if s.max_depth > 1 { Shading::Global } else { Shading::Direct });
+    s.shading = a.shading.map(Shading::from).unwrap_or(if s.max_depth > 1 { Shading::Global } else { Shading::Direct });
     if let Some(p) = &a.cell {
         for (name, v) in ["X", "Y", "DX", "DY"].iter().zip(p) {
             in_range(&format!("-p {name}"), *v, 0, MAX_SIDE)?;

@@ -1,11 +1,12 @@
 //! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`wavepath::study`]).
 
+use super::choices::{Camera, Sweep};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
 use wavepath::load::{CameraMode, LoadOptions, default_scene, load};
 use wavepath::settings::{Settings, Shading};
-use wavepath::study::{StudyConfig, SweepKind};
+use wavepath::study::StudyConfig;
 
 #[derive(Args, Debug, Clone)]
 #[command(long_about = "Sweeps one setting and, for each value, renders at samples per pixel \
@@ -23,7 +24,7 @@ pub struct StudyArgs {
     pub scene: Option<PathBuf>,
     /// The setting to sweep.
     #[arg(long, value_enum)]
-    pub sweep: SweepKind,
+    pub sweep: Sweep,
     /// Resolution of every render (small: a study renders many images).
     #[arg(short = 'r', num_args = 2, value_names = ["W", "H"], default_values_t = [64, 48])]
     pub resolution: Vec<i64>,
@@ -58,8 +59,8 @@ pub struct StudyArgs {
     #[arg(short = 't', value_name = "N")]
     pub threads: Option<i64>,
     /// COLLADA camera framing.
-    #[arg(long, value_enum, default_value_t = CameraMode::Cs184)]
-    pub camera: CameraMode,
+    #[arg(long, value_enum, default_value_t = Camera::Cs184)]
+    pub camera: Camera,
 }
 
 fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
@@ -95,7 +96,7 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
         ..Settings::default()
     };
     Ok(StudyConfig {
-        sweep: a.sweep,
+        sweep: a.sweep.into(),
         base,
         max_spp: in_range("--max-spp", a.max_spp, 1, 1 << 20)? as u32,
         ref_spp: in_range("--ref-spp", a.ref_spp, 1, 1 << 24)? as u32,
@@ -107,14 +108,14 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
 pub fn run(a: &StudyArgs) -> Result<()> {
     let cfg = config(a)?;
     let mut scene = match &a.scene {
-        Some(p) => load(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
+        Some(p) => load(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
         None => default_scene(),
     };
     scene.camera.fit_aspect(cfg.base.width as f32 / cfg.base.height as f32);
     let identity = wavepath::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
-    let camera_label = format!("{:?}", a.camera);
+    let camera_label = format!("{:?}", CameraMode::from(a.camera));
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
     let result = wavepath::render::with_threads(cfg.base.threads, || -> Result<_> {

@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::Path;
 
 /// How linear radiance becomes 8-bit PNG values.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Tonemap {
     /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1).
     #[default]

@@ -15,7 +15,7 @@ use anyhow::{Context, Result, bail};
 use std::path::Path;
 
 /// Which camera a COLLADA file gets.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum CameraMode {
     /// The CS184 reference placement (see COLLADA-CS184.md): the seed's pictures use it.
     #[default]

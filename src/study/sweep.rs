@@ -5,7 +5,7 @@
 use crate::settings::Settings;
 
 /// The setting a study varies.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SweepKind {
     /// Samples per pixel 1, 2, 4, ... up to the cap: one curve.
     Spp,

@@ -1,0 +1,92 @@
+//! The command line's names for the library's choices. clap lives on the binary side, so
+//! each library enum gets a twin here that clap can list and parse (with each value's help),
+//! and turns into the library's value.
+
+/// A clap value enum mirroring a library enum variant by variant.
+macro_rules! choice {
+    ($(#[$doc:meta])* $name:ident => $lib:path { $($(#[$vdoc:meta])* $variant:ident),+ $(,)? }) => {
+        $(#[$doc])*
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+        pub enum $name {
+            $($(#[$vdoc])* $variant),+
+        }
+
+        impl From<$name> for $lib {
+            fn from(c: $name) -> $lib {
+                match c {
+                    $($name::$variant => <$lib>::$variant),+
+                }
+            }
+        }
+    };
+}
+
+choice! {
+    /// What a pixel shows.
+    Shading => wavepath::settings::Shading {
+        /// The shading normal as n * 0.5 + 0.5 (the seed's debug mode).
+        Normals,
+        /// Emission plus direct light (depth 1).
+        Direct,
+        /// Full global illumination up to the maximum depth.
+        Global,
+    }
+}
+
+choice! {
+    /// Which light-transport implementation runs.
+    Integrator => wavepath::settings::IntegratorKind {
+        /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
+        Wavefront,
+        /// The simple recursive single-ray reference.
+        Recursive,
+    }
+}
+
+choice! {
+    /// How linear radiance becomes 8-bit PNG values.
+    Tonemap => wavepath::film::Tonemap {
+        /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1).
+        Cs184,
+        /// Plain sRGB encoding of clamp(L, 0, 1).
+        Srgb,
+    }
+}
+
+choice! {
+    /// Which camera a COLLADA file gets.
+    Camera => wavepath::load::CameraMode {
+        /// The CS184 reference placement (see COLLADA-CS184.md): the seed's pictures use it.
+        Cs184,
+        /// The file's camera exactly as written.
+        File,
+    }
+}
+
+choice! {
+    /// How a render is cut into parts.
+    Split => wavepath::parts::Split {
+        /// Bands of rows, dealt round-robin to the parts: the merge is bit-identical.
+        Tiles,
+        /// Every part renders every pixel with its own range of sample indices.
+        Samples,
+    }
+}
+
+choice! {
+    /// The setting a study varies.
+    Sweep => wavepath::study::SweepKind {
+        /// Samples per pixel 1, 2, 4, ... up to the cap: one curve.
+        Spp,
+        /// Samples per area light (-l) 1 ... 64, each over the spp ladder.
+        LightSamples,
+        /// Uniform hemisphere (-H) against light importance sampling, each over the spp ladder.
+        Sampling,
+        /// Maximum depth (-m) 1 ... 16, without Russian roulette and with it.
+        Depth,
+        /// Russian roulette continue probability at the deepest depth.
+        Roulette,
+        /// Adaptive sampling (-a 64 T) for T from 0.2 to 0.01, against fixed spp.
+        Adaptive,
+    }
+}
