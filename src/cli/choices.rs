@@ -66,9 +66,11 @@ choice! {
 choice! {
     /// How a render is cut into parts.
     Split => wavepath::parts::Split {
-        /// Bands of rows, dealt round-robin to the parts: the merge is bit-identical.
+        /// Bands of rows, dealt round-robin to the parts: every pixel is rendered by one part
+        /// exactly as a single process renders it, so the merge is bit-identical.
         Tiles,
-        /// Every part renders every pixel with its own range of sample indices.
+        /// Every part renders every pixel with its own range of sample indices; the merge adds
+        /// the per-pixel sums (identical up to floating-point summation order).
         Samples,
     }
 }

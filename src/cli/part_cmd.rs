@@ -28,7 +28,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         stats.threads = rayon::current_num_threads();
         Ok((acc, stats))
     })??;
-    stats.host = wavepath::parts::stats::host_name();
+    stats.host = host_name();
     stats.wall_s = t0.elapsed().as_secs_f64();
     let meta = PartMeta {
         format: wavepath::parts::file::FORMAT,
@@ -54,4 +54,13 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         out.display()
     );
     Ok(())
+}
+
+/// The host name for the stats (which node ran a part), without spawning a process.
+fn host_name() -> String {
+    std::env::var("HOSTNAME")
+        .ok()
+        .or_else(|| std::fs::read_to_string("/proc/sys/kernel/hostname").ok())
+        .map(|h| h.trim().to_string())
+        .unwrap_or_default()
 }

@@ -38,12 +38,3 @@ impl PartStats {
         self.camera_rays + self.extension_rays + self.shadow_rays
     }
 }
-
-/// The host name for the stats (which node ran a part), without spawning a process.
-pub fn host_name() -> String {
-    std::env::var("HOSTNAME")
-        .ok()
-        .or_else(|| std::fs::read_to_string("/proc/sys/kernel/hostname").ok())
-        .map(|h| h.trim().to_string())
-        .unwrap_or_default()
-}
