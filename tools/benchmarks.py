@@ -177,7 +177,7 @@ def md_renders(args, part, scenes_dir):
     out = []
     rounds = args.rounds
     out.append("## Renders\n")
-    out.append(f"Wavefront integrator, {args.threads} threads, best of {rounds} round(s) by `render_s` "
+    out.append(f"Wavefront integrator, {args.threads} threads, best of {rounds} round{'s' if rounds > 1 else ''} by `render_s` "
                "(rendering only: no load, no BVH build). Stage times are thread-seconds summed over the "
                "workers (of the best run); tests and nodes are per ray (all rays).\n")
     out.append("| scene | flags | rays (M) | render s | Mrays/s | " + " | ".join(STAGES) +
@@ -241,7 +241,7 @@ def copy_tree(src, dst):
 
 
 def part_peers(args, scenes_dir, peers_dir):
-    work = os.path.join(args.work, "peers")
+    work = args.peers_work
     copy_tree(peers_dir, work)
     meshes = [os.path.join(scenes_dir, m) for m in PEER_MESHES]
     meshes = [m for m in meshes if os.path.exists(m)]
@@ -291,7 +291,7 @@ def md_peers(args, part, scenes_dir):
     out.append(f"Closest-hit rays of `wavepath rays trace` beside the peers in `../shared/peers/run.sh`, "
                f"same meshes and ray sets (primary: 800x600 camera rays; diffuse: one cosine bounce per "
                f"primary hit). Mrays/s, best of {args.reps} timed passes per run and best of "
-               f"{args.peer_passes} harness pass(es); the ratios are wavepath over the peer within one "
+               f"{args.peer_passes} harness pass{'es' if args.peer_passes > 1 else ''}; the ratios are wavepath over the peer within one "
                f"pass (fresh processes run back to back), their median over passes with the range in "
                f"brackets. `hits`: wavepath's verdict against Embree's watertight `robust` variant.\n")
     out.append("| mesh, rays, threads | " + " | ".join(label(c) for c in cols) +
@@ -337,7 +337,8 @@ def md_peers(args, part, scenes_dir):
                "(treat it as a lower bound).  ")
     e = part["env"]
     meshes = " ".join(f"{args.scenes_shown}/{os.path.relpath(m, scenes_dir)}" for m in part["meshes"])
-    out.append(f"Command ({args.peer_passes} times, in a scratch copy of `../shared/peers`): "
+    times = "once" if args.peer_passes == 1 else f"{args.peer_passes} times"
+    out.append(f"Command ({times}, in a scratch copy of `../shared/peers`): "
                f"`PEERS=\"{e['PEERS']}\" EXTRA_PEERS=\"wavepath={args.bin_shown} rays trace\" "
                f"REPS={e['REPS']} WARMUP={e['WARMUP']} THREADS_LIST=\"{e['THREADS_LIST']}\" "
                f"WAIT_QUIET={e['WAIT_QUIET']} RERUN_NOISY=0 ./run.sh {meshes}`.  ")
@@ -347,7 +348,7 @@ def md_peers(args, part, scenes_dir):
 
 # ------------------------------------------------------------------ e2e ----
 def part_e2e(args, peers_dir):
-    work = os.path.join(args.work, "peers")
+    work = args.peers_work
     copy_tree(peers_dir, work)
     run_name = "benchmarks-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     extra = ["--scenes", "cornell-flush", "-r", "160", "120", "--ladder", "1,4,16,64", "--ref-spp", "1024"] \
@@ -414,20 +415,22 @@ def main(argv):
     ap.add_argument("--peers", default=None, help="peers harness folder (default: SCENES/../peers)")
     ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "wavepath-benchmarks"),
                     help="scratch folder (peers copy and builds, images; default /tmp/wavepath-benchmarks)")
+    ap.add_argument("--peers-work", default=None,
+                    help="where the peers harness is copied and built (default WORK/peers; kept between runs)")
     ap.add_argument("--out", default=os.path.join(REPO, "BENCHMARKS.md"), help="page to write")
     ap.add_argument("--threads", type=int, default=NCPU, help=f"render threads / 2nd thread count (default {NCPU})")
     ap.add_argument("--rounds", type=int, default=None, help="alternating render rounds (default 3; quick 1)")
     ap.add_argument("--peer-passes", type=int, default=None, help="peers harness passes (default 3; quick 1)")
     ap.add_argument("--reps", type=int, default=None, help="timed passes per peer run (default 10; quick 3)")
     ap.add_argument("--wait-quiet", type=float, default=None,
-                    help="before each run wait up to S s for a quiet second (default 5; quick 0)")
+                    help="before each run wait up to S s for a quiet second (default 2; quick 0)")
     ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
     args = ap.parse_args(argv)
     q = args.quick
     args.rounds = args.rounds or (1 if q else 3)
     args.peer_passes = args.peer_passes or (1 if q else 3)
     args.reps = args.reps or (3 if q else 10)
-    args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 5)
+    args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:
         if p not in ("renders", "peers", "e2e"):
@@ -445,6 +448,7 @@ def main(argv):
     if ("peers" in parts or "e2e" in parts) and not os.path.isfile(os.path.join(peers_dir, "run.sh")):
         ap.error(f"no peers harness at {peers_dir} (--peers)")
     os.makedirs(args.work, exist_ok=True)
+    args.peers_work = os.path.abspath(args.peers_work or os.path.join(args.work, "peers"))
 
     model, flags = cpu_model()
     with open(args.bin, "rb") as f:
