@@ -46,6 +46,9 @@ RENDERS = [
 PEER_MESHES = ["meshes/lucy_100k.obj", "meshes/dragon_100k.obj"]
 PEERS = ["embree:robust", "embree:single", "tinybvh:bvh8", "obvhs:cwbvh"]
 STAGES = ["generate", "traverse", "shade", "shadow", "compact"]
+E2E_QUICK = "--scenes cornell-flush -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
+# Effects every global-illumination render of a lit scene has; the table lists the others.
+COMMON_EFFECTS = {"emission", "area-lights", "direct-light", "indirect", "russian-roulette"}
 
 
 def log(msg):
@@ -179,17 +182,20 @@ def md_renders(args, part, scenes_dir):
     out.append("## Renders\n")
     out.append(f"Wavefront integrator, {args.threads} threads, best of {rounds} round{'s' if rounds > 1 else ''} by `render_s` "
                "(rendering only: no load, no BVH build). Stage times are thread-seconds summed over the "
-               "workers (of the best run); tests and nodes are per ray (all rays).\n")
-    out.append("| scene | flags | rays (M) | render s | Mrays/s | " + " | ".join(STAGES) +
+               "workers (of the best run); tests and nodes are per ray (all rays). Scenes with "
+               "`non-diffuse-shading` shade one path at a time (the 8-lane kernel is for Lambertian "
+               "scenes: docs/decisions.md, Shade in lanes).\n")
+    out.append("| scene | flags | other effects | rays (M) | render s | Mrays/s | " + " | ".join(STAGES) +
                " | tests / ray | nodes / ray | BVH build s |")
-    out.append("|---|---|--:|--:|--:|" + "--:|" * len(STAGES) + "--:|--:|--:|")
+    out.append("|---|---|---|--:|--:|--:|" + "--:|" * len(STAGES) + "--:|--:|--:|")
     for name, path, flags in part["todo"]:
         runs = [r for r in part["runs"] if r["scene"] == name and r["integrator"] == "wavefront"]
         if not runs:
             continue
         b = min(runs, key=lambda r: r["stats"]["render_s"])["stats"]
         stages = [fmt(b["stages"].get(s)) for s in STAGES]
-        out.append(f"| {name} | `{flags}` | {b['rays']['total'] / 1e6:.1f} | {b['render_s']:.3f} | "
+        other = [e for e in b.get("effects", []) if e not in COMMON_EFFECTS]
+        out.append(f"| {name} | `{flags}` | {', '.join(other) or '-'} | {b['rays']['total'] / 1e6:.1f} | {b['render_s']:.3f} | "
                    f"{b['mrays_per_s']:.1f} | " + " | ".join(stages) +
                    f" | {b['intersection_tests_per_ray']:.2f} | {b['nodes_visited_per_ray']:.2f} | "
                    f"{b['bvh']['build_s']:.3f} |")
@@ -347,12 +353,19 @@ def md_peers(args, part, scenes_dir):
 
 
 # ------------------------------------------------------------------ e2e ----
-def part_e2e(args, peers_dir):
+def part_e2e(args, scenes_dir, peers_dir):
     work = args.peers_work
     copy_tree(peers_dir, work)
+    # e2e/scenes.py reads the scenes at ../../scenes from its own folder: link them beside the copy.
+    link = os.path.join(os.path.dirname(work), "scenes")
+    if os.path.islink(link) and os.path.realpath(link) != scenes_dir:
+        os.remove(link)
+    if not os.path.lexists(link):
+        os.symlink(scenes_dir, link)
+    elif os.path.realpath(link) != scenes_dir:
+        raise SystemExit(f"{link} exists and is not a link to {scenes_dir}; e2e needs it (or another --peers-work)")
     run_name = "benchmarks-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    extra = ["--scenes", "cornell-flush", "-r", "160", "120", "--ladder", "1,4,16,64", "--ref-spp", "1024"] \
-        if args.quick else []
+    extra = shlex.split(args.e2e_args)
     cmd = [os.path.join(work, "e2e", "run.sh"), "--threads", str(args.threads), "--run-name", run_name,
            "--wait-quiet", str(int(args.wait_quiet))] + extra
     env = dict(os.environ, WAVEPATH=os.path.abspath(args.bin), E2E_BUILD=os.path.join(work, "e2e", "build"))
@@ -391,8 +404,9 @@ def md_e2e(args, part):
                        f"{fmt(d.get('speedup_render'))} | {fmt(d.get('speedup_wall'))} | "
                        f"{100 * agree.get('mean_rel_diff_lum_masked', float('nan')):+.1f}% |")
     out.append("")
-    out.append(f"Command: `WAVEPATH={args.bin_shown} ../shared/peers/e2e/run.sh "
-               f"{shlex.join(part['cmd'][1:])}` (in a scratch copy).  ")
+    shown = [c for i, c in enumerate(part["cmd"]) if c != "--run-name" and part["cmd"][i - 1] != "--run-name"]
+    out.append(f"Command: `WAVEPATH={args.bin_shown} ../shared/peers/e2e/run.sh {shlex.join(shown)}` "
+               f"(in a scratch copy).  ")
     out.append(stamp(part) + "\n")
     return out
 
@@ -424,12 +438,16 @@ def main(argv):
     ap.add_argument("--reps", type=int, default=None, help="timed passes per peer run (default 10; quick 3)")
     ap.add_argument("--wait-quiet", type=float, default=None,
                     help="before each run wait up to S s for a quiet second (default 2; quick 0)")
+    ap.add_argument("--e2e-args", default=None,
+                    help="extra options for e2e/run.sh (default none: its full comparison, 15-25 min; "
+                         "quick: " + repr(E2E_QUICK) + ", under a minute)")
     ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
     args = ap.parse_args(argv)
     q = args.quick
     args.rounds = args.rounds or (1 if q else 3)
     args.peer_passes = args.peer_passes or (1 if q else 3)
     args.reps = args.reps or (3 if q else 10)
+    args.e2e_args = args.e2e_args if args.e2e_args is not None else (E2E_QUICK if q else "")
     args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:
@@ -466,7 +484,7 @@ def main(argv):
     if "peers" in parts:
         results["peers"] = part_peers(args, scenes_dir, peers_dir)
     if "e2e" in parts:
-        results["e2e"] = part_e2e(args, peers_dir)
+        results["e2e"] = part_e2e(args, scenes_dir, peers_dir)
     took = time.monotonic() - t0
     with open(os.path.join(args.work, "results.json"), "w") as f:
         json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)
@@ -502,8 +520,9 @@ def main(argv):
         md += md_e2e(args, results["e2e"])
     else:
         md.append("## End to end against Mitsuba 3\n")
-        md.append("Not run this time (15-25 min): `tools/benchmarks.sh --parts renders,peers,e2e` adds "
-                  "whole renders against Mitsuba 3 at equal error (`../shared/peers/e2e/run.sh`).\n")
+        md.append("Not run this time: `tools/benchmarks.sh --e2e` adds whole renders against Mitsuba 3 at "
+                  "equal error (`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args "
+                  f"'{E2E_QUICK}'` under a minute).\n")
     with open(args.out, "w") as f:
         f.write("\n".join(md).rstrip() + "\n")
     log(f"wrote {args.out} ({took / 60:.1f} min)")
