@@ -391,7 +391,10 @@ def md_e2e(args, part):
     out.append(f"Whole renders at equal error ({common.get('width', '?')}x{common.get('height', '?')}, "
                f"-m {common.get('m', '?')}, {common.get('threads', '?')} threads): seconds each renderer "
                f"needs to reach the same relative RMSE against its own converged reference (`~`: "
-               f"extrapolated). Speedup = Mitsuba seconds / wavepath seconds (> 1: wavepath faster).\n")
+               f"extrapolated). Speedup = Mitsuba seconds / wavepath seconds (> 1: wavepath faster), by "
+               f"render time and by whole-process time (Mitsuba's includes Python start and import). "
+               f"The harness runs each renderer's ladder as a block, not alternating, so on a busy machine "
+               f"these ratios are the least reliable on this page (`--reps R` keeps the fastest of R).\n")
     out.append("| scene | target rel. RMSE | renderer | ms / spp | render s to target | speedup (render) | "
                "speedup (wall) | refs: mean lum. diff |")
     out.append("|---|--:|---|--:|--:|--:|--:|--:|")
@@ -505,9 +508,12 @@ def main(argv):
           f"- Load average (1/5/15 min) at the start: {' / '.join(f'{x:.2f}' for x in start['load'])}; "
           f"at the end: {' / '.join(f'{x:.2f}' for x in os.getloadavg())}."]
     if noisy:
+        how = ("ratios can be off by tens of percent (see the per-round ranges), and two-thread figures "
+               "mean little (no free second core)") if busy_mean > 0.3 else "ratios carry several percent of noise"
         md.append(f"- **Noisy machine**: other processes used {100 * busy_mean:.0f}% of the CPUs on average "
                   f"during the runs (max {100 * busy_max:.0f}%), or the load was already high at the start: "
-                  f"absolute figures are lower bounds, ratios carry several percent of noise.")
+                  f"absolute figures are lower bounds, {how}. Rerun on a quiet machine before drawing "
+                  f"conclusions.")
     else:
         md.append(f"- Quiet machine: other processes used {100 * busy_mean:.0f}% of the CPUs on average "
                   f"during the runs (max {100 * busy_max:.0f}%).")
