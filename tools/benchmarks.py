@@ -1,0 +1,539 @@
+#!/usr/bin/env python3
+"""Regenerate BENCHMARKS.md: current results of wavepath on this machine.
+
+    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e] [--quick] [options]
+
+Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
+  renders  a few fixed renders, each run as wavefront and as `--integrator recursive`,
+           alternating fresh processes round by round; tabulated from `--stats` JSON
+  peers    ray throughput beside Embree, tinybvh and obvhs in ../shared/peers/run.sh, with
+           wavepath as an EXTRA_PEER (`wavepath rays trace`); several passes, ratios per pass
+  e2e      whole renders against Mitsuba 3 at equal error (../shared/peers/e2e/run.sh)
+
+The peers folder is copied to a scratch folder (--work) first: its scripts write build
+products beside themselves, and the shared copy must stay untouched.
+Every table records its command, the machine, the load average before and after, and the
+share of the CPUs other processes used during each run (`other_busy`, as the peers harness
+measures it). Python 3 standard library only.
+"""
+import argparse
+import datetime
+import hashlib
+import json
+import os
+import platform
+import resource
+import shlex
+import shutil
+import statistics
+import subprocess
+import sys
+import time
+
+REPO = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+TICK = os.sysconf("SC_CLK_TCK")
+NCPU = os.cpu_count() or 1
+
+# name, scene file (relative to the scenes folder; None = the embedded default), flags, quick flags
+RENDERS = [
+    ("default", None, "-s 16 -l 4 -m 5", "-s 4 -l 4 -m 5"),
+    ("CBspheres_lambertian", "cs184/sky/CBspheres_lambertian.dae", "-s 64 -l 4 -m 5 -r 480 360",
+     "-s 16 -l 4 -m 5 -r 480 360"),
+    ("CBbunny", "cs184/sky/CBbunny.dae", "-s 64 -l 4 -m 5 -r 480 360", "-s 16 -l 4 -m 5 -r 480 360"),
+    ("CBlucy", "cs184/reconstructed/sky/CBlucy.dae", "-s 16 -l 4 -m 5 -r 480 360",
+     "-s 4 -l 4 -m 5 -r 480 360"),
+]
+PEER_MESHES = ["meshes/lucy_100k.obj", "meshes/dragon_100k.obj"]
+PEERS = ["embree:robust", "embree:single", "tinybvh:bvh8", "obvhs:cwbvh"]
+STAGES = ["generate", "traverse", "shade", "shadow", "compact"]
+E2E_QUICK = "--scenes cornell-flush -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
+# Effects every global-illumination render of a lit scene has; the table lists the others.
+COMMON_EFFECTS = {"emission", "area-lights", "direct-light", "indirect", "russian-roulette"}
+
+
+def log(msg):
+    print(f"[benchmarks] {msg}", file=sys.stderr, flush=True)
+
+
+# ------------------------------------------------------------------ machine / noise ----
+def busy_ticks():
+    with open("/proc/stat") as f:
+        v = [int(x) for x in f.readline().split()[1:]]
+    return v[0] + v[1] + v[2] + v[5] + v[6] + (v[7] if len(v) > 7 else 0)
+
+
+def busy_share(seconds):
+    b0, t0 = busy_ticks(), time.monotonic()
+    time.sleep(seconds)
+    return (busy_ticks() - b0) / TICK / ((time.monotonic() - t0) * NCPU)
+
+
+def wait_quiet(limit):
+    """Wait up to `limit` seconds for a 1-second window in which the CPUs are < 10% busy."""
+    start = time.monotonic()
+    while limit > 0 and time.monotonic() - start < limit and busy_share(1.0) >= 0.10:
+        pass
+    return time.monotonic() - start
+
+
+def loadavg():
+    return os.getloadavg()[0]
+
+
+def cpu_model():
+    try:
+        with open("/proc/cpuinfo") as f:
+            info = f.read()
+    except OSError:
+        return platform.processor() or "unknown CPU", []
+    model = next((l.split(":", 1)[1].strip() for l in info.splitlines() if l.startswith("model name")), "unknown CPU")
+    flags = next((l.split(":", 1)[1].split() for l in info.splitlines() if l.startswith("flags")), [])
+    return model, [f for f in ("avx2", "fma", "avx512f") if f in flags]
+
+
+def mem_gib():
+    try:
+        with open("/proc/meminfo") as f:
+            kb = int(f.readline().split()[1])
+        return f"{kb / 2**20:.0f} GiB"
+    except (OSError, ValueError, IndexError):
+        return "?"
+
+
+def sh(cmd, **kw):
+    try:
+        return subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                              check=True, **kw).stdout.strip()
+    except (OSError, subprocess.CalledProcessError):
+        return ""
+
+
+def now_utc():
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M UTC")
+
+
+def stamp(part):
+    """One line naming the machine, the load before/after and the date of a part."""
+    return (f"Machine: {MACHINE['cpu']}, {NCPU} cores; load average {part['load_before']:.2f} before, "
+            f"{part['load_after']:.2f} after; {part['date']}; other processes used "
+            f"{100 * part['busy_mean']:.0f}% of the CPUs on average during the runs "
+            f"(max {100 * part['busy_max']:.0f}%).")
+
+
+# ------------------------------------------------------------------ renders ----
+def run_render(args, name, scene, flags, integrator, tmp):
+    st = os.path.join(tmp, f"{name}-{integrator}.json")
+    img = os.path.join(tmp, f"{name}-{integrator}.pfm")
+    for f in (st, img):
+        if os.path.exists(f):
+            os.remove(f)
+    cmd = [args.bin] + ([scene] if scene else []) + flags.split() + \
+        ["-t", str(args.threads), "--integrator", integrator, "-f", img, "--stats", st]
+    waited = wait_quiet(args.wait_quiet)
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    b0, t0 = busy_ticks(), time.monotonic()
+    p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    wall = time.monotonic() - t0
+    busy = (busy_ticks() - b0) / TICK
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    own = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    if p.returncode != 0:
+        raise SystemExit(f"render failed: {shlex.join(cmd)}\n{p.stderr[-2000:]}")
+    with open(st) as f:
+        stats = json.load(f)
+    rec = {"scene": name, "integrator": integrator, "wall_s": wall, "cpu_s": own, "waited_s": waited,
+           "other_busy": max(0.0, busy - own) / (wall * NCPU), "stats": stats}
+    log(f"{name:22s} {integrator:9s} render {stats['render_s']:.3f} s  {stats['mrays_per_s']:.2f} Mrays/s  "
+        f"wall {wall:.2f} s  others {100 * rec['other_busy']:.0f}%")
+    return rec
+
+
+def part_renders(args, scenes_dir):
+    tmp = os.path.join(args.work, "renders")
+    os.makedirs(tmp, exist_ok=True)
+    todo = []
+    for name, rel, flags, qflags in RENDERS:
+        path = os.path.join(scenes_dir, rel) if rel else None
+        if path and not os.path.exists(path):
+            log(f"skip {name}: {path} not found")
+            continue
+        todo.append((name, path, qflags if args.quick else flags))
+    part = {"load_before": loadavg(), "date": now_utc(), "runs": [], "todo": todo}
+    for rnd in range(args.rounds):
+        for name, path, flags in todo:
+            order = ("wavefront", "recursive") if rnd % 2 == 0 else ("recursive", "wavefront")
+            for integ in order:
+                r = run_render(args, name, path, flags, integ, tmp)
+                r["round"] = rnd
+                part["runs"].append(r)
+    part["load_after"] = loadavg()
+    busy = [r["other_busy"] for r in part["runs"]] or [0.0]
+    part["busy_mean"], part["busy_max"] = statistics.mean(busy), max(busy)
+    return part
+
+
+def fmt(x, nd=2):
+    return "-" if x is None else f"{x:.{nd}f}"
+
+
+def md_renders(args, part, scenes_dir):
+    out = []
+    rounds = args.rounds
+    out.append("## Renders\n")
+    out.append(f"Wavefront integrator, {args.threads} threads, best of {rounds} round{'s' if rounds > 1 else ''} by `render_s` "
+               "(rendering only: no load, no BVH build). Stage times are thread-seconds summed over the "
+               "workers (of the best run); tests and nodes are per ray (all rays). Scenes with "
+               "`non-diffuse-shading` shade one path at a time (the 8-lane kernel is for Lambertian "
+               "scenes: docs/decisions.md, Shade in lanes).\n")
+    out.append("| scene | flags | other effects | rays (M) | render s | Mrays/s | " + " | ".join(STAGES) +
+               " | tests / ray | nodes / ray | BVH build s |")
+    out.append("|---|---|---|--:|--:|--:|" + "--:|" * len(STAGES) + "--:|--:|--:|")
+    for name, path, flags in part["todo"]:
+        runs = [r for r in part["runs"] if r["scene"] == name and r["integrator"] == "wavefront"]
+        if not runs:
+            continue
+        b = min(runs, key=lambda r: r["stats"]["render_s"])["stats"]
+        stages = [fmt(b["stages"].get(s)) for s in STAGES]
+        other = [e for e in b.get("effects", []) if e not in COMMON_EFFECTS]
+        out.append(f"| {name} | `{flags}` | {', '.join(other) or '-'} | {b['rays']['total'] / 1e6:.1f} | {b['render_s']:.3f} | "
+                   f"{b['mrays_per_s']:.1f} | " + " | ".join(stages) +
+                   f" | {b['intersection_tests_per_ray']:.2f} | {b['nodes_visited_per_ray']:.2f} | "
+                   f"{b['bvh']['build_s']:.3f} |")
+    out.append("")
+    out.append(f"Command, per scene, run and integrator: `{args.bin_shown} [$S/SCENE] FLAGS -t {args.threads} "
+               f"--integrator wavefront|recursive -f x.pfm --stats x.json` with `S={args.scenes_shown}` (scene files: "
+               + ", ".join(f"`{os.path.relpath(p, scenes_dir)}`" if p else "default: embedded"
+                           for _, p, _ in part["todo"]) + ").  ")
+    out.append(stamp(part) + "\n")
+
+    out.append("### Wavefront vs recursive\n")
+    out.append(f"The same renders with `--integrator recursive` (the single-ray reference, same BVH), "
+               f"each round running the two integrators back to back as fresh processes, the order "
+               f"swapped every round. Ratio = recursive / wavefront per round (> 1: the wavefront is "
+               f"faster), by `render_s` and by process wall time (load + build + render + write).\n")
+    out.append("| scene | wavefront render s | recursive render s | ratio per round | median ratio | "
+               "median wall ratio |")
+    out.append("|---|---|---|---|--:|--:|")
+    for name, _, _ in part["todo"]:
+        w, rr, ratios, wall = [], [], [], []
+        for rnd in range(rounds):
+            a = [r for r in part["runs"] if r["scene"] == name and r["round"] == rnd]
+            wf = next((r for r in a if r["integrator"] == "wavefront"), None)
+            rc = next((r for r in a if r["integrator"] == "recursive"), None)
+            if not (wf and rc):
+                continue
+            w.append(wf["stats"]["render_s"])
+            rr.append(rc["stats"]["render_s"])
+            ratios.append(rr[-1] / w[-1])
+            wall.append(rc["wall_s"] / wf["wall_s"])
+        if not ratios:
+            continue
+        out.append(f"| {name} | {', '.join(f'{x:.2f}' for x in w)} | {', '.join(f'{x:.2f}' for x in rr)} | "
+                   f"{', '.join(f'{x:.2f}' for x in ratios)} | **{statistics.median(ratios):.2f}** | "
+                   f"{statistics.median(wall):.2f} |")
+    out.append("")
+    out.append("Command: as above, alternating `--integrator wavefront` and `--integrator recursive`.  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
+# ------------------------------------------------------------------ peers ----
+def copy_tree(src, dst):
+    """Copy src's files into dst (mtimes kept, so the harness rebuilds only what changed);
+    build products already in dst stay."""
+    os.makedirs(dst, exist_ok=True)
+    subprocess.run(["cp", "-a", "--no-preserve=ownership", os.path.join(src, "."), dst], check=True)
+    subprocess.run(["chmod", "-R", "u+w", dst], check=True)
+
+
+def part_peers(args, scenes_dir, peers_dir):
+    work = args.peers_work
+    copy_tree(peers_dir, work)
+    meshes = [os.path.join(scenes_dir, m) for m in PEER_MESHES]
+    meshes = [m for m in meshes if os.path.exists(m)]
+    if not meshes:
+        raise SystemExit(f"no peer meshes found under {scenes_dir}")
+    threads = "1" if args.threads == 1 else f"1 {args.threads}"
+    env_common = {
+        "PEERS": " ".join(PEERS),
+        "EXTRA_PEERS": f"wavepath={os.path.abspath(args.bin)} rays trace",
+        "REPS": str(args.reps), "WARMUP": "1", "THREADS_LIST": threads,
+        "WAIT_QUIET": str(int(args.wait_quiet)), "RERUN_NOISY": "0",
+        "PEERS_BUILD": os.path.join(work, "build"),
+    }
+    part = {"load_before": loadavg(), "date": now_utc(), "rows": [], "meshes": meshes, "env": env_common}
+    logf = os.path.join(args.work, "peers.log")
+    for p in range(args.peer_passes):
+        env = dict(os.environ, **env_common)
+        env["SKIP_BUILD"] = "1" if (p > 0 or args.skip_build) else "0"
+        log(f"peers pass {p + 1}/{args.peer_passes} (log: {logf})")
+        with open(logf, "a") as lf:
+            r = subprocess.run([os.path.join(work, "run.sh")] + meshes, env=env, stdout=lf, stderr=lf,
+                               cwd=work)
+        if r.returncode != 0:
+            raise SystemExit(f"peers harness failed (exit {r.returncode}); see {logf}")
+        for m in meshes:
+            name = os.path.splitext(os.path.basename(m))[0]
+            with open(os.path.join(work, "build", "results", name + ".jsonl")) as f:
+                for line in f:
+                    if line.strip():
+                        d = json.loads(line)
+                        d["pass"] = p
+                        part["rows"].append(d)
+    part["load_after"] = loadavg()
+    busy = [r.get("other_busy", 0.0) for r in part["rows"]] or [0.0]
+    part["busy_mean"], part["busy_max"] = statistics.mean(busy), max(busy)
+    return part
+
+
+def md_peers(args, part, scenes_dir):
+    rows = [r for r in part["rows"] if not r.get("failed")]
+    cols = PEERS + ["wavepath:-"]
+
+    def label(c):
+        return "wavepath" if c == "wavepath:-" else c.replace(":", " ")
+
+    out = ["## Ray throughput against the peers\n"]
+    out.append(f"Closest-hit rays of `wavepath rays trace` beside the peers in `../shared/peers/run.sh`, "
+               f"same meshes and ray sets (primary: 800x600 camera rays; diffuse: one cosine bounce per "
+               f"primary hit). Mrays/s, best of {args.reps} timed passes per run and best of "
+               f"{args.peer_passes} harness pass{'es' if args.peer_passes > 1 else ''}; the ratios are wavepath over the peer within one "
+               f"pass (fresh processes run back to back), their median over passes with the range in "
+               f"brackets. `hits`: wavepath's verdict against Embree's watertight `robust` variant.\n")
+    out.append("| mesh, rays, threads | " + " | ".join(label(c) for c in cols) +
+               " | / embree single | / obvhs cwbvh | / tinybvh bvh8 | hits |")
+    out.append("|---|" + "--:|" * len(cols) + "--:|--:|--:|---|")
+    keys = []
+    for r in rows:
+        k = (r["mesh"], r["set"], r["threads"])
+        if k not in keys:
+            keys.append(k)
+    for mesh, set_, thr in keys:
+        sel = [r for r in rows if (r["mesh"], r["set"], r["threads"]) == (mesh, set_, thr)]
+
+        def best(c):
+            peer, var = c.split(":")
+            v = [r["mrays_per_s"] for r in sel if r["peer"] == peer and r["variant"] == var]
+            return max(v) if v else None
+
+        def ratio(c):
+            peer, var = c.split(":")
+            rs = []
+            for p in sorted({r["pass"] for r in sel}):
+                a = [r["mrays_per_s"] for r in sel if r["pass"] == p and r["peer"] == "wavepath"]
+                b = [r["mrays_per_s"] for r in sel if r["pass"] == p and r["peer"] == peer and r["variant"] == var]
+                if a and b:
+                    rs.append(a[0] / b[0])
+            if not rs:
+                return "-"
+            m = statistics.median(rs)
+            return f"{m:.2f}" if len(rs) == 1 else f"{m:.2f} ({min(rs):.2f}-{max(rs):.2f})"
+
+        verdicts = sorted({(r.get("compare") or {}).get("verdict", "?") for r in sel if r["peer"] == "wavepath"})
+        busy = max(r.get("other_busy", 0) for r in sel)
+        cells = []
+        for c in cols:
+            b = best(c)
+            cells.append("-" if b is None else (f"**{b:.2f}**" if c == "wavepath:-" else f"{b:.2f}"))
+        out.append(f"| {mesh} {set_} {thr}T{' !' if busy > 0.10 else ''} | " + " | ".join(cells) +
+                   f" | {ratio('embree:single')} | {ratio('obvhs:cwbvh')} | {ratio('tinybvh:bvh8')} | "
+                   f"{', '.join(verdicts)} |")
+    out.append("")
+    out.append("`!`: other processes used more than 10% of the CPUs during some run of that row "
+               "(treat it as a lower bound).  ")
+    e = part["env"]
+    meshes = " ".join(f"{args.scenes_shown}/{os.path.relpath(m, scenes_dir)}" for m in part["meshes"])
+    times = "once" if args.peer_passes == 1 else f"{args.peer_passes} times"
+    out.append(f"Command ({times}, in a scratch copy of `../shared/peers`): "
+               f"`PEERS=\"{e['PEERS']}\" EXTRA_PEERS=\"wavepath={args.bin_shown} rays trace\" "
+               f"REPS={e['REPS']} WARMUP={e['WARMUP']} THREADS_LIST=\"{e['THREADS_LIST']}\" "
+               f"WAIT_QUIET={e['WAIT_QUIET']} RERUN_NOISY=0 ./run.sh {meshes}`.  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
+# ------------------------------------------------------------------ e2e ----
+def part_e2e(args, scenes_dir, peers_dir):
+    work = args.peers_work
+    copy_tree(peers_dir, work)
+    # e2e/scenes.py reads the scenes at ../../scenes from its own folder: link them beside the copy.
+    link = os.path.join(os.path.dirname(work), "scenes")
+    if os.path.islink(link) and os.path.realpath(link) != scenes_dir:
+        os.remove(link)
+    if not os.path.lexists(link):
+        os.symlink(scenes_dir, link)
+    elif os.path.realpath(link) != scenes_dir:
+        raise SystemExit(f"{link} exists and is not a link to {scenes_dir}; e2e needs it (or another --peers-work)")
+    run_name = "benchmarks-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
+    extra = shlex.split(args.e2e_args)
+    cmd = [os.path.join(work, "e2e", "run.sh"), "--threads", str(args.threads), "--run-name", run_name,
+           "--wait-quiet", str(int(args.wait_quiet))] + extra
+    env = dict(os.environ, WAVEPATH=os.path.abspath(args.bin), E2E_BUILD=os.path.join(work, "e2e", "build"))
+    part = {"load_before": loadavg(), "date": now_utc(), "cmd": cmd[1:], "extra": extra}
+    logf = os.path.join(args.work, "e2e.log")
+    log(f"e2e comparison with Mitsuba 3 (log: {logf})")
+    with open(logf, "w") as lf:
+        r = subprocess.run(cmd, env=env, stdout=lf, stderr=lf, cwd=REPO)
+    if r.returncode != 0:
+        raise SystemExit(f"e2e harness failed (exit {r.returncode}); see {logf}")
+    with open(os.path.join(work, "e2e", "build", "results", run_name + ".jsonl")) as f:
+        part["rows"] = [json.loads(l) for l in f if l.strip()]
+    part["load_after"] = loadavg()
+    busy = [r.get("other_busy", 0.0) for r in part["rows"] if r.get("kind") == "ladder"] or [0.0]
+    part["busy_mean"], part["busy_max"] = statistics.mean(busy), max(busy)
+    return part
+
+
+def md_e2e(args, part):
+    rows = part["rows"]
+    out = ["## End to end against Mitsuba 3\n"]
+    common = next((r for r in rows if r.get("kind") == "summary"), {})
+    out.append(f"Whole renders at equal error ({common.get('width', '?')}x{common.get('height', '?')}, "
+               f"-m {common.get('m', '?')}, {common.get('threads', '?')} threads): seconds each renderer "
+               f"needs to reach the same relative RMSE against its own converged reference (`~`: "
+               f"extrapolated). Speedup = Mitsuba seconds / wavepath seconds (> 1: wavepath faster), by "
+               f"render time and by whole-process time (Mitsuba's includes Python start and import). "
+               f"The harness runs each renderer's ladder as a block, not alternating, so on a busy machine "
+               f"these ratios are the least reliable on this page (`--reps R` keeps the fastest of R).\n")
+    out.append("| scene | target rel. RMSE | renderer | ms / spp | render s to target | speedup (render) | "
+               "speedup (wall) | refs: mean lum. diff |")
+    out.append("|---|--:|---|--:|--:|--:|--:|--:|")
+    for s in (r for r in rows if r.get("kind") == "summary"):
+        agree = next((r for r in rows if r.get("kind") == "agreement" and r["scene"] == s["scene"]), {})
+        for n, d in s["renderers"].items():
+            t = d.get("render_s_to_target")
+            ts = "n/a" if t is None else ("~" if d.get("render_extrapolated") else "") + f"{t:.3f}"
+            out.append(f"| {s['scene']} | {s['target_rel_rmse']:.3f} | {n} | {d['ms_per_spp']:.1f} | {ts} | "
+                       f"{fmt(d.get('speedup_render'))} | {fmt(d.get('speedup_wall'))} | "
+                       f"{100 * agree.get('mean_rel_diff_lum_masked', float('nan')):+.1f}% |")
+    out.append("")
+    shown = [c for i, c in enumerate(part["cmd"]) if c != "--run-name" and part["cmd"][i - 1] != "--run-name"]
+    out.append(f"Command: `WAVEPATH={args.bin_shown} ../shared/peers/e2e/run.sh {shlex.join(shown)}` "
+               f"(in a scratch copy).  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
+# ------------------------------------------------------------------ main ----
+MACHINE = {}
+
+
+def main(argv):
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[1],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
+    ap.add_argument("--bin", default=os.environ.get("WAVEPATH", "target/release/wavepath"),
+                    help="wavepath binary (default: $WAVEPATH or target/release/wavepath)")
+    ap.add_argument("--parts", default="renders,peers", help="comma list of renders, peers, e2e")
+    ap.add_argument("--e2e", action="store_true", help="also run the e2e part (same as adding it to --parts)")
+    ap.add_argument("--quick", action="store_true",
+                    help="a quick look (~3 min): fewer samples, 1 round, 1 peers pass, 3 reps")
+    ap.add_argument("--scenes", dest="scenes_arg", default=None,
+                    help="scenes folder (default: $WAVEPATH_SCENES or ../shared/scenes)")
+    ap.add_argument("--peers", default=None, help="peers harness folder (default: SCENES/../peers)")
+    ap.add_argument("--work", default=os.path.join(os.environ.get("TMPDIR", "/tmp"), "wavepath-benchmarks"),
+                    help="scratch folder (peers copy and builds, images; default /tmp/wavepath-benchmarks)")
+    ap.add_argument("--peers-work", default=None,
+                    help="where the peers harness is copied and built (default WORK/peers; kept between runs)")
+    ap.add_argument("--out", default=os.path.join(REPO, "BENCHMARKS.md"), help="page to write")
+    ap.add_argument("--threads", type=int, default=NCPU, help=f"render threads / 2nd thread count (default {NCPU})")
+    ap.add_argument("--rounds", type=int, default=None, help="alternating render rounds (default 3; quick 1)")
+    ap.add_argument("--peer-passes", type=int, default=None, help="peers harness passes (default 3; quick 1)")
+    ap.add_argument("--reps", type=int, default=None, help="timed passes per peer run (default 10; quick 3)")
+    ap.add_argument("--wait-quiet", type=float, default=None,
+                    help="before each run wait up to S s for a quiet second (default 2; quick 0)")
+    ap.add_argument("--e2e-args", default=None,
+                    help="extra options for e2e/run.sh (default none: its full comparison, 15-25 min; "
+                         "quick: " + repr(E2E_QUICK) + ", under a minute)")
+    ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
+    args = ap.parse_args(argv)
+    q = args.quick
+    args.rounds = args.rounds or (1 if q else 3)
+    args.peer_passes = args.peer_passes or (1 if q else 3)
+    args.reps = args.reps or (3 if q else 10)
+    args.e2e_args = args.e2e_args if args.e2e_args is not None else (E2E_QUICK if q else "")
+    args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
+    parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
+    for p in parts:
+        if p not in ("renders", "peers", "e2e"):
+            ap.error(f"unknown part {p}")
+
+    os.chdir(REPO)
+    args.bin_shown = args.bin
+    if not os.access(args.bin, os.X_OK):
+        ap.error(f"no wavepath binary at {args.bin} (cargo build --release, or --bin PATH)")
+    args.scenes_shown = args.scenes_arg or os.environ.get("WAVEPATH_SCENES") or "../shared/scenes"
+    scenes_dir = os.path.abspath(args.scenes_shown)
+    if not os.path.isdir(scenes_dir):
+        ap.error(f"no scenes folder at {scenes_dir} (--scenes or WAVEPATH_SCENES)")
+    peers_dir = os.path.abspath(args.peers or os.path.join(os.path.dirname(scenes_dir), "peers"))
+    if ("peers" in parts or "e2e" in parts) and not os.path.isfile(os.path.join(peers_dir, "run.sh")):
+        ap.error(f"no peers harness at {peers_dir} (--peers)")
+    os.makedirs(args.work, exist_ok=True)
+    args.peers_work = os.path.abspath(args.peers_work or os.path.join(args.work, "peers"))
+
+    model, flags = cpu_model()
+    with open(args.bin, "rb") as f:
+        digest = hashlib.sha256(f.read()).hexdigest()[:12]
+    MACHINE.update(cpu=model, flags=flags)
+    head = sh(["git", "-C", REPO, "rev-parse", "--short", "HEAD"])
+    built = datetime.datetime.fromtimestamp(os.path.getmtime(args.bin), datetime.timezone.utc)
+    t0 = time.monotonic()
+    start = {"load": os.getloadavg(), "date": now_utc()}
+    log(f"parts {parts}; binary {args.bin} ({digest}); load {start['load'][0]:.2f}")
+
+    results = {}
+    if "renders" in parts:
+        results["renders"] = part_renders(args, scenes_dir)
+    if "peers" in parts:
+        results["peers"] = part_peers(args, scenes_dir, peers_dir)
+    if "e2e" in parts:
+        results["e2e"] = part_e2e(args, scenes_dir, peers_dir)
+    took = time.monotonic() - t0
+    with open(os.path.join(args.work, "results.json"), "w") as f:
+        json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)
+
+    busy_max = max((r["busy_max"] for r in results.values()), default=0.0)
+    busy_mean = max((r["busy_mean"] for r in results.values()), default=0.0)
+    noisy = busy_mean > 0.10 or start["load"][0] > 0.5 * NCPU
+    cmdline = "tools/benchmarks.sh " + shlex.join(argv) if argv else "tools/benchmarks.sh"
+    md = ["# Benchmarks\n",
+          f"Current results, generated by `{cmdline}` on {start['date']} in {took / 60:.1f} min; rerun it "
+          f"rather than editing this page. Why the code is as it is, with the figures of past "
+          f"experiments: [docs/decisions.md](docs/decisions.md). Ratios come from fresh processes "
+          f"run side by side; absolute times move with the machine's load.\n",
+          f"- Machine: {model} ({', '.join(flags) or 'no AVX2'}), {NCPU} cores, {mem_gib()}, "
+          f"Linux {platform.release()}.",
+          f"- wavepath: `{args.bin_shown}` (sha256 {digest}, built {built.strftime('%Y-%m-%d %H:%M UTC')}); "
+          f"repository at {head or '?'}; {sh(['rustc', '-V']) or 'rustc ?'}.",
+          f"- Load average (1/5/15 min) at the start: {' / '.join(f'{x:.2f}' for x in start['load'])}; "
+          f"at the end: {' / '.join(f'{x:.2f}' for x in os.getloadavg())}."]
+    if noisy:
+        how = ("ratios can be off by tens of percent (see the per-round ranges), and two-thread figures "
+               "mean little (no free second core)") if busy_mean > 0.3 else "ratios carry several percent of noise"
+        md.append(f"- **Noisy machine**: other processes used {100 * busy_mean:.0f}% of the CPUs on average "
+                  f"during the runs (max {100 * busy_max:.0f}%), or the load was already high at the start: "
+                  f"absolute figures are lower bounds, {how}. Rerun on a quiet machine before drawing "
+                  f"conclusions.")
+    else:
+        md.append(f"- Quiet machine: other processes used {100 * busy_mean:.0f}% of the CPUs on average "
+                  f"during the runs (max {100 * busy_max:.0f}%).")
+    md.append("")
+    if "renders" in results:
+        md += md_renders(args, results["renders"], scenes_dir)
+    if "peers" in results:
+        md += md_peers(args, results["peers"], scenes_dir)
+    if "e2e" in results:
+        md += md_e2e(args, results["e2e"])
+    else:
+        md.append("## End to end against Mitsuba 3\n")
+        md.append("Not run this time: `tools/benchmarks.sh --e2e` adds whole renders against Mitsuba 3 at "
+                  "equal error (`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args "
+                  f"'{E2E_QUICK}'` under a minute).\n")
+    with open(args.out, "w") as f:
+        f.write("\n".join(md).rstrip() + "\n")
+    log(f"wrote {args.out} ({took / 60:.1f} min)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv[1:]))
