@@ -1,10 +1,9 @@
 //! BVH against brute force, and every SIMD path against the scalar one.
-mod common;
-mod meshgen;
 
-use common::same_hit;
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
+use crate::common::same_hit;
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
 use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters, build};
 use wavepath::ray::Ray;
 use wavepath::sampling::Sampler;

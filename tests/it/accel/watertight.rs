@@ -1,10 +1,9 @@
 //! Watertightness: rays aimed exactly at shared edges and vertices of closed meshes never
 //! pass through, at the origin, translated by 1e5 and scaled by 1e-4.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
 use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
 use wavepath::ray::Ray;
 use wavepath::sampling::Sampler;

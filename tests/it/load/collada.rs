@@ -1,8 +1,7 @@
 //! COLLADA loader: the CS184 scenes (counts against the shared README, lights, materials,
 //! cameras, normals) and hand-written documents for transforms, primitives and bad input.
 
-mod common;
-
+use crate::common;
 use glam::{Vec3, vec3};
 use std::path::Path;
 use wavepath::load::collada::parse_str;

@@ -2,16 +2,13 @@
 //! is invisible, a mirror shows the mirrored scene, and the wavefront integrator agrees with
 //! the recursive reference for every material.
 
+use crate::common;
+use crate::common::agree::assert_agree;
 use glam::{Vec3, vec3};
-
 use wavepath::film::Accumulator;
-
 use wavepath::load::default_scene;
 use wavepath::scene::{Bsdf, Camera, Environment, Light, Material, Mesh, Scene, Sphere};
 use wavepath::settings::{Settings, Shading};
-
-mod common;
-use common::agree::assert_agree;
 
 fn wavefront(scene: &Scene, s: &Settings) -> Accumulator {
     let (acc, st) = common::render::wavefront(scene, s);

@@ -2,15 +2,13 @@
 //! estimators (different seeds) of the same image, so per-region means must agree within
 //! confidence bounds computed from the per-pixel sample variances.
 
+use crate::common;
+use crate::common::agree::assert_agree;
+use crate::common::render::{recursive, wavefront};
 use glam::Vec3;
-
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
 use wavepath::settings::Settings;
-
-mod common;
-use common::agree::assert_agree;
-use common::render::{recursive, wavefront};
 
 fn settings(max_depth: u32, spp: u32) -> Settings {
     common::render::small_settings(32, 24, max_depth, spp)

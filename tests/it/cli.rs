@@ -1,7 +1,6 @@
 //! The command line end to end: the default render, output formats, and bad flags.
 
-mod common;
-
+use crate::common;
 use std::path::Path;
 use std::process::{Command, Output};
 

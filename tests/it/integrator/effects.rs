@@ -2,13 +2,11 @@
 //! is off reports no time (absent from the stats JSON), and forcing every effect on must not
 //! change the image (every kernel part is exact when its effect is not needed).
 
-mod common;
-use common::render::wavefront;
-
+use crate::common;
+use crate::common::render::wavefront;
 use glam::Vec3;
 use wavepath::accel::{self, BruteForce};
 use wavepath::effects::Effects;
-
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
 use wavepath::settings::{Settings, Shading};

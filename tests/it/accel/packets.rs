@@ -2,8 +2,8 @@
 //! real mesh, for every instruction set: random and hard rays (sharing an origin, as the
 //! wavefront's shadow queue holds them), including rays through vertices and along edges,
 //! grazing, axis-parallel, starting on the surface and ending exactly on a triangle.
-mod common;
 
+use crate::common;
 use glam::Vec3;
 use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters};
 use wavepath::ray::Ray;

@@ -2,8 +2,7 @@
 //! (bit for bit for tiles, up to summation order for sample ranges), and every way of
 //! handing merge the wrong parts must be refused with one line naming the part.
 
-mod common;
-
+use crate::common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use wavepath::accel;

@@ -4,11 +4,10 @@
 //! hard rays in coherent runs: ending exactly on shared vertices and edges, axis-parallel
 //! (zero and -0 direction components), starting on the surface, plus incoherent rays with
 //! mixed octants, traced in whole batches, shifted and in short slices.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
 use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
 use wavepath::ray::Ray;
 use wavepath::sampling::Sampler;

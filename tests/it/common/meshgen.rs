@@ -1,5 +1,4 @@
 //! Meshes generated in code for the BVH tests.
-#![allow(dead_code)]
 
 use glam::Vec3;
 use wavepath::scene::{Mesh, Scene, Sphere};

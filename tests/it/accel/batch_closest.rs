@@ -5,11 +5,10 @@
 //! root box, dead rays, vertex chords with tied hits) in batches of every length 1..=70 at
 //! every start, so a ray dropped, traced twice or given another ray's state (stack, set-up,
 //! closest hit) changes some batch's answer.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
 use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
 use wavepath::ray::{Hit, Ray};
 use wavepath::sampling::Sampler;

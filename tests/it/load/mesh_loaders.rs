@@ -1,7 +1,6 @@
 //! OBJ, PLY and glTF loaders against the shared scenes and small hand-written files.
 
-mod common;
-
+use crate::common;
 use glam::{Vec3, vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};

@@ -1,9 +1,8 @@
 //! Ray files: format, bad input, the renderer's own rays, and the peers' trace protocol.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
 use std::process::Command;
 use wavepath::accel::{Bvh, Intersector, TraceCounters};
 use wavepath::ray::Ray;

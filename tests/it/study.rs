@@ -1,8 +1,8 @@
 //! The accuracy-versus-time study: its Monte Carlo errors behave as theory says (RMSE ~
 //! 1/sqrt(spp); importance sampling beats uniform hemisphere sampling at equal samples),
 //! its reference cache is reused and keyed by the settings, and the command writes its files.
-mod common;
 
+use crate::common;
 use std::path::PathBuf;
 use wavepath::accel::{Intersector, build};
 use wavepath::load::{LoadOptions, default_scene, load};

@@ -2,9 +2,9 @@
 //! the Cornell box far from the origin or at extreme scales renders the same image, grazing
 //! light and degenerate geometry give finite, correct answers, and no scene produces NaN
 //! or Inf at the settings the accuracy study uses.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen;
 use glam::{DVec3, Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
 use wavepath::film::{Accumulator, Film};

@@ -1,0 +1,9 @@
+//! Ray traversal: the BVH against brute force, every instruction set against the scalar
+//! path (single rays, batches, packets), watertightness, and ray files.
+
+mod batch_closest;
+mod bvh;
+mod packets;
+mod packets_closest;
+mod rays;
+mod watertight;
