@@ -122,7 +122,6 @@ fn incoherent_batches_match_single_rays_on_an_icosphere_with_spheres() {
 
 #[test]
 fn incoherent_batches_match_single_rays_on_the_bunny() {
-    let Some(path) = common::scene("cs184/sky/CBbunny.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBbunny.dae") else { return };
     check(&scene, "CBbunny");
 }

@@ -199,9 +199,7 @@ fn degenerate_triangles_are_never_hit() {
 #[test]
 fn every_isa_agrees_on_rays_ending_on_vertices() {
     let mut scenes = vec![scene_of(icosphere(8), vec![])];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        scenes.push(wavepath::load::load(&p, &Default::default()).unwrap());
-    }
+    scenes.extend(common::load_scene("cs184/sky/CBspheres_lambertian.dae"));
     for scene in &scenes {
         let v = &scene.mesh.positions;
         let step = v.len() / 60 + 1;

@@ -108,23 +108,20 @@ fn check(scene: &Scene, what: &str) {
 
 #[test]
 fn packets_match_single_rays_on_the_bunny() {
-    let Some(path) = common::scene("cs184/sky/CBbunny.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBbunny.dae") else { return };
     check(&scene, "CBbunny");
 }
 
 #[test]
 fn packets_match_single_rays_on_the_cornell_box() {
-    let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     check(&scene, "CBspheres_lambertian");
 }
 
 /// Intersectors without packets fall back to `any_hits` (brute force).
 #[test]
 fn brute_force_packets_are_single_rays() {
-    let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     let rays = shadow_like_rays(&scene, 300);
     let brute = BruteForce::new(&scene);
     let mut c = TraceCounters::default();

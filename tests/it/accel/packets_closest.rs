@@ -217,15 +217,13 @@ fn check_scene(scene: &Scene, what: &str) {
 
 #[test]
 fn closest_packets_match_single_rays_on_the_bunny() {
-    let Some(path) = common::scene("cs184/sky/CBbunny.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBbunny.dae") else { return };
     check_scene(&scene, "CBbunny");
 }
 
 #[test]
 fn closest_packets_match_single_rays_on_the_cornell_box() {
-    let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     check_scene(&scene, "CBspheres_lambertian");
 }
 

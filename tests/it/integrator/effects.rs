@@ -67,8 +67,7 @@ fn sphere_effect_follows_the_scene() {
     let with = default_scene();
     assert!(!with.spheres.is_empty());
     assert!(Effects::of(&with, &settings(1, 1)).names().contains(&"spheres"));
-    let Some(path) = common::scene("cs184/sky/CBempty.dae") else { return };
-    let without = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(without) = common::load_scene("cs184/sky/CBempty.dae") else { return };
     assert!(without.spheres.is_empty());
     let e = Effects::of(&without, &settings(1, 1));
     assert!(!e.spheres && !e.names().contains(&"spheres"), "{:?}", e.names());

@@ -5,6 +5,7 @@
 
 use crate::common;
 use crate::common::meshgen;
+use crate::common::render;
 use glam::{DVec3, Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
 use wavepath::film::{Accumulator, Film};
@@ -13,18 +14,11 @@ use wavepath::ray::Ray;
 use wavepath::render::render_normals;
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Camera, Light, Material, Mesh, Scene};
-use wavepath::settings::{Settings, Shading};
+use wavepath::settings::Settings;
 use wavepath::wavefront::render_wavefront;
 
 fn settings(w: usize, h: usize, spp: u32, max_depth: u32) -> Settings {
-    Settings {
-        width: w,
-        height: h,
-        spp,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
+    render::settings(w, h, max_depth, spp)
 }
 
 fn render(scene: &Scene, s: &Settings) -> Accumulator {
@@ -155,8 +149,7 @@ fn camera_inside_generated_closed_meshes_sees_no_background() {
 #[test]
 fn camera_inside_closed_scanned_meshes_sees_no_background() {
     for rel in ["meshes/spot.obj", "meshes/dragon_100k.obj"] {
-        let Some(p) = common::scene(rel) else { return };
-        let scene = load(&p, &LoadOptions::default()).unwrap();
+        let Some(scene) = common::load_scene(rel) else { return };
         assert_eq!(boundary_edges(&scene.mesh), 0, "{rel} is not closed");
         let eye = inside_point(&scene);
         assert_eq!(background_from_inside(&scene, eye, 512), 0, "{rel}");
@@ -253,9 +246,7 @@ fn assert_same_image(a: &Accumulator, b: &Accumulator, what: &str) {
 
 fn cornell_boxes() -> Vec<Scene> {
     let mut scenes = vec![default_scene()];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        scenes.push(load(&p, &LoadOptions::default()).unwrap());
-    }
+    scenes.extend(common::load_scene("cs184/sky/CBspheres_lambertian.dae"));
     for s in &mut scenes {
         s.camera.fit_aspect(32.0 / 24.0);
     }
@@ -540,9 +531,7 @@ fn no_nan_or_inf_on_any_scene() {
 #[test]
 fn tiny_roulette_probability_stays_finite() {
     let mut scenes = vec![default_scene()];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        scenes.push(load(&p, &LoadOptions::default()).unwrap());
-    }
+    scenes.extend(common::load_scene("cs184/sky/CBspheres_lambertian.dae"));
     for mut scene in scenes {
         scene.camera.fit_aspect(24.0 / 18.0);
         for depth in [5, 64] {

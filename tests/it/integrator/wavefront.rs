@@ -139,8 +139,7 @@ fn cell_renders_only_its_pixels() {
 #[test]
 fn cs184_scenes_agree_and_stay_finite() {
     for name in ["CBspheres_lambertian", "CBempty"] {
-        let Some(path) = common::scene(&format!("cs184/sky/{name}.dae")) else { return };
-        let mut scene = wavepath::load::load(&path, &wavepath::load::LoadOptions::default()).unwrap();
+        let Some(mut scene) = common::load_scene(&format!("cs184/sky/{name}.dae")) else { return };
         scene.camera.fit_aspect(32.0 / 24.0);
         let s = Settings { light_samples: 1, ..settings(3, 16) };
         compare(&scene, &s, name);
