@@ -144,18 +144,6 @@ fn camera_inside_generated_closed_meshes_sees_no_background() {
     assert_eq!(background_from_inside(&cube, Vec3::new(0.5, 0.5, 0.5), 256), 0);
 }
 
-/// Closed meshes from the scenes folder (the Stanford bunny has holes in its base, so the
-/// closed, manifold dragon and Spot stand in for it; see the boundary-edge check).
-#[test]
-fn camera_inside_closed_scanned_meshes_sees_no_background() {
-    for rel in ["meshes/spot.obj", "meshes/dragon_100k.obj"] {
-        let Some(scene) = common::load_scene(rel) else { return };
-        assert_eq!(boundary_edges(&scene.mesh), 0, "{rel} is not closed");
-        let eye = inside_point(&scene);
-        assert_eq!(background_from_inside(&scene, eye, 512), 0, "{rel}");
-    }
-}
-
 /// Edges used by exactly one triangle, after welding equal positions.
 fn boundary_edges(m: &Mesh) -> usize {
     let mut weld = std::collections::HashMap::new();
@@ -447,39 +435,6 @@ fn degenerate_sliver_and_duplicate_triangles() {
     assert_eq!(na, nb, "duplicates change the normal image");
 }
 
-/// A box 10^4 times longer than wide, as a few huge-aspect triangles and as a strip of
-/// 10^4 cells: traversal agrees with brute force and renders stay finite.
-#[test]
-fn extreme_aspect_ratio_meshes() {
-    for cells in [1usize, 10_000] {
-        let mut m = Mesh::default();
-        // Top and bottom of a 1e4 x 1 x 1 slab as strips along x.
-        for (y, flip) in [(0.0f32, false), (1.0, true)] {
-            let b = m.positions.len() as u32;
-            for i in 0..=cells {
-                let x = 1e4 * i as f32 / cells as f32;
-                m.positions.extend([vec3(x, y, 0.0), vec3(x, y, 1.0)]);
-            }
-            for i in 0..cells as u32 {
-                let (a0, a1, b0, b1) = (b + 2 * i, b + 2 * i + 1, b + 2 * i + 2, b + 2 * i + 3);
-                if flip {
-                    m.triangles.extend([[a0, b1, b0], [a0, a1, b1]]);
-                } else {
-                    m.triangles.extend([[a0, b0, b1], [a0, b1, a1]]);
-                }
-            }
-        }
-        m.material_ids = vec![0; m.triangles.len()];
-        let mut scene = meshgen::scene_of(m, vec![]);
-        scene.name = format!("slab of {cells} cells");
-        scene.lights = vec![Light::Hemisphere { radiance: Vec3::ONE }];
-        scene.camera = Camera::look_at(vec3(5000.0, 3.0, 4.0), vec3(5000.0, 0.5, 0.5), Vec3::Y, 60.0, 4.0 / 3.0);
-        assert_bvh_matches_brute_force(&scene, 20_000);
-        let acc = render(&scene, &settings(32, 24, 8, 3));
-        assert!(acc.pixels.iter().any(|p| p.mean().max_element() > 0.0));
-    }
-}
-
 /// A camera looking straight up and straight down the Y axis (its up hint is parallel to
 /// the view): a valid frame, and from inside the box every pixel sees a wall.
 #[test]
@@ -499,33 +454,6 @@ fn camera_looking_straight_along_an_axis() {
 // ---------------------------------------------------------------------------------------
 // No NaN or Inf anywhere
 
-/// Every scene file in WAVEPATH_SCENES at the study's settings (24x18, 2 spp, -m 5), with
-/// light sampling and with hemisphere sampling.
-#[test]
-fn no_nan_or_inf_on_any_scene() {
-    let Some(dir) = common::scenes_dir() else { return };
-    let files = common::files_with_ext(&dir, &["dae", "obj", "ply", "gltf", "glb"]);
-    assert!(!files.is_empty());
-    let mut rendered = 0;
-    for f in &files {
-        let mut scene = match load(f, &LoadOptions::default()) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("skipped (does not load): {e:#}");
-                continue;
-            }
-        };
-        scene.camera.fit_aspect(24.0 / 18.0);
-        for hemisphere in [false, true] {
-            let s = Settings { hemisphere, ..settings(24, 18, 2, 5) };
-            render(&scene, &s);
-        }
-        rendered += 1;
-    }
-    eprintln!("{rendered} of {} scenes rendered finite", files.len());
-    assert!(rendered * 10 >= files.len() * 9, "only {rendered} of {} scenes loaded", files.len());
-}
-
 /// Russian roulette with a continue probability of 1e-3 divides surviving throughput by
 /// 1e-3: estimates must stay finite, and the image must still be lit.
 #[test]
@@ -544,5 +472,82 @@ fn tiny_roulette_probability_stays_finite() {
             eprintln!("{} -m {depth}: {} lit pixels with --rr 1e-3, {} with 0.65", scene.name, lit(&acc), lit(&normal));
             assert_eq!(lit(&acc), lit(&normal), "{} -m {depth}", scene.name);
         }
+    }
+}
+
+/// The cases that take seconds each (skipped by `cargo test --release -- --skip slow`).
+mod slow {
+    use super::*;
+
+    /// Closed meshes from the scenes folder (the Stanford bunny has holes in its base, so the
+    /// closed, manifold dragon and Spot stand in for it; see the boundary-edge check).
+    #[test]
+    fn camera_inside_closed_scanned_meshes_sees_no_background() {
+        for rel in ["meshes/spot.obj", "meshes/dragon_100k.obj"] {
+            let Some(scene) = common::load_scene(rel) else { return };
+            assert_eq!(boundary_edges(&scene.mesh), 0, "{rel} is not closed");
+            let eye = inside_point(&scene);
+            assert_eq!(background_from_inside(&scene, eye, 512), 0, "{rel}");
+        }
+    }
+
+    /// A box 10^4 times longer than wide, as a few huge-aspect triangles and as a strip of
+    /// 10^4 cells: traversal agrees with brute force and renders stay finite.
+    #[test]
+    fn extreme_aspect_ratio_meshes() {
+        for cells in [1usize, 10_000] {
+            let mut m = Mesh::default();
+            // Top and bottom of a 1e4 x 1 x 1 slab as strips along x.
+            for (y, flip) in [(0.0f32, false), (1.0, true)] {
+                let b = m.positions.len() as u32;
+                for i in 0..=cells {
+                    let x = 1e4 * i as f32 / cells as f32;
+                    m.positions.extend([vec3(x, y, 0.0), vec3(x, y, 1.0)]);
+                }
+                for i in 0..cells as u32 {
+                    let (a0, a1, b0, b1) = (b + 2 * i, b + 2 * i + 1, b + 2 * i + 2, b + 2 * i + 3);
+                    if flip {
+                        m.triangles.extend([[a0, b1, b0], [a0, a1, b1]]);
+                    } else {
+                        m.triangles.extend([[a0, b0, b1], [a0, b1, a1]]);
+                    }
+                }
+            }
+            m.material_ids = vec![0; m.triangles.len()];
+            let mut scene = meshgen::scene_of(m, vec![]);
+            scene.name = format!("slab of {cells} cells");
+            scene.lights = vec![Light::Hemisphere { radiance: Vec3::ONE }];
+            scene.camera = Camera::look_at(vec3(5000.0, 3.0, 4.0), vec3(5000.0, 0.5, 0.5), Vec3::Y, 60.0, 4.0 / 3.0);
+            assert_bvh_matches_brute_force(&scene, 20_000);
+            let acc = render(&scene, &settings(32, 24, 8, 3));
+            assert!(acc.pixels.iter().any(|p| p.mean().max_element() > 0.0));
+        }
+    }
+
+    /// Every scene file in WAVEPATH_SCENES at the study's settings (24x18, 2 spp, -m 5), with
+    /// light sampling and with hemisphere sampling.
+    #[test]
+    fn no_nan_or_inf_on_any_scene() {
+        let Some(dir) = common::scenes_dir() else { return };
+        let files = common::files_with_ext(&dir, &["dae", "obj", "ply", "gltf", "glb"]);
+        assert!(!files.is_empty());
+        let mut rendered = 0;
+        for f in &files {
+            let mut scene = match load(f, &LoadOptions::default()) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("skipped (does not load): {e:#}");
+                    continue;
+                }
+            };
+            scene.camera.fit_aspect(24.0 / 18.0);
+            for hemisphere in [false, true] {
+                let s = Settings { hemisphere, ..settings(24, 18, 2, 5) };
+                render(&scene, &s);
+            }
+            rendered += 1;
+        }
+        eprintln!("{rendered} of {} scenes rendered finite", files.len());
+        assert!(rendered * 10 >= files.len() * 9, "only {rendered} of {} scenes loaded", files.len());
     }
 }
