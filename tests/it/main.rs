@@ -1,7 +1,7 @@
-//! The integration tests, one crate so the library is compiled and linked into one test
-//! binary. A module per area; the statistical and big-render cases that take seconds each
-//! sit in submodules named `slow`, so `cargo test --release -- --skip slow` is the quick
-//! loop and plain `cargo test --release` runs everything.
+//! The integration tests as one crate, so the library is linked into one test binary rather
+//! than one per file. A module per area, a file per subject; the big renders and ray counts
+//! that take seconds each sit in submodules named `slow`, so `cargo test --release -- --skip
+//! slow` is the quick loop and plain `cargo test --release` runs everything.
 
 mod accel;
 mod cli;
