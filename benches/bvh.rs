@@ -63,8 +63,7 @@ fn bench(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("bvh/{name}"));
         g.sample_size(10).measurement_time(Duration::from_secs(3)).warm_up_time(Duration::from_secs(1));
         g.bench_function("build", |b| b.iter(|| black_box(Bvh::build(&scene))));
-        let bvh = Bvh::build(&scene).with_sorted_batches(false);
-        let sorted = Bvh::build(&scene).with_sorted_batches(true);
+        let bvh = Bvh::build(&scene);
         let primary = primary_rays(&scene, 400, 300);
         let diffuse = diffuse_rays(&scene, &bvh, &primary, 1);
         for (set, rays) in [("primary", &primary), ("diffuse", &diffuse)] {
@@ -76,44 +75,32 @@ fn bench(c: &mut Criterion) {
                     black_box(&hits);
                 })
             });
-            // Runs of coherent rays as packets (`rays trace`'s path; these primary rays are
-            // row-major, so a packet is 8 x 1 pixels instead of the peers' 4 x 2).
-            g.bench_function(format!("closest_packets/{set}"), |b| {
-                b.iter(|| {
-                    let mut tc = TraceCounters::default();
-                    bvh.closest_hits_packets(rays, &mut hits, &mut tc);
-                    black_box(&hits);
-                })
-            });
             g.bench_function(format!("any/{set}"), |b| {
                 b.iter(|| {
                     let mut tc = TraceCounters::default();
                     black_box(rays.iter().filter(|r: &&Ray| bvh.any_hit(r, &mut tc)).count())
                 })
             });
-            // The wavefront's use: batches of one wave (4096 rays), in queue order and sorted
-            // by octant and origin cell (`WAVEPATH_RAY_ORDER=sorted`).
+            // The wavefront's use: batches of one wave (4096 rays), in queue order.
             let mut occluded = vec![false; rays.len()];
-            for (order, bvh) in [("queue", &bvh), ("sorted", &sorted)] {
-                g.bench_function(format!("any_hits/{set}/{order}"), |b| {
-                    b.iter(|| {
-                        let mut tc = TraceCounters::default();
-                        for (r, o) in rays.chunks(WAVE).zip(occluded.chunks_mut(WAVE)) {
-                            bvh.any_hits(r, o, &mut tc);
-                        }
-                        black_box(&occluded);
-                    })
-                });
-                g.bench_function(format!("closest_hits/{set}/{order}"), |b| {
-                    b.iter(|| {
-                        let mut tc = TraceCounters::default();
-                        for (r, h) in rays.chunks(WAVE).zip(hits.chunks_mut(WAVE)) {
-                            bvh.closest_hits(r, h, &mut tc);
-                        }
-                        black_box(&hits);
-                    })
-                });
-            }
+            g.bench_function(format!("any_hits/{set}"), |b| {
+                b.iter(|| {
+                    let mut tc = TraceCounters::default();
+                    for (r, o) in rays.chunks(WAVE).zip(occluded.chunks_mut(WAVE)) {
+                        bvh.any_hits(r, o, &mut tc);
+                    }
+                    black_box(&occluded);
+                })
+            });
+            g.bench_function(format!("closest_hits/{set}"), |b| {
+                b.iter(|| {
+                    let mut tc = TraceCounters::default();
+                    for (r, h) in rays.chunks(WAVE).zip(hits.chunks_mut(WAVE)) {
+                        bvh.closest_hits(r, h, &mut tc);
+                    }
+                    black_box(&hits);
+                })
+            });
         }
         g.finish();
     }

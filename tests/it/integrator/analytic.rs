@@ -2,6 +2,8 @@
 //! and a directional light, a plane under the hemisphere light, and a plane under an
 //! emissive rectangle (form factor), by light sampling and by hemisphere sampling.
 
+use crate::common::meshgen::quad;
+use crate::common::render;
 use glam::{DVec3, Vec3, vec3};
 use std::f32::consts::PI;
 use wavepath::accel::BruteForce;
@@ -9,18 +11,10 @@ use wavepath::film::Accumulator;
 use wavepath::integrator::recursive::render_recursive;
 use wavepath::integrator::wavefront::render_wavefront;
 use wavepath::scene::{Camera, Environment, Light, Material, Mesh, Scene, Sphere};
-use wavepath::settings::{Settings, Shading};
+use wavepath::settings::Settings;
 
 const W: usize = 32;
 const H: usize = 24;
-
-fn quad(mesh: &mut Mesh, c: [Vec3; 4], m: u32) {
-    let base = mesh.positions.len() as u32;
-    mesh.positions.extend(c);
-    mesh.triangles.push([base, base + 1, base + 2]);
-    mesh.triangles.push([base, base + 2, base + 3]);
-    mesh.material_ids.extend([m, m]);
-}
 
 /// A square on y = `y`, side 2 `half`, centred on the y axis.
 fn floor(mesh: &mut Mesh, half: f32, y: f32, m: u32) {
@@ -28,14 +22,7 @@ fn floor(mesh: &mut Mesh, half: f32, y: f32, m: u32) {
 }
 
 fn settings(max_depth: u32, spp: u32) -> Settings {
-    Settings {
-        width: W,
-        height: H,
-        spp,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
+    render::settings(W, H, max_depth, spp)
 }
 
 fn render(scene: &Scene, s: &Settings) -> Accumulator {

@@ -2,15 +2,13 @@
 //! estimators (different seeds) of the same image, so per-region means must agree within
 //! confidence bounds computed from the per-pixel sample variances.
 
+use crate::common;
+use crate::common::agree::assert_agree;
+use crate::common::render::{recursive, wavefront};
 use glam::Vec3;
-
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
 use wavepath::settings::Settings;
-
-mod common;
-use common::agree::assert_agree;
-use common::render::{recursive, wavefront};
 
 fn settings(max_depth: u32, spp: u32) -> Settings {
     common::render::small_settings(32, 24, max_depth, spp)
@@ -141,8 +139,7 @@ fn cell_renders_only_its_pixels() {
 #[test]
 fn cs184_scenes_agree_and_stay_finite() {
     for name in ["CBspheres_lambertian", "CBempty"] {
-        let Some(path) = common::scene(&format!("cs184/sky/{name}.dae")) else { return };
-        let mut scene = wavepath::load::load(&path, &wavepath::load::LoadOptions::default()).unwrap();
+        let Some(mut scene) = common::load_scene(&format!("cs184/sky/{name}.dae")) else { return };
         scene.camera.fit_aspect(32.0 / 24.0);
         let s = Settings { light_samples: 1, ..settings(3, 16) };
         compare(&scene, &s, name);

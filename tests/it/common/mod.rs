@@ -1,13 +1,16 @@
-//! Shared helpers for integration tests.
-#![allow(dead_code)]
+//! Helpers shared by the test modules: the scenes folder, the binary, bit-exact hit
+//! comparison, and the submodules below.
 
 pub mod agree;
 pub mod chi2;
-
+pub mod meshgen;
 pub mod render;
 
 use std::path::PathBuf;
+use std::process::{Command, Output};
 use wavepath::geometry::Hit;
+use wavepath::load::{LoadOptions, load};
+use wavepath::scene::Scene;
 
 /// Whether two traversals found the same hit, bit for bit (t, primitive, barycentrics).
 pub fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
@@ -51,6 +54,12 @@ pub fn scene(rel: &str) -> Option<PathBuf> {
     scenes_dir().map(|d| d.join(rel))
 }
 
+/// A file in the shared scenes folder loaded with the default options (None: skip, see
+/// [`scenes_dir`]); a file that does not load fails the test.
+pub fn load_scene(rel: &str) -> Option<Scene> {
+    scene(rel).map(|p| load(&p, &LoadOptions::default()).unwrap_or_else(|e| panic!("{}: {e:#}", p.display())))
+}
+
 /// Every file under `dir` with one of the extensions, sorted.
 pub fn files_with_ext(dir: &std::path::Path, exts: &[&str]) -> Vec<PathBuf> {
     let mut out = Vec::new();
@@ -74,4 +83,18 @@ pub fn files_with_ext(dir: &std::path::Path, exts: &[&str]) -> Vec<PathBuf> {
 /// Path of the built `wavepath` binary (integration tests only).
 pub fn wavepath_bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_wavepath"))
+}
+
+/// Runs the built `wavepath` binary with `args` and waits for it.
+pub fn run_wavepath(args: &[&str]) -> Output {
+    Command::new(wavepath_bin()).args(args).output().expect("wavepath runs")
+}
+
+/// A fresh, empty folder under the system temp dir, unique to `name` and this process (the
+/// tests run side by side in one process, so `name` starts with its module's name).
+pub fn temp_dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("wavepath-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
 }

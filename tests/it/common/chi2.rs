@@ -1,7 +1,6 @@
 //! Chi-square goodness-of-fit of a direction sampler against its stated density, over
 //! bins of (cos theta, phi): expected counts are the pdf integrated over each bin by
 //! quadrature; bins expecting fewer than 5 samples are pooled; p-value threshold 1e-3.
-#![allow(dead_code)]
 
 use glam::DVec3;
 use std::f64::consts::TAU;

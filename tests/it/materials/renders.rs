@@ -2,16 +2,14 @@
 //! is invisible, a mirror shows the mirrored scene, and the wavefront integrator agrees with
 //! the recursive reference for every material.
 
+use crate::common;
+use crate::common::agree::assert_agree;
+use crate::common::meshgen::quad;
 use glam::{Vec3, vec3};
-
 use wavepath::film::Accumulator;
-
 use wavepath::load::default_scene;
 use wavepath::scene::{Bsdf, Camera, Environment, Light, Material, Mesh, Scene, Sphere};
 use wavepath::settings::{Settings, Shading};
-
-mod common;
-use common::agree::assert_agree;
 
 fn wavefront(scene: &Scene, s: &Settings) -> Accumulator {
     let (acc, st) = common::render::wavefront(scene, s);
@@ -60,14 +58,6 @@ fn glass_sphere_in_a_uniform_environment_is_invisible() {
     }
 }
 
-fn add_quad(mesh: &mut Mesh, c: [Vec3; 4], m: u32) {
-    let base = mesh.positions.len() as u32;
-    mesh.positions.extend(c);
-    mesh.triangles.push([base, base + 1, base + 2]);
-    mesh.triangles.push([base, base + 2, base + 3]);
-    mesh.material_ids.extend([m, m]);
-}
-
 /// A camera looking straight down at a mirror floor sees exactly what the same camera sees
 /// with the mirror removed and the scene above it reflected below y = 0: a diffuse sphere lit
 /// by a point light (deterministic direct light, one sample at the pixel centre) and an
@@ -87,7 +77,7 @@ fn mirror_shows_the_mirrored_scene() {
         let mut mesh = Mesh::default();
         if !mirrored {
             let s = 20.0;
-            add_quad(&mut mesh, [vec3(-s, 0.0, -s), vec3(-s, 0.0, s), vec3(s, 0.0, s), vec3(s, 0.0, -s)], 0);
+            quad(&mut mesh, [vec3(-s, 0.0, -s), vec3(-s, 0.0, s), vec3(s, 0.0, s), vec3(s, 0.0, -s)], 0);
         }
         Scene {
             name: "mirror".into(),

@@ -6,6 +6,7 @@
 //! the surface and the hit reconstructed with `Scene::surface_point`, so the error bound under
 //! test is the one shading sees.
 
+use crate::common::meshgen::quad;
 use glam::{Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
 use wavepath::geometry::Ray;
@@ -27,12 +28,8 @@ fn scene(mesh: Mesh, spheres: Vec<Sphere>) -> Scene {
 }
 
 /// A parallelogram of two triangles: corner `o`, edges `e1`, `e2`.
-fn quad(mesh: &mut Mesh, o: Vec3, e1: Vec3, e2: Vec3) {
-    let base = mesh.positions.len() as u32;
-    mesh.positions.extend([o, o + e1, o + e1 + e2, o + e2]);
-    mesh.triangles.push([base, base + 1, base + 2]);
-    mesh.triangles.push([base, base + 2, base + 3]);
-    mesh.material_ids.extend([0, 0]);
+fn parallelogram(mesh: &mut Mesh, o: Vec3, e1: Vec3, e2: Vec3) {
+    quad(mesh, [o, o + e1, o + e1 + e2, o + e2], 0);
 }
 
 /// A direction about `n` whose cosine is uniform half of the time and log-uniform in
@@ -67,7 +64,7 @@ fn shoot(scene: &Scene, accel: &dyn Intersector, from: Vec3, target: Vec3) -> Op
 /// and a ray may then rightly hit the other half).
 /// Returns (rays cast, re-hits).
 fn plane_rehits(scene: &Scene, o: Vec3, e1: Vec3, e2: Vec3, seed: u64) -> (usize, usize) {
-    let (accel, _) = build(scene, true);
+    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
     let brute = BruteForce::new(scene);
     let n = e1.cross(e2).normalize();
     let size = e1.length().max(e2.length());
@@ -164,7 +161,7 @@ fn no_rehits_on_spheres() {
         (1.0, Vec3::splat(1e4)),
     ] {
         let s = scene(Mesh::default(), vec![Sphere { center, radius, material: 0 }]);
-        let (accel, _) = build(&s, true);
+        let (accel, _) = build(&s, true, wavepath::cpu::Isa::default());
         let mut rng = Sampler::for_sample(11, 0, 0);
         let (mut cast, mut rehits) = (0, 0);
         for _ in 0..RAYS {
@@ -216,11 +213,11 @@ fn no_leaks_between_close_parallel_planes() {
         let mut mesh = Mesh::default();
         let o = at - vec3(0.5 * size, 0.0, 0.5 * size);
         let (e1, e2) = (vec3(0.0, 0.0, size), vec3(size, 0.0, 0.0));
-        quad(&mut mesh, o, e1, e2); // normal +y
-        quad(&mut mesh, o + vec3(0.0, gap, 0.0), e1, e2);
+        parallelogram(&mut mesh, o, e1, e2); // normal +y
+        parallelogram(&mut mesh, o + vec3(0.0, gap, 0.0), e1, e2);
         let gap = (o.y + gap) - o.y; // the gap f32 can express there
         let s = scene(mesh, vec![]);
-        let (accel, _) = build(&s, true);
+        let (accel, _) = build(&s, true, wavepath::cpu::Isa::default());
         let mut rng = Sampler::for_sample(5, 0, 0);
         let mut bad = 0;
         for _ in 0..RAYS * 4 {
@@ -272,11 +269,11 @@ fn shadow_rays_toward_a_light_skip_the_lights_leaf() {
         let mut mesh = Mesh::default();
         let p = |x: f32, y: f32, z: f32| at + scale * vec3(x, y, z);
         let s2 = 2.0 * scale;
-        quad(&mut mesh, p(-1.0, 0.0, -1.0), vec3(0.0, 0.0, s2), vec3(s2, 0.0, 0.0)); // floor, +y
-        quad(&mut mesh, p(-1.0, 1.5, -1.0), vec3(s2, 0.0, 0.0), vec3(0.0, 0.0, s2)); // ceiling, -y
-        quad(&mut mesh, p(-0.4, 1.49, -0.3), vec3(0.8 * scale, 0.0, 0.0), vec3(0.0, 0.0, 0.6 * scale)); // light
+        parallelogram(&mut mesh, p(-1.0, 0.0, -1.0), vec3(0.0, 0.0, s2), vec3(s2, 0.0, 0.0)); // floor, +y
+        parallelogram(&mut mesh, p(-1.0, 1.5, -1.0), vec3(s2, 0.0, 0.0), vec3(0.0, 0.0, s2)); // ceiling, -y
+        parallelogram(&mut mesh, p(-0.4, 1.49, -0.3), vec3(0.8 * scale, 0.0, 0.0), vec3(0.0, 0.0, 0.6 * scale)); // light
         let s = scene(mesh, vec![]);
-        let (accel, _) = build(&s, true);
+        let (accel, _) = build(&s, true, wavepath::cpu::Isa::default());
         let mut rng = Sampler::for_sample(11, 0, 0);
         let (mut rays, mut c) = (Vec::new(), TraceCounters::default());
         while rays.len() < RAYS / 5 {

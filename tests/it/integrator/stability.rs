@@ -2,9 +2,10 @@
 //! the Cornell box far from the origin or at extreme scales renders the same image, grazing
 //! light and degenerate geometry give finite, correct answers, and no scene produces NaN
 //! or Inf at the settings the accuracy study uses.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen;
+use crate::common::render;
 use glam::{DVec3, Vec3, vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters, build};
 use wavepath::film::{Accumulator, Film};
@@ -14,21 +15,14 @@ use wavepath::load::{LoadOptions, default_scene, load};
 use wavepath::render::render_normals;
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Camera, Light, Material, Mesh, Scene};
-use wavepath::settings::{Settings, Shading};
+use wavepath::settings::Settings;
 
 fn settings(w: usize, h: usize, spp: u32, max_depth: u32) -> Settings {
-    Settings {
-        width: w,
-        height: h,
-        spp,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
+    render::settings(w, h, max_depth, spp)
 }
 
 fn render(scene: &Scene, s: &Settings) -> Accumulator {
-    let (accel, _) = build(scene, true);
+    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
     let (acc, st) = render_wavefront(scene, accel.as_ref(), s, &|_| {});
     assert_eq!(st.invalid_samples, 0, "{}: NaN/Inf samples", scene.name);
     assert!(acc.to_film().all_finite(), "{}: non-finite film", scene.name);
@@ -36,7 +30,7 @@ fn render(scene: &Scene, s: &Settings) -> Accumulator {
 }
 
 fn normals(scene: &Scene, w: usize, h: usize) -> Film {
-    let (accel, _) = build(scene, true);
+    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
     render_normals(scene, accel.as_ref(), &settings(w, h, 1, 1)).0
 }
 
@@ -52,7 +46,7 @@ fn background_pixels(f: &Film) -> usize {
 /// A point inside a closed mesh: the midpoint between entering and leaving along the
 /// ray (from outside, toward the centre) with the longest inside span.
 fn inside_point(scene: &Scene) -> Vec3 {
-    let (accel, _) = build(scene, true);
+    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
     let (lo, hi) = scene.bounds().unwrap();
     let (c, r) = (0.5 * (lo + hi), (hi - lo).length());
     let mut s = Sampler::for_sample(3, 0, 0);
@@ -150,19 +144,6 @@ fn camera_inside_generated_closed_meshes_sees_no_background() {
     assert_eq!(background_from_inside(&cube, Vec3::new(0.5, 0.5, 0.5), 256), 0);
 }
 
-/// Closed meshes from the scenes folder (the Stanford bunny has holes in its base, so the
-/// closed, manifold dragon and Spot stand in for it; see the boundary-edge check).
-#[test]
-fn camera_inside_closed_scanned_meshes_sees_no_background() {
-    for rel in ["meshes/spot.obj", "meshes/dragon_100k.obj"] {
-        let Some(p) = common::scene(rel) else { return };
-        let scene = load(&p, &LoadOptions::default()).unwrap();
-        assert_eq!(boundary_edges(&scene.mesh), 0, "{rel} is not closed");
-        let eye = inside_point(&scene);
-        assert_eq!(background_from_inside(&scene, eye, 512), 0, "{rel}");
-    }
-}
-
 /// Edges used by exactly one triangle, after welding equal positions.
 fn boundary_edges(m: &Mesh) -> usize {
     let mut weld = std::collections::HashMap::new();
@@ -253,9 +234,7 @@ fn assert_same_image(a: &Accumulator, b: &Accumulator, what: &str) {
 
 fn cornell_boxes() -> Vec<Scene> {
     let mut scenes = vec![default_scene()];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        scenes.push(load(&p, &LoadOptions::default()).unwrap());
-    }
+    scenes.extend(common::load_scene("cs184/sky/CBspheres_lambertian.dae"));
     for s in &mut scenes {
         s.camera.fit_aspect(32.0 / 24.0);
     }
@@ -356,7 +335,7 @@ fn rays_parallel_to_slabs_and_triangle_planes() {
         mesh.append(w);
     }
     let scene = meshgen::scene_of(mesh, vec![]);
-    let (bvh, _) = build(&scene, true);
+    let (bvh, _) = build(&scene, true, wavepath::cpu::Isa::default());
     let brute = BruteForce::new(&scene);
     let mut tc = TraceCounters::default();
     let mut n = 0;
@@ -388,7 +367,7 @@ fn rays_parallel_to_slabs_and_triangle_planes() {
 
 /// Random rays through a scene: BVH and brute force agree on hit/miss and distance.
 fn assert_bvh_matches_brute_force(scene: &Scene, rays: usize) {
-    let (bvh, _) = build(scene, true);
+    let (bvh, _) = build(scene, true, wavepath::cpu::Isa::default());
     let brute = BruteForce::new(scene);
     let (lo, hi) = scene.bounds().unwrap();
     let mut s = Sampler::for_sample(5, 0, 0);
@@ -456,39 +435,6 @@ fn degenerate_sliver_and_duplicate_triangles() {
     assert_eq!(na, nb, "duplicates change the normal image");
 }
 
-/// A box 10^4 times longer than wide, as a few huge-aspect triangles and as a strip of
-/// 10^4 cells: traversal agrees with brute force and renders stay finite.
-#[test]
-fn extreme_aspect_ratio_meshes() {
-    for cells in [1usize, 10_000] {
-        let mut m = Mesh::default();
-        // Top and bottom of a 1e4 x 1 x 1 slab as strips along x.
-        for (y, flip) in [(0.0f32, false), (1.0, true)] {
-            let b = m.positions.len() as u32;
-            for i in 0..=cells {
-                let x = 1e4 * i as f32 / cells as f32;
-                m.positions.extend([vec3(x, y, 0.0), vec3(x, y, 1.0)]);
-            }
-            for i in 0..cells as u32 {
-                let (a0, a1, b0, b1) = (b + 2 * i, b + 2 * i + 1, b + 2 * i + 2, b + 2 * i + 3);
-                if flip {
-                    m.triangles.extend([[a0, b1, b0], [a0, a1, b1]]);
-                } else {
-                    m.triangles.extend([[a0, b0, b1], [a0, b1, a1]]);
-                }
-            }
-        }
-        m.material_ids = vec![0; m.triangles.len()];
-        let mut scene = meshgen::scene_of(m, vec![]);
-        scene.name = format!("slab of {cells} cells");
-        scene.lights = vec![Light::Hemisphere { radiance: Vec3::ONE }];
-        scene.camera = Camera::look_at(vec3(5000.0, 3.0, 4.0), vec3(5000.0, 0.5, 0.5), Vec3::Y, 60.0, 4.0 / 3.0);
-        assert_bvh_matches_brute_force(&scene, 20_000);
-        let acc = render(&scene, &settings(32, 24, 8, 3));
-        assert!(acc.pixels.iter().any(|p| p.mean().max_element() > 0.0));
-    }
-}
-
 /// A camera looking straight up and straight down the Y axis (its up hint is parallel to
 /// the view): a valid frame, and from inside the box every pixel sees a wall.
 #[test]
@@ -508,41 +454,12 @@ fn camera_looking_straight_along_an_axis() {
 // ---------------------------------------------------------------------------------------
 // No NaN or Inf anywhere
 
-/// Every scene file in WAVEPATH_SCENES at the study's settings (24x18, 2 spp, -m 5), with
-/// light sampling and with hemisphere sampling.
-#[test]
-fn no_nan_or_inf_on_any_scene() {
-    let Some(dir) = common::scenes_dir() else { return };
-    let files = common::files_with_ext(&dir, &["dae", "obj", "ply", "gltf", "glb"]);
-    assert!(!files.is_empty());
-    let mut rendered = 0;
-    for f in &files {
-        let mut scene = match load(f, &LoadOptions::default()) {
-            Ok(s) => s,
-            Err(e) => {
-                eprintln!("skipped (does not load): {e:#}");
-                continue;
-            }
-        };
-        scene.camera.fit_aspect(24.0 / 18.0);
-        for hemisphere in [false, true] {
-            let s = Settings { hemisphere, ..settings(24, 18, 2, 5) };
-            render(&scene, &s);
-        }
-        rendered += 1;
-    }
-    eprintln!("{rendered} of {} scenes rendered finite", files.len());
-    assert!(rendered * 10 >= files.len() * 9, "only {rendered} of {} scenes loaded", files.len());
-}
-
 /// Russian roulette with a continue probability of 1e-3 divides surviving throughput by
 /// 1e-3: estimates must stay finite, and the image must still be lit.
 #[test]
 fn tiny_roulette_probability_stays_finite() {
     let mut scenes = vec![default_scene()];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        scenes.push(load(&p, &LoadOptions::default()).unwrap());
-    }
+    scenes.extend(common::load_scene("cs184/sky/CBspheres_lambertian.dae"));
     for mut scene in scenes {
         scene.camera.fit_aspect(24.0 / 18.0);
         for depth in [5, 64] {
@@ -555,5 +472,82 @@ fn tiny_roulette_probability_stays_finite() {
             eprintln!("{} -m {depth}: {} lit pixels with --rr 1e-3, {} with 0.65", scene.name, lit(&acc), lit(&normal));
             assert_eq!(lit(&acc), lit(&normal), "{} -m {depth}", scene.name);
         }
+    }
+}
+
+/// The cases that take seconds each (skipped by `cargo test --release -- --skip slow`).
+mod slow {
+    use super::*;
+
+    /// Closed meshes from the scenes folder (the Stanford bunny has holes in its base, so the
+    /// closed, manifold dragon and Spot stand in for it; see the boundary-edge check).
+    #[test]
+    fn camera_inside_closed_scanned_meshes_sees_no_background() {
+        for rel in ["meshes/spot.obj", "meshes/dragon_100k.obj"] {
+            let Some(scene) = common::load_scene(rel) else { return };
+            assert_eq!(boundary_edges(&scene.mesh), 0, "{rel} is not closed");
+            let eye = inside_point(&scene);
+            assert_eq!(background_from_inside(&scene, eye, 512), 0, "{rel}");
+        }
+    }
+
+    /// A box 10^4 times longer than wide, as a few huge-aspect triangles and as a strip of
+    /// 10^4 cells: traversal agrees with brute force and renders stay finite.
+    #[test]
+    fn extreme_aspect_ratio_meshes() {
+        for cells in [1usize, 10_000] {
+            let mut m = Mesh::default();
+            // Top and bottom of a 1e4 x 1 x 1 slab as strips along x.
+            for (y, flip) in [(0.0f32, false), (1.0, true)] {
+                let b = m.positions.len() as u32;
+                for i in 0..=cells {
+                    let x = 1e4 * i as f32 / cells as f32;
+                    m.positions.extend([vec3(x, y, 0.0), vec3(x, y, 1.0)]);
+                }
+                for i in 0..cells as u32 {
+                    let (a0, a1, b0, b1) = (b + 2 * i, b + 2 * i + 1, b + 2 * i + 2, b + 2 * i + 3);
+                    if flip {
+                        m.triangles.extend([[a0, b1, b0], [a0, a1, b1]]);
+                    } else {
+                        m.triangles.extend([[a0, b0, b1], [a0, b1, a1]]);
+                    }
+                }
+            }
+            m.material_ids = vec![0; m.triangles.len()];
+            let mut scene = meshgen::scene_of(m, vec![]);
+            scene.name = format!("slab of {cells} cells");
+            scene.lights = vec![Light::Hemisphere { radiance: Vec3::ONE }];
+            scene.camera = Camera::look_at(vec3(5000.0, 3.0, 4.0), vec3(5000.0, 0.5, 0.5), Vec3::Y, 60.0, 4.0 / 3.0);
+            assert_bvh_matches_brute_force(&scene, 20_000);
+            let acc = render(&scene, &settings(32, 24, 8, 3));
+            assert!(acc.pixels.iter().any(|p| p.mean().max_element() > 0.0));
+        }
+    }
+
+    /// Every scene file in WAVEPATH_SCENES at the study's settings (24x18, 2 spp, -m 5), with
+    /// light sampling and with hemisphere sampling.
+    #[test]
+    fn no_nan_or_inf_on_any_scene() {
+        let Some(dir) = common::scenes_dir() else { return };
+        let files = common::files_with_ext(&dir, &["dae", "obj", "ply", "gltf", "glb"]);
+        assert!(!files.is_empty());
+        let mut rendered = 0;
+        for f in &files {
+            let mut scene = match load(f, &LoadOptions::default()) {
+                Ok(s) => s,
+                Err(e) => {
+                    eprintln!("skipped (does not load): {e:#}");
+                    continue;
+                }
+            };
+            scene.camera.fit_aspect(24.0 / 18.0);
+            for hemisphere in [false, true] {
+                let s = Settings { hemisphere, ..settings(24, 18, 2, 5) };
+                render(&scene, &s);
+            }
+            rendered += 1;
+        }
+        eprintln!("{rendered} of {} scenes rendered finite", files.len());
+        assert!(rendered * 10 >= files.len() * 9, "only {rendered} of {} scenes loaded", files.len());
     }
 }

@@ -1,34 +1,21 @@
 //! The accuracy-versus-time study: its Monte Carlo errors behave as theory says (RMSE ~
 //! 1/sqrt(spp); importance sampling beats uniform hemisphere sampling at equal samples),
 //! its reference cache is reused and keyed by the settings, and the command writes its files.
-mod common;
 
+use crate::common::render;
+use crate::common::{self, temp_dir};
 use std::path::PathBuf;
 use wavepath::accel::{Intersector, build};
-use wavepath::load::{LoadOptions, default_scene, load};
+use wavepath::load::default_scene;
 use wavepath::scene::Scene;
-use wavepath::settings::{Settings, Shading};
+use wavepath::settings::Settings;
 use wavepath::study::{self, StudyConfig, SweepKind, log_log_slope};
 
 const W: usize = 32;
 const H: usize = 24;
 
 fn base(max_depth: u32) -> Settings {
-    Settings {
-        width: W,
-        height: H,
-        max_depth,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        ..Settings::default()
-    }
-}
-
-/// A fresh folder under the system temp dir, unique to this test and process.
-fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wavepath-study-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    render::settings(W, H, max_depth, 1)
 }
 
 fn cornell_box() -> Scene {
@@ -53,11 +40,11 @@ fn run(scene: &Scene, accel: &dyn Intersector, cfg: &StudyConfig) -> study::Stud
 #[test]
 fn rmse_falls_as_one_over_sqrt_spp() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true);
+    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
     for depth in [1, 3] {
         let b = base(depth);
         let ref_s = study::reference::reference_settings(&b, 8192);
-        let cache = temp_dir(&format!("slope{depth}"));
+        let cache = temp_dir(&format!("study-slope{depth}"));
         let (reference, _) =
             study::reference::reference(&scene, accel.as_ref(), &ref_s, b"test", "test", &cache, "slope").unwrap();
         let mut pts = Vec::new();
@@ -97,14 +84,13 @@ fn rmse_falls_as_one_over_sqrt_spp() {
 #[test]
 fn importance_sampling_beats_hemisphere_sampling() {
     let mut scenes = vec![cornell_box()];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        let mut s = load(&p, &LoadOptions::default()).unwrap();
+    if let Some(mut s) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") {
         s.camera.fit_aspect(W as f32 / H as f32);
         scenes.push(s);
     }
     for scene in scenes {
-        let (accel, _) = build(&scene, true);
-        let cfg = config(SweepKind::Sampling, base(1), 32, 2048, temp_dir("sampling"));
+        let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+        let cfg = config(SweepKind::Sampling, base(1), 32, 2048, temp_dir("study-sampling"));
         let r = run(&scene, accel.as_ref(), &cfg);
         assert_eq!(r.curves.len(), 2);
         assert!(!r.curves[0].settings.hemisphere && r.curves[1].settings.hemisphere);
@@ -123,8 +109,8 @@ fn importance_sampling_beats_hemisphere_sampling() {
 #[test]
 fn reference_is_cached_and_keyed_by_settings() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true);
-    let cache = temp_dir("cache");
+    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let cache = temp_dir("study-cache");
     let cfg = config(SweepKind::Spp, base(1), 2, 64, cache.clone());
     let a = run(&scene, accel.as_ref(), &cfg);
     assert!(!a.reference_info.cached);
@@ -150,8 +136,8 @@ fn reference_is_cached_and_keyed_by_settings() {
 #[test]
 fn depth_sweep_shows_truncation_bias() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true);
-    let cfg = config(SweepKind::Depth, base(5), 16, 512, temp_dir("depth"));
+    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let cfg = config(SweepKind::Depth, base(5), 16, 512, temp_dir("study-depth"));
     let r = run(&scene, accel.as_ref(), &cfg);
     assert_eq!(r.reference_settings.max_depth, study::sweep::DEEP);
     // Pixels that see the light (radiance 10) are left out: their jittered coverage noise
@@ -174,7 +160,7 @@ fn depth_sweep_shows_truncation_bias() {
 /// `wavepath study` writes the CSV (one row per render), both plots, the images and the report.
 #[test]
 fn command_writes_csv_plots_and_report() {
-    let out = temp_dir("cli");
+    let out = temp_dir("study-cli");
     let cache = out.join("cache");
     let status = std::process::Command::new(common::wavepath_bin())
         .args(["study", "--sweep", "adaptive", "-r", "16", "12", "-m", "2", "--max-spp", "128", "--ref-spp", "256"])

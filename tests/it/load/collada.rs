@@ -1,18 +1,12 @@
 //! COLLADA loader: the CS184 scenes (counts against the shared README, lights, materials,
 //! cameras, normals) and hand-written documents for transforms, primitives and bad input.
 
-mod common;
-
+use crate::common;
 use glam::{Vec3, vec3};
 use std::path::Path;
 use wavepath::load::collada::parse_str;
 use wavepath::load::{CameraMode, LoadOptions, load};
 use wavepath::scene::{Bsdf, Light, Scene};
-
-fn load_rel(rel: &str) -> Option<Scene> {
-    let p = common::scene(rel)?;
-    Some(load(&p, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}")))
-}
 
 fn file_mode() -> LoadOptions {
     LoadOptions { camera: CameraMode::File, ..LoadOptions::default() }
@@ -101,7 +95,7 @@ fn counts_match_the_readme_table() {
 #[test]
 fn meshedit_counts() {
     let (Some(beetle), Some(planck)) =
-        (load_rel("cs184/meshedit/beetle.dae"), load_rel("cs184/meshedit/maxplanck.dae"))
+        (common::load_scene("cs184/meshedit/beetle.dae"), common::load_scene("cs184/meshedit/maxplanck.dae"))
     else {
         return;
     };
@@ -111,7 +105,7 @@ fn meshedit_counts() {
 
 #[test]
 fn cbspheres_lambertian_geometry_light_and_cameras() {
-    let Some(s) = load_rel("cs184/sky/CBspheres_lambertian.dae") else { return };
+    let Some(s) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     // Sphere1 matrix translation (-0.4, 0.3, 0.3), Sphere2 (0.4, -0.3, 0.3), both in Z-up.
     // x' = -x, y' = z, z' = y gives (0.4, 0.3, 0.3) and (-0.4, 0.3, -0.3); scale 1, radius .3.
     assert_eq!(s.spheres.len(), 2);
@@ -157,7 +151,9 @@ fn cbspheres_lambertian_geometry_light_and_cameras() {
 
 #[test]
 fn lights_of_cbempty_and_bunny() {
-    let (Some(empty), Some(bunny)) = (load_rel("cs184/sky/CBempty.dae"), load_rel("cs184/sky/bunny.dae")) else {
+    let (Some(empty), Some(bunny)) =
+        (common::load_scene("cs184/sky/CBempty.dae"), common::load_scene("cs184/sky/bunny.dae"))
+    else {
         return;
     };
     assert!(matches!(empty.lights.as_slice(), [Light::Point { intensity, .. }] if *intensity == Vec3::splat(5.0)));
@@ -166,7 +162,7 @@ fn lights_of_cbempty_and_bunny() {
 
 #[test]
 fn legacy_cmu462_sphere_is_a_mirror() {
-    let Some(s) = load_rel("cs184/basic/sphere_mirror.dae") else { return };
+    let Some(s) = common::load_scene("cs184/basic/sphere_mirror.dae") else { return };
     assert_eq!(s.spheres.len(), 1);
     let m = &s.materials[s.spheres[0].material as usize];
     assert_eq!(m.bsdf, Bsdf::Mirror { reflectance: Vec3::ONE });
@@ -174,7 +170,7 @@ fn legacy_cmu462_sphere_is_a_mirror() {
 
 #[test]
 fn cbspheres_has_mirror_and_glass() {
-    let Some(s) = load_rel("cs184/sky/CBspheres.dae") else { return };
+    let Some(s) = common::load_scene("cs184/sky/CBspheres.dae") else { return };
     let kinds: Vec<&Bsdf> = s.spheres.iter().map(|sp| &s.materials[sp.material as usize].bsdf).collect();
     assert!(kinds.iter().any(|b| matches!(b, Bsdf::Mirror { .. })), "{kinds:?}");
     assert!(kinds.iter().any(|b| matches!(b, Bsdf::Glass { ior, .. } if *ior == 1.45)), "{kinds:?}");
@@ -202,7 +198,7 @@ fn microfacet_parameters_come_from_the_file() {
 
 #[test]
 fn smooth_normals_are_unit_and_point_out_of_a_closed_cube() {
-    let Some(s) = load_rel("cs184/simple/cube.dae") else { return };
+    let Some(s) = common::load_scene("cs184/simple/cube.dae") else { return };
     let normals = s.mesh.normals.as_ref().unwrap();
     let used: std::collections::BTreeSet<u32> = s.mesh.triangles.iter().flatten().copied().collect();
     let centroid = used.iter().map(|&i| s.mesh.positions[i as usize]).sum::<Vec3>() / used.len() as f32;
@@ -212,7 +208,7 @@ fn smooth_normals_are_unit_and_point_out_of_a_closed_cube() {
         assert!(n.dot((p - centroid).normalize()) > 0.5, "vertex {i}: normal {n} at {p}");
     }
     // The same on a big mesh: every normal is unit length.
-    if let Some(b) = load_rel("cs184/sky/bunny.dae") {
+    if let Some(b) = common::load_scene("cs184/sky/bunny.dae") {
         assert!(b.mesh.normals.unwrap().iter().all(|n| (n.length() - 1.0).abs() < 1e-4));
     }
 }

@@ -1,11 +1,11 @@
 //! Watertightness: rays aimed exactly at shared edges and vertices of closed meshes never
 //! pass through, at the origin, translated by 1e5 and scaled by 1e-4.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
-use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
+use wavepath::accel::{Bvh, Intersector, TraceCounters};
+use wavepath::cpu::Isa;
 use wavepath::geometry::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::Mesh;
@@ -54,26 +54,6 @@ fn leaks(bvh: &Bvh, targets: &[Vec3], c: Vec3, radius: f32, seed: u64) -> (usize
         }
     }
     (n, bad)
-}
-
-#[test]
-fn no_leaks_through_edges_and_vertices() {
-    let base = icosphere(40); // 32,000 triangles
-    let mut total = 0;
-    for (scale, offset) in
-        [(1.0, Vec3::ZERO), (1.0, Vec3::splat(1e5)), (1e-4, Vec3::ZERO), (1e-4, Vec3::new(3.0, -2.0, 1.0))]
-    {
-        let m = transformed(base.clone(), scale, offset);
-        let t = targets(&m, 3);
-        let scene = scene_of(m, vec![]);
-        for isa in [Isa::Scalar, Isa::Avx2] {
-            let bvh_isa = Bvh::build(&scene).with_isa(isa);
-            let (n, bad) = leaks(&bvh_isa, &t, offset, scale, 11);
-            assert_eq!(bad, 0, "{bad} of {n} rays leaked (scale {scale}, offset {offset}, {isa:?})");
-            total += n;
-        }
-    }
-    assert!(total >= 1_000_000, "only {total} rays");
 }
 
 #[test]
@@ -133,4 +113,29 @@ fn bunny_is_watertight_where_closed() {
         }
     }
     assert_eq!(miss, 0);
+}
+
+/// The cases that take seconds each (skipped by `cargo test --release -- --skip slow`).
+mod slow {
+    use super::*;
+
+    #[test]
+    fn no_leaks_through_edges_and_vertices() {
+        let base = icosphere(40); // 32,000 triangles
+        let mut total = 0;
+        for (scale, offset) in
+            [(1.0, Vec3::ZERO), (1.0, Vec3::splat(1e5)), (1e-4, Vec3::ZERO), (1e-4, Vec3::new(3.0, -2.0, 1.0))]
+        {
+            let m = transformed(base.clone(), scale, offset);
+            let t = targets(&m, 3);
+            let scene = scene_of(m, vec![]);
+            for isa in [Isa::Scalar, Isa::Avx2] {
+                let bvh_isa = Bvh::build(&scene).with_isa(isa);
+                let (n, bad) = leaks(&bvh_isa, &t, offset, scale, 11);
+                assert_eq!(bad, 0, "{bad} of {n} rays leaked (scale {scale}, offset {offset}, {isa:?})");
+                total += n;
+            }
+        }
+        assert!(total >= 1_000_000, "only {total} rays");
+    }
 }

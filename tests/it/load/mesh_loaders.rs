@@ -1,7 +1,6 @@
 //! OBJ, PLY and glTF loaders against the shared scenes and small hand-written files.
 
-mod common;
-
+use crate::common::{self, temp_dir};
 use glam::{Vec3, vec3};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -10,14 +9,6 @@ use wavepath::scene::{Light, Scene};
 
 fn load_ok(path: &Path) -> Scene {
     load(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"))
-}
-
-/// A fresh folder for one test's files.
-fn temp_dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wavepath-meshload-{}-{test}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }
 
 /// Writes `contents` to `dir/name` and returns the path.
@@ -118,7 +109,7 @@ fn obj_triangle_numbering_matches_the_peers_rules_on_real_files() {
 
 #[test]
 fn obj_polygons_groups_and_relative_indices_keep_file_order() {
-    let d = temp_dir("obj_order");
+    let d = temp_dir("mesh-loaders-obj_order");
     write(&d, "m.mtl", "newmtl a\nKd 0.5\nnewmtl b\nKd 0.1 0.2 0.3\nKe 1 2 3\nmap_Kd tex/b.png\n");
     let obj = "mtllib m.mtl\n\
         v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0.5 1.5 0\nvt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n\
@@ -155,7 +146,7 @@ fn obj_shares_positions_of_a_big_mesh() {
 
 #[test]
 fn obj_without_its_mtl_loads_with_the_default_material() {
-    let d = temp_dir("obj_no_mtl");
+    let d = temp_dir("mesh-loaders-obj_no_mtl");
     let path = write(&d, "nomtl.obj", "mtllib missing.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     let scene = load_ok(&path);
     assert_eq!(scene.materials.len(), 1);
@@ -201,7 +192,7 @@ fn ply_header(format: &str, nv: usize, nf: usize) -> String {
 fn ply_ascii_and_both_binary_byte_orders_give_the_same_mesh() {
     let Some(src) = common::scene("meshes/kitten_25k.ply") else { return };
     let (verts, faces) = read_simple_binary_ply(&std::fs::read(&src).unwrap());
-    let d = temp_dir("ply_formats");
+    let d = temp_dir("mesh-loaders-ply_formats");
     let mut ascii = ply_header("ascii", verts.len(), faces.len());
     let mut be = ply_header("binary_big_endian", verts.len(), faces.len()).into_bytes();
     for v in &verts {
@@ -228,7 +219,7 @@ fn ply_ascii_and_both_binary_byte_orders_give_the_same_mesh() {
 
 #[test]
 fn ply_polygons_normals_uvs_and_doubles() {
-    let d = temp_dir("ply_attrs");
+    let d = temp_dir("mesh-loaders-ply_attrs");
     let text = "ply\nformat ascii 1.0\ncomment quad and triangle\nelement vertex 5\nproperty double x\nproperty double y\n\
         property double z\nproperty float nx\nproperty float ny\nproperty float nz\nproperty float s\nproperty float t\n\
         element face 2\nproperty list uchar uint vertex_index\nelement extra 1\nproperty int whatever\nend_header\n\
@@ -287,7 +278,7 @@ fn base64(data: &[u8]) -> String {
 
 #[test]
 fn gltf_node_transforms_are_flattened_to_world_space() {
-    let d = temp_dir("gltf_nodes");
+    let d = temp_dir("mesh-loaders-gltf_nodes");
     // Root: translate (1,2,3), scale 2. Child: rotate 90 degrees about +Z, holds the mesh.
     let h = std::f32::consts::FRAC_1_SQRT_2;
     let nodes =
@@ -304,14 +295,14 @@ fn gltf_node_transforms_are_flattened_to_world_space() {
 
 #[test]
 fn gltf_indexed_primitive_follows_its_indices() {
-    let d = temp_dir("gltf_indexed");
+    let d = temp_dir("mesh-loaders-gltf_indexed");
     let s = load_ok(&write(&d, "ix.gltf", gltf_with(r#"{"mesh":0}"#, "", Some(&[2, 0, 1]), None)));
     assert_eq!(s.mesh.corners(0), [vec3(0.0, 1.0, 0.0), Vec3::ZERO, Vec3::X]);
 }
 
 #[test]
 fn gltf_camera_and_punctual_lights() {
-    let d = temp_dir("gltf_lights");
+    let d = temp_dir("mesh-loaders-gltf_lights");
     let h = std::f32::consts::FRAC_1_SQRT_2;
     // Root holds the mesh and four children: camera turned 90 degrees about +Y (looks down -X),
     // a point light, a directional light pointing down (-Z turned to -Y) and a spot light.
@@ -389,7 +380,7 @@ fn gltf_emissive_strength_multiplies_the_emissive_factor() {
 
 #[test]
 fn gltf_external_texture_is_recorded_and_embedded_is_decoded() {
-    let d = temp_dir("gltf_tex");
+    let d = temp_dir("mesh-loaders-gltf_tex");
     let extra = r#","materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
         "textures":[{"source":0}],"images":[{"uri":"albedo.png"}]"#;
     let text = tiny_gltf(r#"{"mesh":0}"#, extra).replace(r#""attributes""#, r#""material":0,"attributes""#);
@@ -409,7 +400,7 @@ fn gltf_external_texture_is_recorded_and_embedded_is_decoded() {
 
 #[test]
 fn bad_missing_files() {
-    let d = temp_dir("missing");
+    let d = temp_dir("mesh-loaders-missing");
     for name in ["nothing.obj", "nothing.ply", "nothing.gltf", "nothing.glb"] {
         assert_load_error(&d.join(name), "missing file");
     }
@@ -417,14 +408,14 @@ fn bad_missing_files() {
 
 #[test]
 fn bad_gltf_missing_bin() {
-    let d = temp_dir("missing_bin");
+    let d = temp_dir("mesh-loaders-missing_bin");
     let text = gltf_with(r#"{"mesh":0}"#, "", None, Some("gone.bin"));
     assert_load_error(&write(&d, "nobin.gltf", text), "missing .bin");
 }
 
 #[test]
 fn bad_truncated_files() {
-    let d = temp_dir("truncated");
+    let d = temp_dir("mesh-loaders-truncated");
     if let Some(ply) = common::scene("meshes/kitten_25k.ply") {
         let bytes = std::fs::read(ply).unwrap();
         assert_load_error(&write(&d, "half.ply", &bytes[..bytes.len() / 2]), "truncated binary ply");
@@ -445,7 +436,7 @@ fn bad_truncated_files() {
 
 #[test]
 fn bad_non_numeric_and_non_finite_coordinates() {
-    let d = temp_dir("nan");
+    let d = temp_dir("mesh-loaders-nan");
     let e = assert_load_error(&write(&d, "word.obj", "v 0 0 0\nv 1 zero 0\nv 0 1 0\nf 1 2 3\n"), "word in obj");
     assert!(e.contains("line 2"), "{e}");
     for (name, v) in [("nan.obj", "nan"), ("inf.obj", "inf"), ("bigexp.obj", "1e999")] {
@@ -459,7 +450,7 @@ fn bad_non_numeric_and_non_finite_coordinates() {
 
 #[test]
 fn bad_mtl_values() {
-    let d = temp_dir("bad_mtl");
+    let d = temp_dir("mesh-loaders-bad_mtl");
     write(&d, "bad.mtl", "newmtl a\nKd 0.5 green 0.5\n");
     let e = assert_load_error(&write(&d, "badmtl.obj", "mtllib bad.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n"), "mtl");
     assert!(e.contains("bad.mtl") && e.contains("line 2"), "{e}");
@@ -467,7 +458,7 @@ fn bad_mtl_values() {
 
 #[test]
 fn bad_indices_out_of_range() {
-    let d = temp_dir("indices");
+    let d = temp_dir("mesh-loaders-indices");
     assert_load_error(&write(&d, "far.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"), "obj index");
     assert_load_error(&write(&d, "neg.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -9\n"), "obj negative");
     assert_load_error(&write(&d, "zero.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n"), "obj zero");
@@ -486,7 +477,7 @@ fn bad_indices_out_of_range() {
 
 #[test]
 fn bad_empty_meshes() {
-    let d = temp_dir("empty");
+    let d = temp_dir("mesh-loaders-empty");
     assert_load_error(&write(&d, "empty.obj", ""), "empty obj");
     assert_load_error(&write(&d, "points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\n"), "no faces");
     assert_load_error(&write(&d, "empty.ply", ply_header("ascii", 0, 0)), "empty ply");
@@ -498,7 +489,7 @@ fn bad_empty_meshes() {
 
 #[test]
 fn bad_counts_larger_than_the_data() {
-    let d = temp_dir("counts");
+    let d = temp_dir("mesh-loaders-counts");
     for format in ["ascii", "binary_little_endian", "binary_big_endian"] {
         let text = format!("{}0 0 0\n", ply_header(format, 4_000_000_000, 1));
         let e = assert_load_error(&write(&d, &format!("huge_{format}.ply"), text), format);

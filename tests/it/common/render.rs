@@ -10,17 +10,21 @@ use wavepath::settings::{Settings, Shading};
 use wavepath::stats::RenderStats;
 
 /// A `width` x `height` render at depth `max_depth` (direct light at 1, global above) with
-/// `spp` samples and two light samples.
-pub fn small_settings(width: usize, height: usize, max_depth: u32, spp: u32) -> Settings {
+/// `spp` samples, the rest default.
+pub fn settings(width: usize, height: usize, max_depth: u32, spp: u32) -> Settings {
     Settings {
         width,
         height,
         spp,
-        light_samples: 2,
         max_depth,
         shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
         ..Settings::default()
     }
+}
+
+/// [`settings`] with two light samples.
+pub fn small_settings(width: usize, height: usize, max_depth: u32, spp: u32) -> Settings {
+    Settings { light_samples: 2, ..settings(width, height, max_depth, spp) }
 }
 
 pub fn wavefront(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {

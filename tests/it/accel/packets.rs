@@ -2,10 +2,11 @@
 //! real mesh, for every instruction set: random and hard rays (sharing an origin, as the
 //! wavefront's shadow queue holds them), including rays through vertices and along edges,
 //! grazing, axis-parallel, starting on the surface and ending exactly on a triangle.
-mod common;
 
+use crate::common;
 use glam::Vec3;
-use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters};
+use wavepath::accel::{BruteForce, Bvh, Intersector, TraceCounters};
+use wavepath::cpu::Isa;
 use wavepath::geometry::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::Scene;
@@ -108,23 +109,20 @@ fn check(scene: &Scene, what: &str) {
 
 #[test]
 fn packets_match_single_rays_on_the_bunny() {
-    let Some(path) = common::scene("cs184/sky/CBbunny.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBbunny.dae") else { return };
     check(&scene, "CBbunny");
 }
 
 #[test]
 fn packets_match_single_rays_on_the_cornell_box() {
-    let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     check(&scene, "CBspheres_lambertian");
 }
 
 /// Intersectors without packets fall back to `any_hits` (brute force).
 #[test]
 fn brute_force_packets_are_single_rays() {
-    let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     let rays = shadow_like_rays(&scene, 300);
     let brute = BruteForce::new(&scene);
     let mut c = TraceCounters::default();

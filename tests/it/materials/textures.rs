@@ -3,8 +3,7 @@
 //! albedo), so every pixel on it must equal the texture's colour at that point. The
 //! expected colours come from the image decoded here on its own and a local bilinear filter.
 
-mod common;
-
+use crate::common;
 use glam::{Vec2, Vec3};
 use wavepath::accel::{BruteForce, Intersector, TraceCounters};
 use wavepath::load::{LoadOptions, load};

@@ -1,11 +1,11 @@
 //! BVH against brute force, and every SIMD path against the scalar one.
-mod common;
-mod meshgen;
 
-use common::same_hit;
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
+use crate::common::same_hit;
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
-use wavepath::accel::{BruteForce, Bvh, Intersector, Isa, TraceCounters, build};
+use wavepath::accel::{BruteForce, Bvh, Intersector, TraceCounters, build};
+use wavepath::cpu::Isa;
 use wavepath::geometry::Ray;
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Mesh, Sphere};
@@ -98,9 +98,9 @@ fn every_isa_gives_identical_hits() {
 }
 
 #[test]
-fn batches_in_any_order_and_isa_match_single_rays() {
+fn batches_of_every_isa_match_single_rays() {
     let scene = scene_of(icosphere(16), vec![Sphere { center: Vec3::new(0.0, 1.2, 0.0), radius: 0.4, material: 0 }]);
-    let reference = Bvh::build(&scene).with_isa(Isa::Scalar).with_sorted_batches(false);
+    let reference = Bvh::build(&scene).with_isa(Isa::Scalar);
     let mut s = Sampler::for_sample(11, 2, 0);
     let mut rays: Vec<Ray> = (0..5000).map(|_| random_ray(&mut s, 1.0)).collect();
     // Shadow-like rays that stop short of what they would hit.
@@ -115,31 +115,24 @@ fn batches_in_any_order_and_isa_match_single_rays() {
     let occluded = want_any.iter().filter(|&&o| o).count();
     assert!(occluded > 200 && rays.len() - occluded > 200, "{occluded} of {} rays occluded", rays.len());
     for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512] {
-        for sorted in [false, true] {
-            let bvh = Bvh::build(&scene).with_isa(isa).with_sorted_batches(sorted);
-            let (mut hits, mut occluded) = (vec![None; rays.len()], vec![false; rays.len()]);
-            let (mut c1, mut c2) = (TraceCounters::default(), TraceCounters::default());
-            bvh.closest_hits(&rays, &mut hits, &mut c1);
-            bvh.any_hits(&rays, &mut occluded, &mut c2);
-            for i in 0..rays.len() {
-                assert!(
-                    same_hit(hits[i], want_hit[i]),
-                    "{isa:?} sorted={sorted} ray {i}: {:?} vs {:?}",
-                    hits[i],
-                    want_hit[i]
-                );
-                assert_eq!(occluded[i], want_any[i], "{isa:?} sorted={sorted} any-hit ray {i}");
-            }
-            assert_eq!((c1.rays, c2.rays), (rays.len() as u64, rays.len() as u64));
+        let bvh = Bvh::build(&scene).with_isa(isa);
+        let (mut hits, mut occluded) = (vec![None; rays.len()], vec![false; rays.len()]);
+        let (mut c1, mut c2) = (TraceCounters::default(), TraceCounters::default());
+        bvh.closest_hits(&rays, &mut hits, &mut c1);
+        bvh.any_hits(&rays, &mut occluded, &mut c2);
+        for i in 0..rays.len() {
+            assert!(same_hit(hits[i], want_hit[i]), "{isa:?} ray {i}: {:?} vs {:?}", hits[i], want_hit[i]);
+            assert_eq!(occluded[i], want_any[i], "{isa:?} any-hit ray {i}");
         }
+        assert_eq!((c1.rays, c2.rays), (rays.len() as u64, rays.len() as u64));
     }
 }
 
 #[test]
 fn accel_build_switches_between_bvh_and_brute_force() {
     let scene = scene_of(icosphere(4), vec![]);
-    let (bvh, info) = build(&scene, true);
-    let (brute, binfo) = build(&scene, false);
+    let (bvh, info) = build(&scene, true, Isa::default());
+    let (brute, binfo) = build(&scene, false, Isa::default());
     assert!(bvh.name().starts_with("bvh8"));
     assert_eq!(brute.name(), "brute force");
     assert!(info.nodes > 0 && binfo.nodes == 0);
@@ -200,9 +193,7 @@ fn degenerate_triangles_are_never_hit() {
 #[test]
 fn every_isa_agrees_on_rays_ending_on_vertices() {
     let mut scenes = vec![scene_of(icosphere(8), vec![])];
-    if let Some(p) = common::scene("cs184/sky/CBspheres_lambertian.dae") {
-        scenes.push(wavepath::load::load(&p, &Default::default()).unwrap());
-    }
+    scenes.extend(common::load_scene("cs184/sky/CBspheres_lambertian.dae"));
     for scene in &scenes {
         let v = &scene.mesh.positions;
         let step = v.len() / 60 + 1;

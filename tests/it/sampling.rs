@@ -3,14 +3,12 @@
 //! quadrature; bins expecting fewer than 5 samples are pooled; p-value threshold 1e-3, fixed
 //! seeds), and a quadrature check that each pdf integrates to 1 over the sphere.
 
+use crate::common::chi2::{chi_square, gamma_q, ln_gamma};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{PI, TAU};
 use wavepath::lights::{EmissiveTriangles, Infinite, SampledLight};
 use wavepath::sampling::{Frame, Sampler, warp};
 use wavepath::scene::{Material, Mesh, Scene};
-
-mod common;
-use common::chi2::{chi_square, gamma_q, ln_gamma};
 
 fn f32x3(r: &mut Sampler) -> [f32; 3] {
     [r.next_f32(), r.next_f32(), r.next_f32()]

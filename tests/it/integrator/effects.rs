@@ -2,13 +2,11 @@
 //! is off reports no time (absent from the stats JSON), and forcing every effect on must not
 //! change the image (every kernel part is exact when its effect is not needed).
 
-mod common;
-use common::render::wavefront;
-
+use crate::common;
+use crate::common::render::wavefront;
 use glam::Vec3;
 use wavepath::accel::{self, BruteForce};
 use wavepath::effects::Effects;
-
 use wavepath::integrator::wavefront::render_wavefront;
 use wavepath::load::default_scene;
 use wavepath::scene::Scene;
@@ -69,8 +67,7 @@ fn sphere_effect_follows_the_scene() {
     let with = default_scene();
     assert!(!with.spheres.is_empty());
     assert!(Effects::of(&with, &settings(1, 1)).names().contains(&"spheres"));
-    let Some(path) = common::scene("cs184/sky/CBempty.dae") else { return };
-    let without = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(without) = common::load_scene("cs184/sky/CBempty.dae") else { return };
     assert!(without.spheres.is_empty());
     let e = Effects::of(&without, &settings(1, 1));
     assert!(!e.spheres && !e.names().contains(&"spheres"), "{:?}", e.names());
@@ -95,7 +92,7 @@ fn a_scene_without_lights_runs_no_shadow_stage() {
 #[test]
 fn forcing_all_effects_on_gives_the_same_image() {
     let scene = default_scene();
-    let (bvh, _) = accel::build(&scene, true);
+    let (bvh, _) = accel::build(&scene, true, wavepath::cpu::Isa::default());
     for (depth, hemisphere, rr) in
         [(1, false, 0.65), (2, false, 0.65), (5, false, 1.0), (5, false, 0.65), (3, true, 0.65)]
     {

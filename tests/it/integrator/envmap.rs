@@ -1,8 +1,7 @@
 //! Environment maps: irradiance against a brute-force integral of the map, importance
 //! sampling against cosine sampling, and what camera rays that miss see.
 
-mod common;
-
+use crate::common;
 use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
 use std::sync::Arc;

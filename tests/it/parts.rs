@@ -2,34 +2,22 @@
 //! (bit for bit for tiles, up to summation order for sample ranges), and every way of
 //! handing merge the wrong parts must be refused with one line naming the part.
 
-mod common;
-
+use crate::common::{self, run_wavepath, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 use wavepath::accel;
 use wavepath::load::default_scene;
 use wavepath::parts::{PartSpec, Split, merge_files, render_part};
 use wavepath::settings::Settings;
 
-fn tempdir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wavepath-parts-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
-
-fn run(args: &[&str]) -> Output {
-    Command::new(common::wavepath_bin()).args(args).output().unwrap()
-}
-
 fn ok(args: &[&str]) {
-    let o = run(args);
+    let o = run_wavepath(args);
     assert!(o.status.success(), "wavepath {args:?} failed: {}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// Runs a merge that must fail; returns its one-line message.
 fn refused(args: &[&str]) -> String {
-    let o = run(args);
+    let o = run_wavepath(args);
     assert!(!o.status.success(), "wavepath {args:?} should have failed");
     let err = String::from_utf8_lossy(&o.stderr).trim().to_string();
     assert_eq!(err.lines().count(), 1, "not one line: {err}");
@@ -72,7 +60,7 @@ fn split_and_merge(dir: &Path, base: &[&str], n: u32, split: &str) -> (PathBuf, 
 
 #[test]
 fn tile_parts_merge_bit_identical_to_one_process() {
-    let dir = tempdir("tiles");
+    let dir = temp_dir("parts-tiles");
     let base = ["-s", "4", "-m", "3", "-r", "64", "48", "--seed", "7"];
     for n in [1, 2, 3, 4, 7] {
         let (single, merged) = split_and_merge(&dir, &base, n, "tiles");
@@ -98,11 +86,11 @@ fn tile_parts_merge_bit_identical_to_one_process() {
 /// f32 ulp, so a merged f32 mean equals the single one or is its neighbour (1 ulp).
 #[test]
 fn sample_parts_merge_within_the_summation_order_bound() {
-    let dir = tempdir("samples");
+    let dir = temp_dir("parts-samples");
     let scene = default_scene();
     let mut st = Settings { width: 48, height: 36, spp: 24, max_depth: 4, ..Settings::default() };
     st.shading = wavepath::settings::Shading::Global;
-    let (bvh, _) = accel::build(&scene, true);
+    let (bvh, _) = accel::build(&scene, true, wavepath::cpu::Isa::default());
     let (single, _) = wavepath::render::render_sums(&scene, bvh.as_ref(), &st, &|_| {}).unwrap();
     let n = 5;
     let mut files = Vec::new();
@@ -148,7 +136,7 @@ fn sample_parts_merge_within_the_summation_order_bound() {
 
 #[test]
 fn wrong_parts_are_refused_naming_the_part() {
-    let dir = tempdir("refuse");
+    let dir = temp_dir("parts-refuse");
     let d = |n: &str| dir.join(n);
     let base = ["-s", "3", "-m", "2", "-r", "32", "24"];
     let part = |extra: &[&str], label: &str, out: &Path| {
@@ -221,7 +209,7 @@ fn wrong_parts_are_refused_naming_the_part() {
 
 #[test]
 fn part_flags_are_checked() {
-    let dir = tempdir("flags");
+    let dir = temp_dir("parts-flags");
     let out = dir.join("p.exr");
     let o = s(&out);
     for (args, says) in [
@@ -236,7 +224,7 @@ fn part_flags_are_checked() {
         assert!(e.contains(says), "{args:?}: {e}");
     }
     // `auto` outside a scheduler has nothing to go on; inside one it reads the environment.
-    let o2 = run(&["--part", "auto", "-f", o]);
+    let o2 = run_wavepath(&["--part", "auto", "-f", o]);
     assert!(!o2.status.success());
     let env_run = |vars: &[(&str, &str)], out: &Path| {
         let mut c = Command::new(common::wavepath_bin());
@@ -265,7 +253,7 @@ fn part_flags_are_checked() {
 /// part in one step and leaves no temporary files behind.
 #[test]
 fn killed_parts_leave_no_file_and_reruns_replace_atomically() {
-    let dir = tempdir("kill");
+    let dir = temp_dir("parts-kill");
     let out = dir.join("p0.exr");
     // Far more work than the test waits for.
     let mut child = Command::new(common::wavepath_bin())
@@ -302,7 +290,7 @@ fn killed_parts_leave_no_file_and_reruns_replace_atomically() {
 /// only (`-m 1`) there is no bounce stage, and merging must not invent one.
 #[test]
 fn merged_stats_keep_absent_stages_absent() {
-    let dir = tempdir("stages");
+    let dir = temp_dir("parts-stages");
     let stage_keys = |p: &Path| -> Vec<String> {
         let v: serde_json::Value = serde_json::from_slice(&std::fs::read(p).unwrap()).unwrap();
         let mut k: Vec<String> = v["stages"].as_object().unwrap().keys().cloned().collect();

@@ -5,12 +5,12 @@
 //! root box, dead rays, vertex chords with tied hits) in batches of every length 1..=70 at
 //! every start, so a ray dropped, traced twice or given another ray's state (stack, set-up,
 //! closest hit) changes some batch's answer.
-mod common;
-mod meshgen;
 
+use crate::common;
+use crate::common::meshgen::{icosphere, scene_of};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
-use wavepath::accel::{Bvh, Intersector, Isa, TraceCounters};
+use wavepath::accel::{Bvh, Intersector, TraceCounters};
+use wavepath::cpu::Isa;
 use wavepath::geometry::{Hit, Ray};
 use wavepath::sampling::Sampler;
 use wavepath::scene::{Scene, Sphere};
@@ -72,7 +72,7 @@ fn check(scene: &Scene, what: &str) {
     let hits = want.iter().filter(|h| h.is_some()).count();
     assert!(hits > rays.len() / 4 && hits < rays.len() * 3 / 4, "{what}: {hits} hits of {}", rays.len());
     for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512] {
-        let bvh = Bvh::build(scene).with_isa(isa).with_sorted_batches(false);
+        let bvh = Bvh::build(scene).with_isa(isa);
         // Per ray alone: its node count, for the totals of the batches below.
         let nodes: Vec<u64> = rays
             .iter()
@@ -123,7 +123,6 @@ fn incoherent_batches_match_single_rays_on_an_icosphere_with_spheres() {
 
 #[test]
 fn incoherent_batches_match_single_rays_on_the_bunny() {
-    let Some(path) = common::scene("cs184/sky/CBbunny.dae") else { return };
-    let scene = wavepath::load::load(&path, &Default::default()).unwrap();
+    let Some(scene) = common::load_scene("cs184/sky/CBbunny.dae") else { return };
     check(&scene, "CBbunny");
 }

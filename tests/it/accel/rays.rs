@@ -1,20 +1,13 @@
 //! Ray files: format, bad input, the renderer's own rays, and the peers' trace protocol.
-mod common;
-mod meshgen;
 
+use crate::common::meshgen::{icosphere, scene_of};
+use crate::common::{self, temp_dir};
 use glam::Vec3;
-use meshgen::{icosphere, scene_of};
 use std::process::Command;
 use wavepath::accel::{Bvh, Intersector, TraceCounters};
 use wavepath::geometry::Ray;
-use wavepath::rays::file::{HitRecord, parse_rays, read_hits, read_rays, write_rays};
-use wavepath::rays::{diffuse_rays, primary_rays, trace_all};
-
-fn tmp(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("wavepath-rays-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d.join(name)
-}
+use wavepath::rayfile::file::{HitRecord, parse_rays, read_hits, read_rays, write_rays};
+use wavepath::rayfile::{diffuse_rays, primary_rays, trace_all};
 
 #[test]
 fn ray_file_round_trip_and_layout() {
@@ -22,7 +15,7 @@ fn ray_file_round_trip_and_layout() {
         Ray { origin: Vec3::new(1.0, 2.0, 3.0), dir: Vec3::new(0.0, -0.0, 1.0), tmin: 0.5, tmax: f32::INFINITY },
         Ray::new(Vec3::splat(-1e5), Vec3::new(1e-30, 2.0, -3.0)),
     ];
-    let p = tmp("rt.bin");
+    let p = temp_dir("rays-round-trip").join("rt.bin");
     write_rays(&p, &rays).unwrap();
     let bytes = std::fs::read(&p).unwrap();
     assert_eq!(bytes.len(), 16 + 32 * 2);
@@ -61,7 +54,7 @@ fn bad_ray_files_give_one_line_errors() {
     huge.extend(u64::MAX.to_le_bytes());
     assert!(parse_rays(p, &huge).is_err());
     // The CLI reports it in one line and fails, whatever the mesh.
-    let f = tmp("trunc.bin");
+    let f = temp_dir("rays-bad").join("trunc.bin");
     std::fs::write(&f, &good[..40]).unwrap();
     let out = Command::new(common::wavepath_bin()).args(["rays", "trace", "nothing.obj"]).arg(&f).output().unwrap();
     assert!(!out.status.success());
@@ -142,8 +135,9 @@ fn cli_dump_and_trace_a_mesh() {
         eprintln!("skipped: the OBJ loader is not available yet");
         return;
     }
-    let rays = tmp("bunny_primary.bin");
-    let hits = tmp("bunny_hits.bin");
+    let dir = temp_dir("rays-cli");
+    let rays = dir.join("bunny_primary.bin");
+    let hits = dir.join("bunny_hits.bin");
     let bin = common::wavepath_bin();
     let st = Command::new(&bin)
         .args(["rays", "dump"])

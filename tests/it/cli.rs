@@ -1,13 +1,8 @@
 //! The command line end to end: the default render, output formats, and bad flags.
 
-mod common;
-
+use crate::common::{run_wavepath, temp_dir};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn run(args: &[&str]) -> Output {
-    Command::new(common::wavepath_bin()).args(args).output().expect("wavepath runs")
-}
+use std::process::Output;
 
 fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
@@ -38,9 +33,9 @@ fn read_pfm(path: &Path) -> (usize, usize, Vec<[f32; 3]>) {
 
 #[test]
 fn default_scene_normals_show_the_floor_and_walls() {
-    let dir = tempdir("normals");
+    let dir = temp_dir("cli-normals");
     let out = dir.join("n.pfm");
-    let o = run(&["--shading", "normals", "-r", "80", "60", "-f", out.to_str().unwrap()]);
+    let o = run_wavepath(&["--shading", "normals", "-r", "80", "60", "-f", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (w, h, px) = read_pfm(&out);
     assert_eq!((w, h), (80, 60));
@@ -62,12 +57,12 @@ fn default_scene_normals_show_the_floor_and_walls() {
 
 #[test]
 fn png_exr_and_stats_are_written() {
-    let dir = tempdir("formats");
+    let dir = temp_dir("cli-formats");
     let png = dir.join("a.png");
     let exr = dir.join("a.exr");
     let stats = dir.join("s.json");
     for f in [&png, &exr] {
-        let o = run(&[
+        let o = run_wavepath(&[
             "--shading",
             "normals",
             "-r",
@@ -98,9 +93,22 @@ fn png_exr_and_stats_are_written() {
 
 #[test]
 fn cell_renders_only_that_rectangle() {
-    let dir = tempdir("cell");
+    let dir = temp_dir("cli-cell");
     let out = dir.join("c.pfm");
-    let o = run(&["--shading", "normals", "-r", "40", "30", "-p", "10", "5", "20", "10", "-f", out.to_str().unwrap()]);
+    let o = run_wavepath(&[
+        "--shading",
+        "normals",
+        "-r",
+        "40",
+        "30",
+        "-p",
+        "10",
+        "5",
+        "20",
+        "10",
+        "-f",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (w, _, px) = read_pfm(&out);
     for (i, p) in px.iter().enumerate() {
@@ -116,7 +124,7 @@ fn cell_renders_only_that_rectangle() {
 /// Each bad flag gets exactly one line on stderr, naming the problem, and a non-zero exit.
 #[test]
 fn bad_flags_fail_with_one_line() {
-    let dir = tempdir("badflags");
+    let dir = temp_dir("cli-badflags");
     let cam = dir.join("cam.txt");
     std::fs::write(&cam, "1 2 three").unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
@@ -154,7 +162,7 @@ fn bad_flags_fail_with_one_line() {
             full = args.clone();
         }
         let refs: Vec<&str> = full.iter().map(|s| s.as_str()).collect();
-        let o = run(&refs);
+        let o = run_wavepath(&refs);
         let err = stderr(&o);
         assert!(!o.status.success(), "{args:?} succeeded");
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?} printed more than one line:\n{err}");
@@ -165,7 +173,7 @@ fn bad_flags_fail_with_one_line() {
 
 #[test]
 fn help_lists_every_cs184_flag() {
-    let o = run(&["--help"]);
+    let o = run_wavepath(&["--help"]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     for flag in [
@@ -198,10 +206,4 @@ fn help_lists_every_cs184_flag() {
         });
         assert!(listed, "--help lacks {flag}");
     }
-}
-
-fn tempdir(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("wavepath-cli-{}-{name}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
 }

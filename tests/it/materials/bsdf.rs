@@ -3,12 +3,10 @@
 //! perfect rough conductor), Fresnel choice frequencies for glass, and no NaN or Inf for any
 //! input.
 
+use crate::common::chi2::chi_square_with_missing;
 use glam::{DVec3, Vec3};
 use wavepath::bsdf::{Dielectric, Distribution, Lambert, Microfacet, Mirror, Model, fresnel_dielectric};
 use wavepath::sampling::Sampler;
-
-mod common;
-use common::chi2::chi_square_with_missing;
 
 fn wo_at(cos: f32, phi: f32) -> Vec3 {
     let s = (1.0 - cos * cos).max(0.0).sqrt();

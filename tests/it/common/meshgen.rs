@@ -1,5 +1,4 @@
-//! Meshes generated in code for the BVH tests.
-#![allow(dead_code)]
+//! Meshes generated in code.
 
 use glam::Vec3;
 use wavepath::scene::{Mesh, Scene, Sphere};
@@ -92,6 +91,16 @@ pub fn icosphere(freq: u32) -> Mesh {
     Mesh { positions, normals: None, uvs: None, triangles, material_ids }
 }
 
+/// Corners `c` in order as two triangles (c0 c1 c2, c0 c2 c3) of material `m`.
+pub fn quad(mesh: &mut Mesh, c: [Vec3; 4], m: u32) {
+    let base = mesh.positions.len() as u32;
+    mesh.positions.extend(c);
+    mesh.triangles.push([base, base + 1, base + 2]);
+    mesh.triangles.push([base, base + 2, base + 3]);
+    mesh.material_ids.extend([m, m]);
+}
+
+/// The default scene's materials, lights and camera with `mesh` and `spheres`.
 pub fn scene_of(mesh: Mesh, spheres: Vec<Sphere>) -> Scene {
     let mut s = wavepath::load::default_scene();
     s.mesh = mesh;

@@ -1,0 +1,11 @@
+//! Rendering: closed-form answers, the wavefront integrator against the recursive
+//! reference, effects and stages, environment maps, the thin lens, ray offsets and
+//! numerical stability.
+
+mod analytic;
+mod effects;
+mod envmap;
+mod lens;
+mod offsets;
+mod stability;
+mod wavefront;

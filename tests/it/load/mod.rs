@@ -1,0 +1,6 @@
+//! Scene loaders: COLLADA, OBJ, PLY and glTF, on the shared scenes and on hand-written
+//! files, and one scene written in three formats loading alike.
+
+mod collada;
+mod formats_agree;
+mod mesh_loaders;

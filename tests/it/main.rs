@@ -1,0 +1,14 @@
+//! The integration tests as one crate, so the library is linked into one test binary rather
+//! than one per file. A module per area, a file per subject; the big renders and ray counts
+//! that take seconds each sit in submodules named `slow`, so `cargo test --release -- --skip
+//! slow` is the quick loop and plain `cargo test --release` runs everything.
+
+mod accel;
+mod cli;
+mod common;
+mod integrator;
+mod load;
+mod materials;
+mod parts;
+mod sampling;
+mod study;

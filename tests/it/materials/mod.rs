@@ -1,0 +1,6 @@
+//! Materials: the BSDF models against their densities and physics, non-diffuse materials
+//! in renders, and albedo textures.
+
+mod bsdf;
+mod renders;
+mod textures;
