@@ -141,8 +141,8 @@ impl Bvh {
         &self.nodes
     }
 
-    fn dispatch_closest(&self, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
-        on_isa!(self, |t| traverse::closest_hit(self, t, ray, c))
+    fn dispatch_closest(&self, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit> {
+        on_isa!(self, |isa| traverse::closest_hit(self, isa, ray, counters))
     }
 
     fn tokens(&self) -> (Option<Sse>, Option<Avx2>) {
@@ -171,32 +171,32 @@ impl Intersector for Bvh {
         self.dispatch_closest(ray, counters)
     }
 
-    fn any_hit(&self, ray: &Ray, c: &mut TraceCounters) -> bool {
+    fn any_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> bool {
         if self.nodes.is_empty() {
-            c.rays += 1;
+            counters.rays += 1;
             return false;
         }
-        on_isa!(self, |t| traverse::any_hit(self, t, ray, c))
+        on_isa!(self, |isa| traverse::any_hit(self, isa, ray, counters))
     }
 
     fn name(&self) -> String {
         format!("bvh8 {}", self.isa.name())
     }
 
-    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
-        self.closest_batch(rays, hits, c)
+    fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], counters: &mut TraceCounters) {
+        self.closest_batch(rays, hits, counters)
     }
 
-    fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+    fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
         if self.nodes.is_empty() {
-            return self.any_hits(rays, occluded, c);
+            return self.any_hits(rays, occluded, counters);
         }
-        packet::any_hits(self, rays, occluded, c);
+        packet::any_hits(self, rays, occluded, counters);
     }
 
-    fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+    fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
         if self.nodes.is_empty() {
-            c.rays += rays.len() as u64;
+            counters.rays += rays.len() as u64;
             occluded.iter_mut().for_each(|o| *o = false);
             return;
         }
@@ -204,19 +204,19 @@ impl Intersector for Bvh {
         macro_rules! run {
             ($isa:expr) => {
                 for (r, o) in rays.iter().zip(occluded.iter_mut()) {
-                    *o = traverse::any_hit_with(self, $isa, r, c, &mut stack);
+                    *o = traverse::any_hit_with(self, $isa, r, counters, &mut stack);
                 }
             };
         }
-        on_isa!(self, |t| run!(t))
+        on_isa!(self, |isa| run!(isa))
     }
 }
 
 impl Bvh {
     /// Closest hits of a batch.
-    fn closest_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>], c: &mut TraceCounters) {
+    fn closest_batch(&self, rays: &[Ray], hits: &mut [Option<Hit>], counters: &mut TraceCounters) {
         if self.nodes.is_empty() {
-            c.rays += rays.len() as u64;
+            counters.rays += rays.len() as u64;
             hits.iter_mut().for_each(|h| *h = None);
             return;
         }
@@ -250,15 +250,15 @@ impl Bvh {
                         slot[n] = i as u8;
                         n += 1;
                     }
-                    c.rays += (rs.len() - n) as u64;
+                    counters.rays += (rs.len() - n) as u64;
                     hs.fill(None);
                     for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
                         let i = i as usize;
-                        hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, c, &mut stack);
+                        hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, counters, &mut stack);
                     }
                 }
             }};
         }
-        on_isa!(self, |t| run!(t))
+        on_isa!(self, |isa| run!(isa))
     }
 }

@@ -66,7 +66,7 @@ impl PacketTest for super::boxtest::Scalar {}
 
 /// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
-pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCounters) {
+pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
     let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need] };
     let mut single = traverse::BigStack::boxed();
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
@@ -77,15 +77,15 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], c: &mut TraceCou
             while i < rays.len() {
                 let n = run_len(&rays[i..]);
                 if n == 1 {
-                    occluded[i] = traverse::any_hit_with(bvh, $isa, &rays[i], c, &mut single);
+                    occluded[i] = traverse::any_hit_with(bvh, $isa, &rays[i], counters, &mut single);
                 } else {
-                    packet_any(bvh, $isa, &rays[i..i + n], &mut occluded[i..i + n], c, &mut stack);
+                    packet_any(bvh, $isa, &rays[i..i + n], &mut occluded[i..i + n], counters, &mut stack);
                 }
                 i += n;
             }
         }};
     }
-    on_isa!(bvh, |t| run!(t))
+    on_isa!(bvh, |isa| run!(isa))
 }
 
 /// The packet stack: node references and, per entry, the rays that entered it.
@@ -303,11 +303,11 @@ fn packet_any<B: PacketTest>(
     isa: B,
     rays: &[Ray],
     occluded: &mut [bool],
-    c: &mut TraceCounters,
+    counters: &mut TraceCounters,
     stack: &mut Stack,
 ) {
     let n = rays.len().min(PACKET);
-    c.rays += n as u64;
+    counters.rays += n as u64;
     let pb = isa.packet_box_rays(&rays[..n]);
     let live = pb.live;
     // The leaf set-up is made at the packet's first leaf (many rays never reach one).
@@ -387,8 +387,8 @@ fn packet_any<B: PacketTest>(
         cur = stack.nodes[sp];
         cur_rays = stack.masks[sp];
     }
-    c.nodes += visited;
-    c.prim_tests += tests;
+    counters.nodes += visited;
+    counters.prim_tests += tests;
     for (k, o) in occluded.iter_mut().enumerate().take(n) {
         *o = hit >> k & 1 != 0;
     }

@@ -88,11 +88,11 @@ impl Best {
 }
 
 #[inline(always)]
-pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> Option<Hit> {
+pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit> {
     if SmallStack::holds(bvh.stack_need) {
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut SmallStack::new())
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), counters, &mut SmallStack::new())
     } else {
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), c, &mut *BigStack::boxed())
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), counters, &mut *BigStack::boxed())
     }
 }
 
@@ -110,16 +110,20 @@ pub fn closest_hit_with<B: BoxTest, const N: usize>(
     isa: B,
     ray: &Ray,
     br: &BoxRay,
-    c: &mut TraceCounters,
+    counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> Option<Hit> {
     debug_assert!(Stack::<N>::holds(bvh.stack_need));
-    c.rays += 1;
+    counters.rays += 1;
     if !br.live {
         return None;
     }
     // The loop compiled once per form of the box test (no branch on it per node).
-    if br.fma { walk(bvh, isa, ray, br, true, c, stack) } else { walk(bvh, isa, ray, br, false, c, stack) }
+    if br.fma {
+        walk(bvh, isa, ray, br, true, counters, stack)
+    } else {
+        walk(bvh, isa, ray, br, false, counters, stack)
+    }
 }
 
 /// The loop of [`closest_hit_with`] for a live ray; `fma` is `br.fma`.
@@ -130,7 +134,7 @@ fn walk<B: BoxTest, const N: usize>(
     ray: &Ray,
     br: &BoxRay,
     fma: bool,
-    c: &mut TraceCounters,
+    counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> Option<Hit> {
     // The shear is set up at the first leaf: many rays never reach one.
@@ -160,12 +164,12 @@ fn walk<B: BoxTest, const N: usize>(
                 continue;
             }
         } else {
-            leaf_closest(bvh, isa, cur, sr.get_or_insert_with(|| ShearedRay::of(ray)), ray, &mut best, c);
+            leaf_closest(bvh, isa, cur, sr.get_or_insert_with(|| ShearedRay::of(ray)), ray, &mut best, counters);
         }
         // Pop the nearest pending child that can still hold something closer.
         loop {
             if sp == 0 {
-                c.nodes += visited;
+                counters.nodes += visited;
                 return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
             }
             sp -= 1;
@@ -235,9 +239,9 @@ pub(super) fn leaf_closest<B: BoxTest>(
     sr: &ShearedRay,
     ray: &Ray,
     best: &mut Best,
-    c: &mut TraceCounters,
+    counters: &mut TraceCounters,
 ) {
-    c.prim_tests += leaf_range(r).1 as u64;
+    counters.prim_tests += leaf_range(r).1 as u64;
     let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
@@ -259,11 +263,11 @@ fn sphere_hit(ray: &Ray, tmax: f32, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
 }
 
 #[inline(always)]
-pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, c: &mut TraceCounters) -> bool {
+pub fn any_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, counters: &mut TraceCounters) -> bool {
     if SmallStack::holds(bvh.stack_need) {
-        any_hit_with(bvh, isa, ray, c, &mut SmallStack::new())
+        any_hit_with(bvh, isa, ray, counters, &mut SmallStack::new())
     } else {
-        any_hit_with(bvh, isa, ray, c, &mut *BigStack::boxed())
+        any_hit_with(bvh, isa, ray, counters, &mut *BigStack::boxed())
     }
 }
 
@@ -277,17 +281,21 @@ pub fn any_hit_with<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
-    c: &mut TraceCounters,
+    counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> bool {
     debug_assert!(Stack::<N>::holds(bvh.stack_need));
     let br = &isa.box_ray(ray);
-    c.rays += 1;
+    counters.rays += 1;
     if !br.live {
         return false;
     }
     // The loop compiled once per form of the box test (no branch on it per node).
-    if br.fma { walk_any(bvh, isa, ray, br, true, c, stack) } else { walk_any(bvh, isa, ray, br, false, c, stack) }
+    if br.fma {
+        walk_any(bvh, isa, ray, br, true, counters, stack)
+    } else {
+        walk_any(bvh, isa, ray, br, false, counters, stack)
+    }
 }
 
 /// The loop of [`any_hit_with`] for a live ray; `fma` is `br.fma`.
@@ -298,7 +306,7 @@ fn walk_any<B: BoxTest, const N: usize>(
     ray: &Ray,
     br: &BoxRay,
     fma: bool,
-    c: &mut TraceCounters,
+    counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> bool {
     let mut sr = None;
@@ -338,8 +346,8 @@ fn walk_any<B: BoxTest, const N: usize>(
         sp -= 1;
         cur = stack.nodes[sp & Stack::<N>::MASK];
     };
-    c.nodes += visited;
-    c.prim_tests += tests;
+    counters.nodes += visited;
+    counters.prim_tests += tests;
     hit
 }
 
