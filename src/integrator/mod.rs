@@ -120,14 +120,15 @@ pub struct DirectRay {
 }
 
 impl<'a> Transport<'a> {
-    pub fn new(scene: &'a Scene, s: &Settings) -> Self {
+    pub fn new(scene: &'a Scene, settings: &Settings) -> Self {
         let lights = LightSet::new(scene);
         let models: Vec<crate::bsdf::Model> =
             scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect();
         let non_diffuse = models.iter().any(|m| m.kind() != crate::bsdf::Kind::Diffuse);
-        let max_depth = if s.shading == Shading::Direct { s.max_depth.min(1) } else { s.max_depth };
-        let light_samples = s.light_samples.max(1);
-        let direct_per_vertex = if s.hemisphere {
+        let max_depth =
+            if settings.shading == Shading::Direct { settings.max_depth.min(1) } else { settings.max_depth };
+        let light_samples = settings.light_samples.max(1);
+        let direct_per_vertex = if settings.hemisphere {
             // As the seed: as many hemisphere samples as light sampling would take for
             // area lights, lights x -l.
             (lights.lights.len() as u32 * light_samples).max(light_samples)
@@ -147,7 +148,7 @@ impl<'a> Transport<'a> {
             })
             .collect();
         Transport {
-            avx2: s.isa.avx2(),
+            avx2: settings.isa.avx2(),
             area_lights,
             shadow_margins,
             scene,
@@ -158,11 +159,11 @@ impl<'a> Transport<'a> {
             textures: Textures::new(scene),
             lights,
             max_depth,
-            accumulate: s.accumulate,
-            hemisphere: s.hemisphere,
+            accumulate: settings.accumulate,
+            hemisphere: settings.hemisphere,
             light_samples,
-            rr_continue: s.rr_continue.clamp(1e-3, 1.0),
-            seed: s.seed,
+            rr_continue: settings.rr_continue.clamp(1e-3, 1.0),
+            seed: settings.seed,
             direct_per_vertex,
             tan_half_fov: (
                 (scene.camera.hfov_deg.to_radians() * 0.5).tan(),

@@ -22,67 +22,73 @@ struct RowStats {
     shadow: u64,
 }
 
-struct PathCtx<'t, 'a> {
-    t: &'t Transport<'a>,
+struct PathTracer<'t, 'a> {
+    transport: &'t Transport<'a>,
     accel: &'t dyn Intersector,
     pixel: u32,
     sample: u32,
     st: RowStats,
 }
 
-impl PathCtx<'_, '_> {
+impl PathTracer<'_, '_> {
     fn radiance(&mut self, ray: &Ray) -> Vec3 {
         self.st.camera += 1;
         let Some(hit) = self.accel.closest_hit(ray, &mut self.st.trace) else {
-            return if self.t.counts_emission() { self.t.lights.background_toward(ray.dir) } else { Vec3::ZERO };
+            return if self.transport.counts_emission() {
+                self.transport.lights.background_toward(ray.dir)
+            } else {
+                Vec3::ZERO
+            };
         };
-        let v = self.t.vertex(ray, &hit);
-        let mut l = if self.t.counts_emission() { v.emission } else { Vec3::ZERO };
-        if self.t.max_depth >= 1 {
+        let v = self.transport.vertex(ray, &hit);
+        let mut l = if self.transport.counts_emission() { v.emission } else { Vec3::ZERO };
+        if self.transport.max_depth >= 1 {
             l += self.at_least_one_bounce(ray, &v, 0);
         }
         l
     }
 
     fn at_least_one_bounce(&mut self, ray: &Ray, v: &Vertex, depth: u32) -> Vec3 {
-        let rng = self.t.sampler(self.pixel, self.sample, depth);
+        let rng = self.transport.sampler(self.pixel, self.sample, depth);
         let mut l = Vec3::ZERO;
-        let sh = self.t.non_diffuse.then(|| self.t.shading(v, ray.dir));
-        if self.t.counts_direct(depth) {
-            let (t, accel) = (self.t, self.accel);
+        let sh = self.transport.non_diffuse.then(|| self.transport.shading(v, ray.dir));
+        if self.transport.counts_direct(depth) {
+            let (transport, accel) = (self.transport, self.accel);
             let mut shadow = 0;
             let mut trace = self.st.trace;
             let mut add = |d: DirectRay| {
                 shadow += 1;
-                if t.hemisphere {
+                if transport.hemisphere {
                     let hit = accel.closest_hit(&d.ray, &mut trace);
-                    l += d.weight * t.probe_radiance(&d.ray, hit.as_ref());
+                    l += d.weight * transport.probe_radiance(&d.ray, hit.as_ref());
                 } else if !accel.any_hit(&d.ray, &mut trace) {
                     l += d.weight;
                 }
             };
             match &sh {
-                Some(sh) => t.direct_rays_shaded(v, sh, rng, add),
-                None => t.direct_rays(v, rng, &mut add),
+                Some(sh) => transport.direct_rays_shaded(v, sh, rng, add),
+                None => transport.direct_rays(v, rng, &mut add),
             }
             self.st.trace = trace;
             self.st.shadow += shadow;
         }
         let next = match &sh {
-            Some(sh) => self.t.continuation_shaded(v, sh, depth, rng),
-            None => self.t.continuation(v, depth, rng).map(|(r, w)| (r, w, Bounce::DIFFUSE)),
+            Some(sh) => self.transport.continuation_shaded(v, sh, depth, rng),
+            None => self.transport.continuation(v, depth, rng).map(|(r, w)| (r, w, Bounce::DIFFUSE)),
         };
         if let Some((ray, w, bounce)) = next {
             self.st.extension += 1;
             match self.accel.closest_hit(&ray, &mut self.st.trace) {
                 Some(hit) => {
-                    let next = self.t.vertex(&ray, &hit);
-                    if self.t.non_diffuse {
-                        l += w * self.t.arrival(bounce, &ray, Some(&hit), next.emission, depth + 1);
+                    let next = self.transport.vertex(&ray, &hit);
+                    if self.transport.non_diffuse {
+                        l += w * self.transport.arrival(bounce, &ray, Some(&hit), next.emission, depth + 1);
                     }
                     l += w * self.at_least_one_bounce(&ray, &next, depth + 1);
                 }
-                None if self.t.non_diffuse => l += w * self.t.arrival(bounce, &ray, None, Vec3::ZERO, depth + 1),
+                None if self.transport.non_diffuse => {
+                    l += w * self.transport.arrival(bounce, &ray, None, Vec3::ZERO, depth + 1)
+                }
                 None => {}
             }
         }
@@ -94,14 +100,14 @@ impl PathCtx<'_, '_> {
 pub fn render_recursive(
     scene: &Scene,
     accel: &dyn Intersector,
-    s: &Settings,
+    settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
     let start = Instant::now();
-    let t = Transport::new(scene, s);
-    let (w, h) = (s.width, s.height);
-    let region = s.region();
-    let spp = s.spp.max(1);
+    let transport = Transport::new(scene, settings);
+    let (w, h) = (settings.width, settings.height);
+    let region = settings.region();
+    let spp = settings.spp.max(1);
     let mut acc = Accumulator::new(w, h);
     let rows: Vec<RowStats> = acc
         .pixels
@@ -113,19 +119,19 @@ pub fn render_recursive(
             for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
                 let pixel = (y * w + x) as u32;
                 let mut sums = PixelSums::default();
-                let (first, end) = s.sample_span();
+                let (first, end) = settings.sample_span();
                 for i in first..end {
-                    if let Some((b, tol)) = s.adaptive
+                    if let Some((b, tol)) = settings.adaptive
                         && i > first
                         && i.is_multiple_of(b)
                         && sums.converged(tol)
                     {
                         break;
                     }
-                    let ray = t.camera_ray(x as u32, y as u32, w, h, i, spp);
-                    let mut ctx = PathCtx { t: &t, accel, pixel, sample: i, st };
-                    let l = ctx.radiance(&ray);
-                    st = ctx.st;
+                    let ray = transport.camera_ray(x as u32, y as u32, w, h, i, spp);
+                    let mut tracer = PathTracer { transport: &transport, accel, pixel, sample: i, st };
+                    let l = tracer.radiance(&ray);
+                    st = tracer.st;
                     sums.add(l);
                 }
                 progress(sums.taken as u64);
@@ -143,6 +149,6 @@ pub fn render_recursive(
     }
     stats.render_s = start.elapsed().as_secs_f64();
     stats.invalid_samples = acc.invalid_samples();
-    stats.samples_per_pixel = acc.samples_taken_in(s.region());
+    stats.samples_per_pixel = acc.samples_taken_in(settings.region());
     (acc, stats)
 }
