@@ -12,7 +12,7 @@
 //! calls is `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
 
 use super::Features;
-use super::queues::{PathQueue, ShadowQueue};
+use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
 use crate::cpu::Avx2;
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
@@ -34,22 +34,17 @@ pub fn applies<F: Features>(t: &Transport) -> bool {
 
 /// [`super::shade::shade`] eight paths at a time when the CPU has AVX2 and FMA; `false` (and
 /// nothing done) when it has not.
-pub fn shade_lanes<F: Features>(
-    t: &Transport,
-    q: &mut PathQueue,
-    hits: &[Option<Hit>],
-    shadow: &mut ShadowQueue,
-) -> bool {
+pub fn shade_lanes<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) -> bool {
     #[cfg(target_arch = "x86_64")]
     if let Some(avx) = t.avx2 {
         crate::cpu::with_avx2(
             avx,
             #[inline(always)]
-            |avx| shade_groups::<F>(avx, t, q, hits, shadow),
+            |avx| shade_groups::<F>(avx, t, q, shadow),
         );
         return true;
     }
-    let _ = (t, q, hits, shadow);
+    let _ = (t, q, shadow);
     false
 }
 
@@ -240,16 +235,10 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
 /// at a time (hence the token).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features>(
-    avx: Avx2,
-    t: &Transport,
-    q: &mut PathQueue,
-    hits: &[Option<Hit>],
-    shadow: &mut ShadowQueue,
-) {
+fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
-    let n = q.len().min(hits.len());
+    let n = q.len();
     let mut pts = Points::default();
     let mut rays = Rays::default();
     let mut surf = Surfaces::default();
@@ -268,7 +257,7 @@ fn shade_groups<F: Features>(
             let i = base + j;
             let depth = q.depth[i];
             q.alive[i] = false;
-            let Some(hit) = hits[i] else {
+            let Some(hit) = q.hit[i] else {
                 if F::ENVIRONMENT && depth == 0 && sees_emission {
                     q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
                 }
@@ -319,7 +308,7 @@ fn shade_groups<F: Features>(
                 }
                 // Every candidate is stored; the cursor moves past the valid ones only.
                 let samples = &pending[..ns as usize];
-                let (rs, ws, os) = shadow.open(m * samples.len());
+                let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(m * samples.len());
                 let mut w = 0;
                 for j in 0..m {
                     if !direct[j] {
@@ -366,9 +355,9 @@ fn shade_groups<F: Features>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::{BruteForce, Intersector, TraceCounters};
+    use crate::accel::{BruteForce, TraceCounters};
     use crate::integrator::wavefront::generate::{Wave, generate};
-    use crate::integrator::wavefront::{Kernel, compact, shade};
+    use crate::integrator::wavefront::{Kernel, compact, shade, traverse};
     use crate::settings::{Settings, Shading};
 
     type K = Kernel<true, false, true, true, true, false>;
@@ -417,18 +406,16 @@ mod tests {
             let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
             let mut q = PathQueue::default();
             generate(&t, &mut q, &wave, 24, 18, 8);
-            let (mut hits, mut sl, mut ss) = (Vec::new(), ShadowQueue::default(), ShadowQueue::default());
+            let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
             let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
             let mut shadow_rays = 0;
             while !q.is_empty() {
-                hits.clear();
-                hits.resize(q.len(), None);
-                accel.closest_hits(&q.ray, &mut hits, &mut TraceCounters::default());
+                traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
                 let mut qs = q.clone();
-                if !shade_lanes::<K>(&t, &mut q, &hits, &mut sl) {
+                if !shade_lanes::<K>(&t, &mut q, &mut sl) {
                     return; // no AVX2 on this CPU: nothing to compare
                 }
-                shade::shade_scalar::<K>(&t, &mut qs, &hits, &mut ss);
+                shade::shade_scalar::<K>(&t, &mut qs, &mut ss);
                 assert_eq!(q.ray, qs.ray);
                 assert_eq!(q.throughput, qs.throughput);
                 assert_eq!(q.radiance, qs.radiance);

@@ -29,7 +29,6 @@ pub mod traverse;
 use crate::accel::{Intersector, TraceCounters};
 use crate::effects::Effects;
 use crate::film::{Accumulator, PixelSums};
-use crate::geometry::Hit;
 use crate::integrator::Transport;
 use crate::scene::Scene;
 use crate::settings::Settings;
@@ -114,7 +113,6 @@ macro_rules! with_kernel {
 #[derive(Default)]
 pub struct Local {
     pub paths: PathQueue,
-    pub hits: Vec<Option<Hit>>,
     pub shadow: ShadowQueue,
     occluded: Vec<bool>,
     slot_radiance: Vec<Vec3>,
@@ -244,13 +242,13 @@ fn run_wave<F: Features>(c: &Ctx, wave: &Wave, l: &mut Local, out: &mut [PixelSu
     l.slot_radiance.resize(n, Vec3::ZERO);
     let mut first = true;
     while !l.paths.is_empty() {
-        traverse::traverse(accel, &l.paths, &mut l.hits, &mut st.counters);
+        traverse::traverse(accel, &mut l.paths, &mut st.counters);
         if !first {
             st.extension += l.paths.len() as u64;
         }
         first = false;
         clock = lap(clock, &mut st.stages.traverse);
-        shade::shade::<F>(t, &mut l.paths, &l.hits, &mut l.shadow);
+        shade::shade::<F>(t, &mut l.paths, &mut l.shadow);
         clock = lap(clock, &mut st.stages.shade);
         if F::DIRECT {
             shadow::shadow(t, accel, &l.shadow, &mut l.occluded, &mut l.paths.radiance, &mut st.counters);

@@ -1,8 +1,7 @@
 //! Stage 3: at every hit, emission, the direct-light rays and the continuation ray.
 
 use super::Features;
-use super::queues::{PathQueue, ShadowQueue};
-use crate::geometry::Hit;
+use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
 use crate::integrator::Transport;
 use crate::sampling::Sampler;
 use glam::Vec3;
@@ -10,21 +9,21 @@ use glam::Vec3;
 /// Shades every path against its hit: adds emission (and the environment) seen by camera
 /// rays, appends the path's shadow rays (throughput applied), and replaces the path's ray by
 /// its continuation (`alive`, after Russian roulette) or ends it. Parts whose effect `F` leaves out are not compiled in.
-pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
-    if super::lanes::applies::<F>(t) && super::lanes::shade_lanes::<F>(t, q, hits, shadow) {
+pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
+    if super::lanes::applies::<F>(t) && super::lanes::shade_lanes::<F>(t, q, shadow) {
         return;
     }
-    shade_scalar::<F>(t, q, hits, shadow);
+    shade_scalar::<F>(t, q, shadow);
 }
 
 /// [`shade`] one path at a time (any features; the reference for the lane kernel).
-pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Option<Hit>], shadow: &mut ShadowQueue) {
+pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
     shadow.clear();
     let sees_emission = t.counts_emission();
-    for (i, hit) in hits.iter().enumerate().take(q.len()) {
+    for i in 0..q.len() {
         let depth = q.depth[i];
         q.alive[i] = false;
-        let Some(hit) = *hit else {
+        let Some(hit) = q.hit[i] else {
             if F::ENVIRONMENT && depth == 0 && sees_emission {
                 q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
             }
@@ -48,7 +47,9 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Optio
             let sh = t.shading(&v, q.ray[i].dir);
             if F::DIRECT && t.counts_direct(depth) {
                 let tp = q.throughput[i];
-                t.direct_rays_shaded(&v, &sh, rng, |d| shadow.push(d.ray, d.weight * tp, i as u32));
+                t.direct_rays_shaded(&v, &sh, rng, |d| {
+                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+                });
             }
             if F::INDIRECT
                 && let Some((next, w, bounce)) = t.scatter_shaded(&v, &sh, depth, rng)
@@ -64,7 +65,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, hits: &[Optio
         }
         if F::DIRECT && t.counts_direct(depth) {
             let tp = q.throughput[i];
-            t.direct_rays(&v, rng, |d| shadow.push(d.ray, d.weight * tp, i as u32));
+            t.direct_rays(&v, rng, |d| shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 }));
         }
         if F::INDIRECT
             && let Some((next, w)) = t.scatter(&v, depth, rng)

@@ -2,11 +2,9 @@
 
 use super::queues::PathQueue;
 use crate::accel::{Intersector, TraceCounters};
-use crate::geometry::Hit;
 
 /// Traces the whole path queue through the intersector's batch interface.
-pub fn traverse(accel: &dyn Intersector, paths: &PathQueue, hits: &mut Vec<Option<Hit>>, c: &mut TraceCounters) {
-    // Not cleared first: the intersector writes every entry.
-    hits.resize(paths.len(), None);
-    accel.closest_hits(&paths.ray, hits, c);
+pub fn traverse(accel: &dyn Intersector, paths: &mut PathQueue, c: &mut TraceCounters) {
+    // `hit` is not cleared first: the intersector writes every entry.
+    accel.closest_hits(&paths.ray, &mut paths.hit, c);
 }
