@@ -63,9 +63,6 @@ pub struct Transport<'a> {
     pub area_lights: Vec<Option<AreaLight>>,
     /// Per light: [`shadow_margin`] of its points.
     shadow_margins: Vec<f32>,
-    /// The AVX2 token when the settings' [`crate::cpu::Isa`] allows it and the CPU has it:
-    /// the kernels that run eight paths in lanes take it.
-    pub avx2: Option<crate::cpu::Avx2>,
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -148,7 +145,6 @@ impl<'a> Transport<'a> {
             })
             .collect();
         Transport {
-            avx2: settings.isa.avx2(),
             area_lights,
             shadow_margins,
             scene,

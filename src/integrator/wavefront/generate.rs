@@ -33,15 +33,23 @@ impl Wave<'_> {
 /// Fills the path queue with the wave's camera rays, in slot order. A pixel's samples are
 /// consecutive slots, so the pixel's coordinates and the pixel part of the path key
 /// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
-/// With a pinhole camera and AVX2, the rays of eight samples are set up lane-parallel
-/// (keys and jitters one by one, the directions' normalisations together).
-pub fn generate(t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+/// With `lanes` (a pinhole camera and AVX2: `super::Lanes`), the rays of eight samples are
+/// set up lane-parallel (keys and jitters one by one, the directions' normalisations together).
+pub fn generate(
+    t: &Transport,
+    lanes: Option<Avx2>,
+    q: &mut PathQueue,
+    wave: &Wave,
+    width: usize,
+    height: usize,
+    spp: u32,
+) {
     q.clear();
     let n = wave.len();
     q.ray.reserve(n);
     q.key.reserve(n);
     #[cfg(target_arch = "x86_64")]
-    if let (true, Some(avx)) = (t.pinhole(), t.avx2) {
+    if let Some(avx) = lanes {
         crate::cpu::with_avx2(
             avx,
             #[inline(always)]
@@ -121,16 +129,18 @@ mod tests {
             let t = Transport::new(&scene, &s);
             let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
             let wave = Wave { pixels: &pixels, base: 2, batch };
-            let mut q = PathQueue::default();
-            generate(&t, &mut q, &wave, w, h, spp);
-            assert_eq!(q.len(), wave.len());
-            for slot in 0..wave.len() as u32 {
-                let (pixel, sample) = wave.pixel_sample(slot);
-                let key = t.path_key(pixel, sample);
-                let (x, y) = (pixel % w as u32, pixel / w as u32);
-                assert_eq!(q.key[slot as usize], key);
-                assert_eq!(q.ray[slot as usize], t.camera_ray_keyed(x, y, w, h, key, spp), "slot {slot}");
-                assert_eq!(q.ray[slot as usize], t.camera_ray(x, y, w, h, sample, spp));
+            for lanes in [None, crate::cpu::Avx2::new()] {
+                let mut q = PathQueue::default();
+                generate(&t, lanes, &mut q, &wave, w, h, spp);
+                assert_eq!(q.len(), wave.len());
+                for slot in 0..wave.len() as u32 {
+                    let (pixel, sample) = wave.pixel_sample(slot);
+                    let key = t.path_key(pixel, sample);
+                    let (x, y) = (pixel % w as u32, pixel / w as u32);
+                    assert_eq!(q.key[slot as usize], key);
+                    assert_eq!(q.ray[slot as usize], t.camera_ray_keyed(x, y, w, h, key, spp), "slot {slot}");
+                    assert_eq!(q.ray[slot as usize], t.camera_ray(x, y, w, h, sample, spp));
+                }
             }
         }
     }

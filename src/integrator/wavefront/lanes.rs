@@ -26,26 +26,21 @@ use std::f32::consts::FRAC_1_PI;
 /// Paths per group.
 const L: usize = 8;
 
-/// Whether the lane kernel can shade this render's paths: no BSDF models, light sampling
-/// (not hemisphere probes) and nothing but area lights.
-pub fn applies<F: Features>(t: &Transport) -> bool {
-    !F::NON_DIFFUSE && !t.hemisphere && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
+/// Whether the lane kernel can shade this render's paths: Lambertian materials without
+/// textures, light sampling (not hemisphere probes) and nothing but area lights. Decided once
+/// per render, with the kernel (`super::Lanes`).
+pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
+    !non_diffuse && !t.hemisphere && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
 }
 
-/// [`super::shade::shade`] eight paths at a time when the CPU has AVX2 and FMA; `false` (and
-/// nothing done) when it has not.
-pub fn shade_lanes<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) -> bool {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = t.avx2 {
-        crate::cpu::with_avx2(
-            avx,
-            #[inline(always)]
-            |avx| shade_groups::<F>(avx, t, q, shadow),
-        );
-        return true;
-    }
-    let _ = (t, q, shadow);
-    false
+/// [`super::shade::shade`] eight paths at a time (for renders where [`can_shade`] holds).
+#[cfg(target_arch = "x86_64")]
+pub fn shade_lanes<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
+    crate::cpu::with_avx2(
+        avx,
+        #[inline(always)]
+        |avx| shade_groups::<F>(avx, t, q, shadow),
+    );
 }
 
 /// The shading points of a group, one array per component.
@@ -400,21 +395,20 @@ mod tests {
                 ..Settings::default()
             };
             let t = Transport::new(&scene, &s);
-            assert!(applies::<K>(&t));
+            assert!(can_shade(&t, K::NON_DIFFUSE));
+            let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
             let accel = BruteForce::new(&scene);
             let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
             let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
             let mut q = PathQueue::default();
-            generate(&t, &mut q, &wave, 24, 18, 8);
+            generate(&t, None, &mut q, &wave, 24, 18, 8);
             let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
             let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
             let mut shadow_rays = 0;
             while !q.is_empty() {
                 traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
                 let mut qs = q.clone();
-                if !shade_lanes::<K>(&t, &mut q, &mut sl) {
-                    return; // no AVX2 on this CPU: nothing to compare
-                }
+                shade_lanes::<K>(avx, &t, &mut q, &mut sl);
                 shade::shade_scalar::<K>(&t, &mut qs, &mut ss);
                 assert_eq!(q.ray, qs.ray);
                 assert_eq!(q.throughput, qs.throughput);

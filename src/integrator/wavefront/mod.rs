@@ -27,6 +27,7 @@ pub mod shadow;
 pub mod traverse;
 
 use crate::accel::{Intersector, TraceCounters};
+use crate::cpu::{Avx2, Isa};
 use crate::effects::Effects;
 use crate::film::{Accumulator, PixelSums};
 use crate::integrator::Transport;
@@ -109,9 +110,28 @@ macro_rules! with_kernel {
     };
 }
 
+/// Which stages run eight paths in lanes (AVX2), decided once per render beside the kernel:
+/// the token when the stage's lane kernel runs, `None` when its one-path-at-a-time kernel does.
+#[derive(Clone, Copy, Debug)]
+pub struct Lanes {
+    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers).
+    pub camera: Option<Avx2>,
+    /// Shading, eight paths at a time: see [`lanes::can_shade`].
+    pub shade: Option<Avx2>,
+}
+
+impl Lanes {
+    /// The lane kernels this render runs: those its scene allows, where the settings'
+    /// instruction set and the CPU have AVX2.
+    pub fn of(t: &Transport, effects: &Effects, isa: Isa) -> Lanes {
+        let avx2 = isa.avx2();
+        Lanes { camera: avx2.filter(|_| t.pinhole()), shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)) }
+    }
+}
+
 /// A worker thread's queues, reused by every wave it runs.
 #[derive(Default)]
-pub struct Local {
+pub struct WaveQueues {
     pub paths: PathQueue,
     pub shadow: ShadowQueue,
     occluded: Vec<bool>,
@@ -139,11 +159,13 @@ impl WaveStats {
     }
 }
 
-struct Ctx<'a, 's> {
-    t: Transport<'s>,
+/// Everything the waves of one render share.
+struct RenderJob<'a, 's> {
+    transport: Transport<'s>,
     accel: &'a dyn Intersector,
-    s: &'a Settings,
+    settings: &'a Settings,
     effects: Effects,
+    lanes: Lanes,
     progress: &'a (dyn Fn(u64) + Sync),
 }
 
@@ -151,21 +173,23 @@ struct Ctx<'a, 's> {
 pub fn render_wavefront(
     scene: &Scene,
     accel: &dyn Intersector,
-    s: &Settings,
+    settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
-    let effects = Effects::of(scene, s);
-    let c = Ctx { t: Transport::new(scene, s), accel, s, effects, progress };
-    let e = &c.effects;
+    let effects = Effects::of(scene, settings);
+    let transport = Transport::new(scene, settings);
+    let lanes = Lanes::of(&transport, &effects, settings.isa);
+    let job = RenderJob { transport, accel, settings, effects, lanes, progress };
+    let e = &job.effects;
     with_kernel!(
-        render_frames(&c),
+        render_frames(&job),
         [e.emission, e.environment, e.direct, e.indirect, e.russian_roulette, e.non_diffuse]
     )
 }
 
-fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
+fn render_frames<F: Features>(job: &RenderJob) -> (Accumulator, RenderStats) {
     let start = Instant::now();
-    let s = c.s;
+    let s = job.settings;
     let (w, h) = (s.width, s.height);
     let region = s.region();
     let mut acc = Accumulator::new(w, h);
@@ -176,7 +200,7 @@ fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
     // Forced on without -a, the bookkeeping runs with a tolerance no pixel meets.
     let adaptive = match s.adaptive {
         Some(a) => Some(a),
-        None if c.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
+        None if job.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
         None => None,
     };
     let mut partial: Vec<PixelSums> = Vec::new();
@@ -195,10 +219,10 @@ fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
         let frame = partial
             .par_chunks_mut(per_wave)
             .zip(active.par_chunks(per_wave))
-            .map_init(Local::default, |local, (out, pixels)| {
+            .map_init(WaveQueues::default, |queues, (out, pixels)| {
                 let wave = Wave { pixels, base: n, batch };
-                let st = run_wave::<F>(c, &wave, local, out);
-                (c.progress)(wave.len() as u64);
+                let st = run_wave::<F>(job, &wave, queues, out);
+                (job.progress)(wave.len() as u64);
                 st
             })
             .reduce(WaveStats::default, WaveStats::sum);
@@ -230,43 +254,43 @@ fn render_frames<F: Features>(c: &Ctx) -> (Accumulator, RenderStats) {
 
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
 /// then each pixel's samples (in slot order) into `out`.
-fn run_wave<F: Features>(c: &Ctx, wave: &Wave, l: &mut Local, out: &mut [PixelSums]) -> WaveStats {
-    let (t, accel, s) = (&c.t, c.accel, c.s);
+fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: &mut [PixelSums]) -> WaveStats {
+    let (t, accel, s) = (&job.transport, job.accel, job.settings);
     let mut st = WaveStats::default();
     let n = wave.len();
     let clock = Instant::now();
-    generate::generate(t, &mut l.paths, wave, s.width, s.height, s.spp.max(1));
+    generate::generate(t, job.lanes.camera, &mut q.paths, wave, s.width, s.height, s.spp.max(1));
     st.camera = n as u64;
     let mut clock = lap(clock, &mut st.stages.generate);
-    l.slot_radiance.clear();
-    l.slot_radiance.resize(n, Vec3::ZERO);
+    q.slot_radiance.clear();
+    q.slot_radiance.resize(n, Vec3::ZERO);
     let mut first = true;
-    while !l.paths.is_empty() {
-        traverse::traverse(accel, &mut l.paths, &mut st.counters);
+    while !q.paths.is_empty() {
+        traverse::traverse(accel, &mut q.paths, &mut st.counters);
         if !first {
-            st.extension += l.paths.len() as u64;
+            st.extension += q.paths.len() as u64;
         }
         first = false;
         clock = lap(clock, &mut st.stages.traverse);
-        shade::shade::<F>(t, &mut l.paths, &mut l.shadow);
+        shade::shade::<F>(t, job.lanes.shade, &mut q.paths, &mut q.shadow);
         clock = lap(clock, &mut st.stages.shade);
         if F::DIRECT {
-            shadow::shadow(t, accel, &l.shadow, &mut l.occluded, &mut l.paths.radiance, &mut st.counters);
-            st.shadow += l.shadow.len() as u64;
+            shadow::shadow(t, accel, &q.shadow, &mut q.occluded, &mut q.paths.radiance, &mut st.counters);
+            st.shadow += q.shadow.len() as u64;
             clock = lap(clock, &mut st.stages.shadow);
         }
         if F::INDIRECT {
-            compact::compact(&mut l.paths, &mut l.slot_radiance);
+            compact::compact(&mut q.paths, &mut q.slot_radiance);
             clock = lap(clock, &mut st.stages.compact);
         } else {
             // Every path ended at its first hit, still in slot order.
-            std::mem::swap(&mut l.slot_radiance, &mut l.paths.radiance);
-            l.paths.clear();
+            std::mem::swap(&mut q.slot_radiance, &mut q.paths.radiance);
+            q.paths.clear();
         }
     }
     let batch = wave.batch as usize;
     for (j, p) in out.iter_mut().enumerate() {
-        for r in &l.slot_radiance[j * batch..(j + 1) * batch] {
+        for r in &q.slot_radiance[j * batch..(j + 1) * batch] {
             p.add(*r);
         }
     }

@@ -2,6 +2,7 @@
 
 use super::Features;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
+use crate::cpu::Avx2;
 use crate::integrator::Transport;
 use crate::sampling::Sampler;
 use glam::Vec3;
@@ -9,10 +10,14 @@ use glam::Vec3;
 /// Shades every path against its hit: adds emission (and the environment) seen by camera
 /// rays, appends the path's shadow rays (throughput applied), and replaces the path's ray by
 /// its continuation (`alive`, after Russian roulette) or ends it. Parts whose effect `F` leaves out are not compiled in.
-pub fn shade<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
-    if super::lanes::applies::<F>(t) && super::lanes::shade_lanes::<F>(t, q, shadow) {
+/// `lanes`: the token of the eight-path kernel when this render uses it (`super::Lanes`).
+pub fn shade<F: Features>(t: &Transport, lanes: Option<Avx2>, q: &mut PathQueue, shadow: &mut ShadowQueue) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = lanes {
+        super::lanes::shade_lanes::<F>(avx, t, q, shadow);
         return;
     }
+    let _ = lanes;
     shade_scalar::<F>(t, q, shadow);
 }
 
