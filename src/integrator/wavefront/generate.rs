@@ -50,11 +50,8 @@ pub fn generate(
     q.key.reserve(n);
     #[cfg(target_arch = "x86_64")]
     if let Some(avx) = lanes {
-        crate::cpu::with_avx2(
-            avx,
-            #[inline(always)]
-            |avx| pinhole_lanes(avx, t, q, wave, width, height, spp),
-        );
+        // SAFETY: the token proves the CPU has AVX2 and FMA.
+        unsafe { pinhole_lanes(avx, t, q, wave, width, height, spp) };
         q.start_camera_paths(n);
         return;
     }
@@ -77,7 +74,7 @@ const L: usize = 8;
 /// The pinhole camera's rays of the wave, eight samples of a pixel at a time; the same rays
 /// as [`Transport::camera_ray_keyed`] (the same functions, per lane).
 #[cfg(target_arch = "x86_64")]
-#[inline(always)]
+#[target_feature(enable = "avx2,fma")]
 fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
