@@ -21,27 +21,16 @@ const LAYERS: &[&[&str]] = &[
 /// Module path (`["accel", "bvh", "traverse"]`) -> its source without comments and unit tests.
 fn modules(src: &Path) -> BTreeMap<Vec<String>, String> {
     let mut out = BTreeMap::new();
-    let mut dirs = vec![src.to_path_buf()];
-    while let Some(dir) = dirs.pop() {
-        for entry in std::fs::read_dir(&dir).unwrap() {
-            let path = entry.unwrap().path();
-            if path.is_dir() {
-                dirs.push(path);
-                continue;
-            }
-            if path.extension().is_none_or(|e| e != "rs") {
-                continue;
-            }
-            let rel = path.strip_prefix(src).unwrap().with_extension("");
-            let mut name: Vec<String> = rel.iter().map(|c| c.to_string_lossy().into_owned()).collect();
-            if name.last().is_some_and(|n| n == "mod") {
-                name.pop();
-            }
-            if name == ["lib"] || name == ["main"] || name.first().is_some_and(|n| n == "cli") {
-                continue; // the crate roots and the binary's own modules
-            }
-            out.insert(name, code_of(&std::fs::read_to_string(&path).unwrap()));
+    for path in crate::common::files_with_ext(src, &["rs"]) {
+        let rel = path.strip_prefix(src).unwrap().with_extension("");
+        let mut name: Vec<String> = rel.iter().map(|c| c.to_string_lossy().into_owned()).collect();
+        if name.last().is_some_and(|n| n == "mod") {
+            name.pop();
         }
+        if name == ["lib"] || name == ["main"] || name.first().is_some_and(|n| n == "cli") {
+            continue; // the crate roots and the binary's own modules
+        }
+        out.insert(name, code_of(&std::fs::read_to_string(&path).unwrap()));
     }
     out
 }
@@ -62,7 +51,7 @@ fn code_of(text: &str) -> String {
 
 /// The modules `code` (of module `from`) names: for each `crate::a::b` or `super::b` path,
 /// its longest prefix that is a module of `known`.
-fn uses(from: &[String], is_dir: bool, code: &str, known: &BTreeSet<Vec<String>>) -> BTreeSet<Vec<String>> {
+fn uses(from: &[String], code: &str, known: &BTreeSet<Vec<String>>) -> BTreeSet<Vec<String>> {
     let mut found = BTreeSet::new();
     let bytes = code.as_bytes();
     for start in [&b"crate::"[..], &b"super::"[..]] {
@@ -96,7 +85,6 @@ fn uses(from: &[String], is_dir: bool, code: &str, known: &BTreeSet<Vec<String>>
                 } else {
                     // `super` in `a/b.rs` and in `a/b/mod.rs` is `a`.
                     base = from.to_vec();
-                    let _ = is_dir;
                     while rest.first() == Some(&"super") {
                         base.pop();
                         rest = &rest[1..];
@@ -132,8 +120,7 @@ fn edges() -> Vec<(Vec<String>, Vec<String>)> {
     let known: BTreeSet<Vec<String>> = mods.keys().cloned().collect();
     let mut out = Vec::new();
     for (name, code) in &mods {
-        let is_dir = src.join(name.join("/")).is_dir();
-        for used in uses(name, is_dir, code, &known) {
+        for used in uses(name, code, &known) {
             if &used != name {
                 out.push((name.clone(), used));
             }

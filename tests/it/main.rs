@@ -7,6 +7,8 @@ mod accel;
 mod cli;
 mod common;
 mod integrator;
+mod isa;
+mod layers;
 mod load;
 mod materials;
 mod parts;
