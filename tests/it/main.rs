@@ -1,7 +1,7 @@
 //! The integration tests as one crate, so the library is linked into one test binary rather
 //! than one per file. A module per area, a file per subject; the big renders and ray counts
-//! that take seconds each sit in submodules named `slow`, so `cargo test --release -- --skip
-//! slow` is the quick loop and plain `cargo test --release` runs everything.
+//! that take seconds each sit in submodules named `slow`, so `cargo test --profile quick --
+//! --skip slow` is the edit loop and plain `cargo test --release` runs everything.
 
 mod accel;
 mod cli;
