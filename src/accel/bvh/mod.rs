@@ -55,6 +55,8 @@ pub struct Bvh {
     blocks: Vec<leaf::Tri4>,
     stack_need: usize,
     isa: Isa,
+    /// The kernel tokens `isa` allows, made once (not per ray).
+    tokens: (Option<Sse>, Option<Avx2>),
     /// The quick test of batched closest-hit rays (None: every ray is traversed).
     root: Option<RootBox>,
     info: BuildInfo,
@@ -118,6 +120,7 @@ impl Bvh {
             blocks: leaves.blocks,
             stack_need: WIDTH_STACK * (depth + 1),
             isa: Isa::detect(),
+            tokens: tokens_of(Isa::detect()),
             info,
         }
     }
@@ -125,6 +128,7 @@ impl Bvh {
     /// The same tree with another box-test path (falls back to what the CPU has).
     pub fn with_isa(mut self, isa: Isa) -> Bvh {
         self.isa = isa.effective();
+        self.tokens = tokens_of(isa);
         self
     }
 
@@ -145,13 +149,15 @@ impl Bvh {
         on_isa!(self, |isa| traverse::closest_hit(self, isa, ray, counters))
     }
 
+    #[inline(always)]
     fn tokens(&self) -> (Option<Sse>, Option<Avx2>) {
-        match self.isa {
-            Isa::Scalar => (None, None),
-            Isa::Sse => (Sse::new(), None),
-            Isa::Avx2 | Isa::Avx512 => (Sse::new(), Avx2::new()),
-        }
+        self.tokens
     }
+}
+
+/// The tokens of the box-test paths `isa` allows on this CPU.
+fn tokens_of(isa: Isa) -> (Option<Sse>, Option<Avx2>) {
+    (isa.sse(), isa.avx2())
 }
 
 /// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
