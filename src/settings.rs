@@ -66,6 +66,9 @@ pub struct Settings {
     /// The widest SIMD instruction set the kernels may use (`--isa`); every set gives the
     /// same image, so this only changes speed.
     pub isa: crate::cpu::Isa,
+    /// The CS184 course renderer's biased area-light pdf (`--cs184-light-pdf`): see
+    /// [`SampledLight::Area`](crate::lights::SampledLight::Area).
+    pub cs184_light_pdf: bool,
 }
 
 impl Default for Settings {
@@ -89,6 +92,7 @@ impl Default for Settings {
             sample_range: None,
             all_effects: false,
             isa: crate::cpu::Isa::default(),
+            cs184_light_pdf: false,
         }
     }
 }

@@ -10,7 +10,7 @@ blue right wall, white elsewhere, an emissive quad of radiance 10 under the ceil
 tall rotated box and an icosahedron. All three files give the same triangles in the same order
 (OBJ quads are fan-triangulated (v0,v1,v2),(v0,v2,v3) by the loader; the other two files
 spell out those triangles), the same materials and the same camera: the one that
-`Camera::framing(lo, hi, 4/3)` (src/scene/camera.rs) gives the camera-less OBJ.
+`Camera::framing(lo, hi)` (src/scene/camera.rs) gives the camera-less OBJ, fitted to 4:3.
 
 * glTF: the tall box is stored in its local frame under a node with translation + rotation,
   so that loading exercises node flattening; its world positions equal the other files'.
@@ -134,12 +134,24 @@ def bounds(objs):
 
 
 def framing_camera(lo, hi, aspect=4.0 / 3.0):
-    """src/scene/camera.rs Camera::framing, in double precision."""
+    """src/scene/camera.rs Camera::framing (40 degrees across the shorter side, which is the
+    vertical one at 4:3) and three_quarter_view, in double precision."""
     center = scale(add(lo, hi), 0.5)
     radius = max(0.5 * math.sqrt(dot(sub(hi, lo), sub(hi, lo))), 1e-6)
     vfov = 40.0
     dist = radius / math.sin(math.radians(vfov) * 0.5) * 1.05
-    d = norm((0.0, 0.25, 1.0))
+    ext = sub(hi, lo)
+    area = (ext[1] * ext[2], ext[0] * ext[2], ext[0] * ext[1])
+    large = lambda a: a >= 0.5 * max(area)
+    az, el = math.radians(30.0), math.radians(20.0)
+    if large(area[2]):
+        d = (math.sin(az) * math.cos(el), math.sin(el), math.cos(az) * math.cos(el))
+    elif large(area[0]):
+        d = (math.cos(az) * math.cos(el), math.sin(el), math.sin(az) * math.cos(el))
+    else:
+        el = math.radians(50.0)
+        d = (math.sin(az) * math.cos(el), math.sin(el), math.cos(az) * math.cos(el))
+    d = norm(d)
     eye = add(center, scale(d, dist))
     back = norm(sub(eye, center))
     right = norm(cross((0.0, 1.0, 0.0), back))

@@ -1,6 +1,6 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use super::choices::{Camera, Integrator, Shading, Split, Tonemap};
+use super::choices::{Camera, Fov, Integrator, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::cpu::Isa;
@@ -146,6 +146,15 @@ pub struct RenderArgs {
     /// COLLADA camera framing: cs184 (the reference renderer's placement) or the file's camera.
     #[arg(long, value_enum, default_value_t = Camera::Cs184)]
     pub camera: Camera,
+    /// How a COLLADA camera's field of view follows -r (other files keep theirs).
+    #[arg(long, value_enum, default_value_t = Fov::Cs184)]
+    pub fov: Fov,
+    /// The CS184 course renderer's area-light pdf, dist / (area cos) instead of
+    /// dist^2 / (area cos): every light-sampled area-light estimate is multiplied by the
+    /// distance to the light point. Wrong, but it is what renderers built on the course
+    /// skeleton show (about 1.4x brighter Cornell boxes); for comparing with them.
+    #[arg(long)]
+    pub cs184_light_pdf: bool,
     /// Force every effect (stage and kernel feature) on, even those the scene does not need;
     /// the image is the same, only slower: for measuring what specialisation saves.
     #[arg(long)]

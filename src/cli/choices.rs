@@ -92,3 +92,27 @@ choice! {
         Adaptive,
     }
 }
+
+/// How a CS184 camera's field of view follows `-r` (a command-line choice only: it picks
+/// between [`Camera::fit_to`] as loaded and [`Camera::whole_frame`] first).
+///
+/// [`Camera::fit_to`]: wavepath::scene::Camera::fit_to
+/// [`Camera::whole_frame`]: wavepath::scene::Camera::whole_frame
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Fov {
+    /// The reference renderer's rule: its 800x600 picture's angle per pixel, so `-r W H` shows
+    /// the centre W x H window of that picture (more than it beyond 800x600).
+    Cs184,
+    /// The whole 800x600 picture at any resolution (its vertical field kept).
+    Frame,
+}
+
+impl Fov {
+    /// Fits `cam` to a `width x height` image by this rule.
+    pub fn apply(self, cam: &mut wavepath::scene::Camera, width: usize, height: usize) {
+        if self == Fov::Frame {
+            cam.whole_frame();
+        }
+        cam.fit_to(width as f32, height as f32);
+    }
+}

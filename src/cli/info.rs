@@ -16,6 +16,8 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         scene.env = Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
     }
     let load_s = t0.elapsed().as_secs_f64();
+    // The camera as a render at the default resolution sees it.
+    scene.camera.fit_to(800.0, 600.0);
     let effects = Effects::of(&scene, &Settings::default());
     let text =
         if a.json { format!("{}\n", summary_json(&scene, &effects, load_s)) } else { text(&scene, &effects, load_s) };
@@ -87,7 +89,7 @@ fn text(scene: &Scene, effects: &Effects, load_s: f64) -> String {
     }
     let _ = writeln!(
         o,
-        "camera:     at {:?} looking {:?}, fov {:.3} x {:.3} deg, clip [{}, {}]",
+        "camera:     at {:?} looking {:?}, fov {:.3} x {:.3} deg at 800x600, clip [{}, {}]",
         c.position, -c.c2w.z_axis, c.hfov_deg, c.vfov_deg, c.nclip, c.fclip
     );
     let _ = writeln!(o, "lights:     {}", scene.lights.len());

@@ -20,7 +20,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     if let Some(c) = &a.camera_file {
         scene.camera = read_camera_file(c)?;
     }
-    scene.camera.fit_aspect(s.width as f32 / s.height as f32);
+    a.fov.apply(&mut scene.camera, s.width, s.height);
     if let Some(b) = a.lens_radius {
         scene.camera.lens_radius = b as f32;
     }

@@ -25,6 +25,10 @@ pub struct StudyArgs {
     /// The setting to sweep.
     #[arg(long, value_enum)]
     pub sweep: Sweep,
+    /// How a COLLADA camera's field of view follows -r; default: the whole 800x600 picture
+    /// (a study's small renders would otherwise show the centre of it only).
+    #[arg(long, value_enum, default_value_t = super::choices::Fov::Frame)]
+    pub fov: super::choices::Fov,
     /// Resolution of every render (small: a study renders many images).
     #[arg(short = 'r', num_args = 2, value_names = ["W", "H"], default_values_t = [64, 48])]
     pub resolution: Vec<i64>,
@@ -111,11 +115,11 @@ pub fn run(a: &StudyArgs) -> Result<()> {
         Some(p) => load(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
         None => default_scene(),
     };
-    scene.camera.fit_aspect(cfg.base.width as f32 / cfg.base.height as f32);
+    a.fov.apply(&mut scene.camera, cfg.base.width, cfg.base.height);
     let identity = wavepath::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
-    let camera_label = format!("{:?}", CameraMode::from(a.camera));
+    let camera_label = format!("{:?} {:?}", CameraMode::from(a.camera), a.fov);
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
     let result = wavepath::render::with_threads(cfg.base.threads, || -> Result<_> {

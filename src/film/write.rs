@@ -6,10 +6,11 @@ use std::path::Path;
 /// How linear radiance becomes 8-bit PNG values.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Tonemap {
-    /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1).
+    /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1), truncated to
+    /// 8 bits as the reference writes its bytes.
     #[default]
     Cs184,
-    /// Plain sRGB encoding of clamp(L, 0, 1).
+    /// Plain sRGB encoding of clamp(L, 0, 1), rounded to the nearest 8-bit level.
     Srgb,
 }
 
@@ -23,6 +24,17 @@ impl Tonemap {
                 let l = l.min(1.0);
                 if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 }
             }
+        }
+    }
+
+    /// The 8-bit value of linear radiance `l`: the reference truncates (`(uint8_t)(v * 255)`),
+    /// so `cs184` reproduces its bytes; `srgb` rounds, as image encoders do.
+    #[inline]
+    pub fn byte(self, l: f32) -> u8 {
+        let v = self.apply(l) * 255.0;
+        match self {
+            Tonemap::Cs184 => v as u8,
+            Tonemap::Srgb => (v + 0.5) as u8,
         }
     }
 }
@@ -49,10 +61,7 @@ pub fn write_image(film: &Film, path: &Path, tonemap: Tonemap) -> Result<()> {
     };
     let result = match ext.as_str() {
         "png" => {
-            let data: Vec<u8> = top_down(&|p| [tonemap.apply(p.x), tonemap.apply(p.y), tonemap.apply(p.z)])
-                .into_iter()
-                .map(|v| (v * 255.0 + 0.5) as u8)
-                .collect();
+            let data: Vec<u8> = top_down(&|p| [p.x, p.y, p.z]).into_iter().map(|v| tonemap.byte(v)).collect();
             let img = image::RgbImage::from_raw(w, h, data).context("image size mismatch")?;
             img.save_with_format(&tmp, image::ImageFormat::Png).map_err(anyhow::Error::from)
         }

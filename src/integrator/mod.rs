@@ -118,7 +118,10 @@ pub struct DirectRay {
 
 impl<'a> Transport<'a> {
     pub fn new(scene: &'a Scene, settings: &Settings) -> Self {
-        let lights = LightSet::new(scene);
+        let mut lights = LightSet::new(scene);
+        if settings.cs184_light_pdf {
+            lights.use_cs184_area_pdf();
+        }
         let models: Vec<crate::bsdf::Model> =
             scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect();
         let non_diffuse = models.iter().any(|m| m.kind() != crate::bsdf::Kind::Diffuse);
@@ -138,7 +141,9 @@ impl<'a> Transport<'a> {
             .iter()
             .zip(&shadow_margins)
             .map(|(l, &margin)| match *l {
-                SampledLight::Area { position, normal, dim_x, dim_y, area, .. } => {
+                // The fast path computes the correct estimator only; the biased one goes
+                // through the general light sample.
+                SampledLight::Area { position, normal, dim_x, dim_y, area, cs184_pdf: false, .. } => {
                     Some(AreaLight { position, normal, dim_x, dim_y, area, margin })
                 }
                 _ => None,

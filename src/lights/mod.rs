@@ -40,6 +40,10 @@ pub enum SampledLight {
         exponent: f32,
         intensity: Vec3,
     },
+    /// `cs184_pdf`: use the course renderer's pdf, `dist / (area cos)` instead of
+    /// `dist^2 / (area cos)`. Its skeleton takes the light-side cosine from the unnormalised
+    /// vector to the light point, so every light-sampled estimate it makes is the correct
+    /// one times that distance; kept only to compare with renderers built on it.
     Area {
         position: Vec3,
         normal: Vec3,
@@ -47,6 +51,7 @@ pub enum SampledLight {
         dim_y: Vec3,
         area: f32,
         radiance: Vec3,
+        cs184_pdf: bool,
     },
     /// Light from infinity (hemisphere light, constant environment, environment map).
     Infinite(Infinite),
@@ -98,11 +103,12 @@ impl SampledLight {
                 let falloff = if exponent > 0.0 { c.max(0.0).powf(exponent) } else { 1.0 };
                 Some(LightSample { wi, target: Some(position), weight: intensity * falloff })
             }
-            SampledLight::Area { position, normal, dim_x, dim_y, area, radiance } => {
+            SampledLight::Area { position, normal, dim_x, dim_y, area, radiance, cs184_pdf } => {
                 let q = position + (u[0] - 0.5) * dim_x + (u[1] - 0.5) * dim_y;
                 // One-sided: the light emits toward `normal`, so it must face the point.
                 let (wi, inv_pdf) = area_to_solid_angle(p, q, normal, area, true)?;
-                Some(LightSample { wi, target: Some(q), weight: radiance * inv_pdf })
+                let bias = if cs184_pdf { (q - p).length() } else { 1.0 };
+                Some(LightSample { wi, target: Some(q), weight: radiance * (inv_pdf * bias) })
             }
             SampledLight::Infinite(ref inf) => inf.sample(n, [u[0], u[1]]),
             SampledLight::Emissive(ref e) => e.sample(p, u),
@@ -145,10 +151,11 @@ impl SampledLight {
     #[inline]
     pub fn sample_pdf(&self, p: Vec3, n: Vec3, u: [f32; 3]) -> Option<(LightSample, f32)> {
         match *self {
-            SampledLight::Area { normal, area, .. } => {
+            SampledLight::Area { normal, area, cs184_pdf, .. } => {
                 let ls = self.sample(p, n, u)?;
                 let dist2 = (ls.target? - p).length_squared();
-                Some((ls, dist2 / (-ls.wi.dot(normal) * area)))
+                let d = if cs184_pdf { dist2.sqrt() } else { dist2 };
+                Some((ls, d / (-ls.wi.dot(normal) * area)))
             }
             SampledLight::Infinite(ref inf) => {
                 let ls = inf.sample(n, [u[0], u[1]])?;
@@ -168,7 +175,7 @@ impl SampledLight {
     #[inline]
     pub fn radiance_pdf(&self, p: Vec3, n: Vec3, wi: Vec3, seen: Seen) -> Option<(Vec3, f32)> {
         match *self {
-            SampledLight::Area { position, normal, dim_x, dim_y, area, radiance } => {
+            SampledLight::Area { position, normal, dim_x, dim_y, area, radiance, cs184_pdf } => {
                 let cos_l = -wi.dot(normal);
                 if cos_l <= 0.0 {
                     return None;
@@ -189,7 +196,7 @@ impl SampledLight {
                 {
                     return None;
                 }
-                let pdf = t * t / (cos_l * area);
+                let pdf = if cs184_pdf { t } else { t * t } / (cos_l * area);
                 pdf.is_finite().then_some((radiance, pdf))
             }
             SampledLight::Infinite(ref inf) => match seen {
@@ -273,7 +280,15 @@ impl LightSet {
                     if let Some(normal) = direction.try_normalize()
                         && area > 0.0
                     {
-                        lights.push(SampledLight::Area { position, normal, dim_x, dim_y, area, radiance });
+                        lights.push(SampledLight::Area {
+                            position,
+                            normal,
+                            dim_x,
+                            dim_y,
+                            area,
+                            radiance,
+                            cs184_pdf: false,
+                        });
                     }
                 }
             }
@@ -295,6 +310,15 @@ impl LightSet {
             lights.push(SampledLight::Emissive(e));
         }
         LightSet { lights, infinite, background }
+    }
+
+    /// Switches every area light to the CS184 course renderer's biased pdf.
+    pub fn use_cs184_area_pdf(&mut self) {
+        for l in &mut self.lights {
+            if let SampledLight::Area { cs184_pdf, .. } = l {
+                *cs184_pdf = true;
+            }
+        }
     }
 
     /// What a camera ray that misses everything sees looking toward `dir` (unit).
@@ -333,6 +357,7 @@ mod tests {
             dim_y: Vec3::Z * 0.02,
             area: 0.0004,
             radiance: Vec3::splat(5.0),
+            cs184_pdf: false,
         };
         let mut s = Sampler::for_sample(1, 0, 0);
         let mut e = 0.0f64;

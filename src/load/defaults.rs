@@ -1,6 +1,6 @@
 //! The embedded default scene and the defaults given to files that carry no camera or light.
 
-use crate::scene::{Camera, Light, Material, Mesh, Scene, Sphere};
+use crate::scene::{Camera, FovFit, Light, Material, Mesh, Scene, Sphere};
 use glam::{Vec3, vec3};
 
 /// Gives a mesh-only file (OBJ, PLY, glTF without camera or lights) a camera that frames
@@ -8,7 +8,7 @@ use glam::{Vec3, vec3};
 /// `wavepath bunny.obj` shows the shape.
 pub fn finish_mesh_only(scene: &mut Scene, has_camera: bool) {
     if !has_camera && let Some((lo, hi)) = scene.bounds() {
-        scene.camera = Camera::framing(lo, hi, 4.0 / 3.0);
+        scene.camera = Camera::framing(lo, hi);
     }
     let emits = scene.materials.iter().any(|m| m.is_emissive());
     if scene.lights.is_empty() && !emits {
@@ -72,7 +72,8 @@ pub fn default_scene() -> Scene {
         vfov_deg: 2.0 * (24.567f32.to_radians().tan() / (4.0 / 3.0)).atan().to_degrees(),
         ..Camera::default()
     };
-    camera.fit_aspect(4.0 / 3.0);
+    camera.fit = FovFit::cs184(49.134_34, camera.vfov_deg);
+    camera.fit_to(800.0, 600.0);
     camera.cs184_place(Vec3::Z, lo, hi);
     scene.camera = camera;
     scene

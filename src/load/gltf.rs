@@ -273,9 +273,10 @@ fn make_camera(cam: &gltf::Camera, world: &Mat4) -> Result<Camera, String> {
         nclip: p.znear(),
         fclip: p.zfar().unwrap_or(1e30),
         lens_radius: 0.0,
-        focal_distance: 1.0,
+        focal_distance: crate::scene::CS184_FOCAL_DISTANCE,
+        fit: crate::scene::FovFit::Vertical,
     };
-    camera.fit_aspect(p.aspect_ratio().unwrap_or(4.0 / 3.0));
+    camera.fit_to(p.aspect_ratio().unwrap_or(4.0 / 3.0), 1.0);
     Ok(camera)
 }
 

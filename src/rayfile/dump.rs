@@ -8,10 +8,10 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 /// Camera rays through pixel centres, row-major from the bottom-left (as the renderer
-/// generates them), with the camera fitted to the image aspect.
+/// generates them), with the camera fitted to the image by its own rule.
 pub fn primary_rays(scene: &Scene, w: usize, h: usize) -> Vec<Ray> {
     let mut cam = scene.camera;
-    cam.fit_aspect(w as f32 / h as f32);
+    cam.fit_to(w as f32, h as f32);
     (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);

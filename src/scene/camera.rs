@@ -16,6 +16,37 @@ pub struct Camera {
     /// Thin-lens aperture radius; 0 is a pinhole.
     pub lens_radius: f32,
     pub focal_distance: f32,
+    /// How the fields of view follow the image size ([`fit_to`](Self::fit_to)).
+    pub fit: FovFit,
+}
+
+/// The rule that turns a camera's field of view into the one of a `W x H` image. Formats
+/// disagree here, and a picture matches its source only with the source's rule.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum FovFit {
+    /// The vertical field stays, the horizontal one follows the aspect (glTF's `yfov`).
+    Vertical,
+    /// The horizontal field stays (a COLLADA `xfov` taken as the file's own camera).
+    Horizontal,
+    /// The field given spans the shorter side of the image, so a framing made for it holds
+    /// in landscape and portrait pictures alike (the automatic camera).
+    ShorterSide,
+    /// The CS184 reference renderer: it fits the field once to its 800x600 start-up window
+    /// and keeps the angle per pixel, so `W x H` is the centre window of that picture (wider
+    /// beyond 800x600). `tan_half_600` is the tangent of half the vertical field at 600 rows.
+    Cs184 { tan_half_600: f32 },
+    /// Both fields as written, whatever the image size (a `-c` camera settings file, as the
+    /// reference uses it).
+    AsWritten,
+}
+
+impl FovFit {
+    /// The CS184 rule for a file's optics: whichever of its angles is too narrow for the
+    /// 4:3 start-up window is widened, `t = max(tan(vfov/2), 0.75 tan(hfov/2))`.
+    pub fn cs184(hfov_deg: f32, vfov_deg: f32) -> FovFit {
+        let half_tan = |deg: f32| (deg.to_radians() * 0.5).tan();
+        FovFit::Cs184 { tan_half_600: half_tan(vfov_deg).max(0.75 * half_tan(hfov_deg)) }
+    }
 }
 
 impl Default for Camera {
@@ -39,30 +70,69 @@ impl Camera {
             nclip: 0.01,
             fclip: 1e30,
             lens_radius: 0.0,
-            focal_distance: 1.0,
+            focal_distance: CS184_FOCAL_DISTANCE,
+            fit: FovFit::Vertical,
         };
-        cam.fit_aspect(aspect);
+        cam.fit_to(aspect, 1.0);
         cam
     }
 
-    /// Keeps the vertical field of view and sets the horizontal one for an image of this
-    /// aspect (width / height), as the reference renderer does when the window is sized.
-    pub fn fit_aspect(&mut self, aspect: f32) {
-        let half_v = (self.vfov_deg.to_radians() * 0.5).tan();
-        self.hfov_deg = 2.0 * (half_v * aspect).atan().to_degrees();
+    /// Sets both fields of view for a `width x height` image by the camera's [`FovFit`].
+    /// Only the ratio matters, except for the CS184 rule, which counts pixels.
+    pub fn fit_to(&mut self, width: f32, height: f32) {
+        let half_tan = |deg: f32| (deg.to_radians() * 0.5).tan();
+        let from_tan = |t: f32| 2.0 * t.atan().to_degrees();
+        let aspect = width / height;
+        match self.fit {
+            FovFit::Vertical => self.hfov_deg = from_tan(half_tan(self.vfov_deg) * aspect),
+            FovFit::Horizontal => self.vfov_deg = from_tan(half_tan(self.hfov_deg) / aspect),
+            FovFit::ShorterSide => {
+                // The field is stored in vfov_deg until the first fit tells the sides apart.
+                let t = half_tan(self.vfov_deg.min(self.hfov_deg));
+                let (th, tv) = if aspect >= 1.0 { (t * aspect, t) } else { (t, t / aspect) };
+                (self.hfov_deg, self.vfov_deg) = (from_tan(th), from_tan(tv));
+            }
+            FovFit::Cs184 { tan_half_600: t } => {
+                self.hfov_deg = from_tan(width * t / 600.0);
+                self.vfov_deg = from_tan(height * t / 600.0);
+            }
+            FovFit::AsWritten => {}
+        }
     }
 
-    /// A camera that frames the axis-aligned box `lo..hi` from the +Z side and a little
-    /// above, for files that carry no camera (OBJ, PLY).
-    pub fn framing(lo: Vec3, hi: Vec3, aspect: f32) -> Self {
+    /// Fits the camera to an image of this aspect (width / height) showing its whole frame:
+    /// [`whole_frame`](Self::whole_frame), then [`fit_to`](Self::fit_to). For small renders
+    /// of CS184 scenes that should show what the 800x600 picture shows.
+    pub fn fit_aspect(&mut self, aspect: f32) {
+        self.whole_frame();
+        self.fit_to(aspect, 1.0);
+    }
+
+    /// The CS184 rule turned into "the whole 800x600 picture at any size": the vertical
+    /// field of the 800x600 picture, kept at every resolution (`--fov frame`). Other rules
+    /// are left as they are.
+    pub fn whole_frame(&mut self) {
+        if let FovFit::Cs184 { tan_half_600 } = self.fit {
+            self.vfov_deg = 2.0 * tan_half_600.atan().to_degrees();
+            self.fit = FovFit::Vertical;
+        }
+    }
+
+    /// A camera for a file that carries none: it sees a large face of the bounds at three
+    /// quarters ([`three_quarter_view`]), the bounding sphere filling 95% of a 40-degree
+    /// field across the shorter image side, clip planes around the sphere and the focus on
+    /// its centre. Anywhere, at any scale: all of it is relative to the bounds.
+    pub fn framing(lo: Vec3, hi: Vec3) -> Self {
         let center = 0.5 * (lo + hi);
-        let radius = (0.5 * (hi - lo).length()).max(1e-6);
-        let vfov: f32 = 40.0;
-        let dist = radius / (vfov.to_radians() * 0.5).sin() * 1.05;
-        let dir = Vec3::new(0.0, 0.25, 1.0).normalize();
-        let mut cam = Camera::look_at(center + dir * dist, center, Vec3::Y, vfov, aspect);
+        let radius = (0.5 * (hi - lo).length()).max(1e-6 * center.abs().max_element()).max(f32::MIN_POSITIVE);
+        let fov: f32 = 40.0;
+        let dist = radius / (fov.to_radians() * 0.5).sin() * 1.05;
+        let dir = three_quarter_view(hi - lo);
+        let mut cam = Camera::look_at(center + dir * dist, center, Vec3::Y, fov, 1.0);
+        cam.fit = FovFit::ShorterSide;
         cam.nclip = (dist - radius).max(dist * 1e-4) * 0.5;
         cam.fclip = (dist + radius) * 2.0;
+        cam.focal_distance = dist;
         cam
     }
 
@@ -86,6 +156,27 @@ impl Camera {
         let screen_up = to_camera.cross(right).normalize();
         self.position = target + to_camera;
         self.c2w = Mat3::from_cols(right, screen_up, to_camera.normalize());
+    }
+
+    /// Widens the clip range so that it covers the box `lo..hi` (the reference keeps the
+    /// file's range after moving the camera, which can leave a whole scene beyond the far
+    /// plane). Returns a line for the log when it changed anything.
+    pub fn cover_bounds(&mut self, lo: Vec3, hi: Vec3) -> Option<String> {
+        let (near, far) = distance_range(self.position, lo, hi);
+        let (old_n, old_f) = (self.nclip, self.fclip);
+        if far >= self.fclip {
+            self.fclip = far * 1.01 + f32::EPSILON * self.position.abs().max_element();
+        }
+        if near > 0.0 && near <= self.nclip {
+            self.nclip = near * 0.5;
+        }
+        ((old_n, old_f) != (self.nclip, self.fclip)).then(|| {
+            format!(
+                "the camera's clip range [{old_n}, {old_f}] does not cover the scene seen from where it was placed \
+                 (distances {near} to {far}); widened to [{}, {}]",
+                self.nclip, self.fclip
+            )
+        })
     }
 
     /// Direction (not normalised) through the image point `(x, y)` in [0,1]^2, bottom-left origin.
@@ -140,6 +231,36 @@ impl Camera {
         }
         Ok(())
     }
+}
+
+/// The reference renderer's default focal distance of the thin lens.
+pub const CS184_FOCAL_DISTANCE: f32 = 4.7;
+
+/// The direction from a box's centre toward the camera that sees a large face of the box at
+/// three quarters. A face at least half as large as the largest counts as large; among those
+/// the front (+Z) is preferred, then the side (+X), then the top (+Y), since Y-up models face
+/// +Z. The view is 30 degrees to the side of the face's normal and 20 degrees above it (50
+/// degrees above the top face, which is seen from above).
+fn three_quarter_view(extent: Vec3) -> Vec3 {
+    let area = Vec3::new(extent.y * extent.z, extent.x * extent.z, extent.x * extent.y);
+    let large = |a: f32| a >= 0.5 * area.max_element();
+    let (az, el) = (30f32.to_radians(), 20f32.to_radians());
+    let d = if large(area.z) {
+        Vec3::new(az.sin() * el.cos(), el.sin(), az.cos() * el.cos())
+    } else if large(area.x) {
+        Vec3::new(az.cos() * el.cos(), el.sin(), az.sin() * el.cos())
+    } else {
+        let el = 50f32.to_radians();
+        Vec3::new(az.sin() * el.cos(), el.sin(), az.cos() * el.cos())
+    };
+    d.normalize()
+}
+
+/// The nearest and farthest distance from `p` to the box `lo..hi` (0 when inside).
+fn distance_range(p: Vec3, lo: Vec3, hi: Vec3) -> (f32, f32) {
+    let nearest = p.clamp(lo, hi);
+    let farthest = Vec3::select(p.cmplt(0.5 * (lo + hi)), hi, lo);
+    ((nearest - p).length(), (farthest - p).length())
 }
 
 fn any_perpendicular(v: Vec3) -> Vec3 {

@@ -3,8 +3,13 @@
 //! Lines: `hFov vFov ar nClip fClip`, `pos.xyz target.xyz`, `phi theta r minR maxR`,
 //! `c2w` (9 numbers, row-major), optionally `screenW screenH screenDist` and
 //! `focalDistance lensRadius`.
+//!
+//! Read as the reference renderer reads it: both fields of view as written (not re-fitted
+//! to the image), the position and `c2w`; the screen size, screen distance, target and angles
+//! do not affect the picture, and the lens values are not taken from the file (`-b`/`-d` or
+//! their defaults replace them).
 
-use super::Camera;
+use super::{CS184_FOCAL_DISTANCE, Camera, FovFit};
 use anyhow::{Context, Result, bail};
 use glam::{Mat3, Vec3};
 use std::path::Path;
@@ -35,12 +40,17 @@ pub fn parse_camera_settings(text: &str) -> Result<Camera> {
     let m = &nums[16..25];
     // Row-major in the file; glam matrices are column-major.
     let c2w = Mat3::from_cols(Vec3::new(m[0], m[3], m[6]), Vec3::new(m[1], m[4], m[7]), Vec3::new(m[2], m[5], m[8]));
-    let mut cam =
-        Camera { position, c2w, hfov_deg: hfov, vfov_deg: vfov, nclip, fclip, lens_radius: 0.0, focal_distance: 1.0 };
-    if nums.len() >= 30 {
-        cam.focal_distance = nums[28];
-        cam.lens_radius = nums[29];
-    }
+    let cam = Camera {
+        position,
+        c2w,
+        hfov_deg: hfov,
+        vfov_deg: vfov,
+        nclip,
+        fclip,
+        lens_radius: 0.0,
+        focal_distance: CS184_FOCAL_DISTANCE,
+        fit: FovFit::AsWritten,
+    };
     cam.validate().map_err(|e| anyhow::anyhow!(e))?;
     Ok(cam)
 }
@@ -98,7 +108,10 @@ mod tests {
         assert!((back.position - cam.position).length() < 1e-5);
         assert!((back.c2w.z_axis - cam.c2w.z_axis).length() < 1e-5);
         assert!((back.hfov_deg - cam.hfov_deg).abs() < 1e-4);
-        assert_eq!(back.lens_radius, 0.05);
+        assert!((back.vfov_deg - cam.vfov_deg).abs() < 1e-4);
+        // The lens is not the file's: -b/-d or the reference's defaults replace it.
+        assert_eq!((back.lens_radius, back.focal_distance), (0.0, CS184_FOCAL_DISTANCE));
+        assert_eq!(back.fit, FovFit::AsWritten);
     }
 
     #[test]

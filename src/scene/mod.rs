@@ -13,12 +13,12 @@ mod normals;
 pub mod surface;
 pub mod texture;
 
-pub use camera::Camera;
+pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit};
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
 pub use envmap::EnvMap;
 pub use material::{Bsdf, Material, Texture};
 pub use mesh::{Mesh, Sphere};
-pub use normals::area_weighted_vertex_normals;
+pub use normals::{area_weighted_vertex_normals, cs184_vertex_normals};
 pub use surface::SurfacePoint;
 pub use texture::Textures;
 

@@ -35,7 +35,8 @@ fn read_pfm(path: &Path) -> (usize, usize, Vec<[f32; 3]>) {
 fn default_scene_normals_show_the_floor_and_walls() {
     let dir = temp_dir("cli-normals");
     let out = dir.join("n.pfm");
-    let o = run_wavepath(&["--shading", "normals", "-r", "80", "60", "-f", out.to_str().unwrap()]);
+    // The whole 800x600 picture, small (the CS184 rule would show its centre 80x60 only).
+    let o = run_wavepath(&["--shading", "normals", "--fov", "frame", "-r", "80", "60", "-f", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (w, h, px) = read_pfm(&out);
     assert_eq!((w, h), (80, 60));

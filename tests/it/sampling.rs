@@ -123,6 +123,7 @@ fn area_light_sampling_matches_its_pdf() {
         dim_y: dy,
         area: dx.length() * dy.length(),
         radiance,
+        cs184_pdf: false,
     };
     let (c, nn, ddx, ddy) = (center.as_dvec3(), normal.as_dvec3(), dx.as_dvec3(), dy.as_dvec3());
     let pdf = move |d: DVec3| rect_pdf(DVec3::ZERO, c, nn, ddx, ddy, d);

@@ -2,7 +2,7 @@
 
 use super::xml::{Doc, child, path};
 use crate::load::CameraMode;
-use crate::scene::Camera;
+use crate::scene::{Camera, FovFit};
 use anyhow::Result;
 use glam::{Mat3, Mat4, Vec3, Vec4};
 use roxmltree::Node;
@@ -14,6 +14,8 @@ const DEFAULT_ASPECT: f32 = 4.0 / 3.0;
 pub struct Optics {
     hfov_deg: f32,
     vfov_deg: f32,
+    /// The file gives `xfov` (the horizontal angle is the one it means).
+    has_xfov: bool,
     znear: f32,
     zfar: f32,
 }
@@ -50,25 +52,30 @@ pub fn optics(d: &Doc, cam: Node) -> Result<Optics> {
     if znear < 0.0 || zfar <= znear {
         return Err(d.err(persp, format!("clip range znear={znear} zfar={zfar} is empty")));
     }
-    Ok(Optics { hfov_deg, vfov_deg, znear, zfar })
+    Ok(Optics { hfov_deg, vfov_deg, has_xfov: xfov.is_some(), znear, zfar })
 }
 
 /// Places the camera. `w` is the camera node's world matrix with the axis conversion,
-/// `bounds` the scene's (for the CS184 placement).
-pub fn place(o: &Optics, w: Mat4, mode: CameraMode, (lo, hi): (Vec3, Vec3)) -> Camera {
+/// `bounds` the scene's (for the CS184 placement). Returns a line for the log when the
+/// CS184 placement had to widen the file's clip range to see the scene.
+pub fn place(o: &Optics, w: Mat4, mode: CameraMode, (lo, hi): (Vec3, Vec3)) -> (Camera, Option<String>) {
     let mut cam =
         Camera { hfov_deg: o.hfov_deg, vfov_deg: o.vfov_deg, nclip: o.znear, fclip: o.zfar, ..Camera::default() };
+    let mut note = None;
     match mode {
         CameraMode::Cs184 => {
             // The reference's quirk: the point one unit in front of the camera, as a point.
             let d = (w * Vec4::new(0.0, 0.0, -1.0, 1.0)).truncate();
             cam.cs184_place(d.normalize_or_zero(), lo, hi);
+            cam.fit = FovFit::cs184(o.hfov_deg, o.vfov_deg);
+            note = cam.cover_bounds(lo, hi);
         }
         CameraMode::File => {
+            cam.fit = if o.has_xfov { FovFit::Horizontal } else { FovFit::Vertical };
             cam.position = w.transform_point3(Vec3::ZERO);
             let axis = |v: Vec3, fallback: Vec3| w.transform_vector3(v).try_normalize().unwrap_or(fallback);
             cam.c2w = Mat3::from_cols(axis(Vec3::X, Vec3::X), axis(Vec3::Y, Vec3::Y), axis(Vec3::Z, Vec3::Z));
         }
     }
-    cam
+    (cam, note)
 }

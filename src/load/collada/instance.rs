@@ -3,14 +3,15 @@
 
 use super::geometry::{Corner, LocalMesh, NONE};
 use super::transform::normal_matrix;
-use crate::scene::{Mesh, area_weighted_vertex_normals};
+use crate::scene::{Mesh, area_weighted_vertex_normals, cs184_vertex_normals};
 use glam::{Mat4, Vec2, Vec3};
 use std::collections::HashMap;
 
 /// The world-space mesh of one geometry instance.
 ///
-/// `smooth`: area-weighted vertex normals over the whole instance (the reference renderer's
-/// choice), else the file's normals where it has them. `material_of_group[g]` is the
+/// `smooth`: the reference renderer's vertex normals over the whole instance
+/// ([`cs184_vertex_normals`]; area-weighted where it would refuse the mesh), else the file's
+/// normals where it has them. `material_of_group[g]` is the
 /// material of the triangles of group `g`.
 pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[u32]) -> Mesh {
     let positions: Vec<Vec3> = local.positions.iter().map(|&p| world.transform_point3(p)).collect();
@@ -18,7 +19,10 @@ pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[
     let file_normals = !smooth && local.corners.iter().any(|c| c.n != NONE);
     let has_uvs = local.corners.iter().any(|c| c.t != NONE);
     // Smooth normals are also the fallback for corners the file gives no usable normal.
-    let smooth_n = area_weighted_vertex_normals(&positions, &pos_tris);
+    let smooth_n = smooth
+        .then(|| cs184_vertex_normals(&positions, &pos_tris))
+        .flatten()
+        .unwrap_or_else(|| area_weighted_vertex_normals(&positions, &pos_tris));
     let mut material_ids = Vec::with_capacity(pos_tris.len());
     for (g, &m) in local.groups.iter().zip(material_of_group) {
         material_ids.extend(std::iter::repeat_n(m, g.triangles));

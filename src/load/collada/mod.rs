@@ -86,7 +86,8 @@ struct Builder<'d, 'a, 'input> {
     mats: Materials,
     /// Parsed geometries by element, so instancing one twice reads it once.
     geometries: HashMap<NodeId, Geometry>,
-    /// The first camera met: its optics and world matrix (conversion included).
+    /// The last camera met (the reference renderer uses the last one): its optics and world
+    /// matrix (conversion included).
     camera: Option<(camera::Optics, Mat4)>,
 }
 
@@ -115,7 +116,7 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
                 "instance_camera" => {
                     let cam = d.resolve(c, "url", &["camera"])?;
                     let optics = camera::optics(d, cam)?;
-                    self.camera.get_or_insert((optics, w));
+                    self.camera = Some((optics, w));
                 }
                 _ => {}
             }
@@ -162,8 +163,14 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
             bail!("{name}: the scene has no triangles and no spheres");
         };
         self.scene.camera = match &self.camera {
-            Some((optics, w)) => camera::place(optics, *w, self.opts.camera, bounds),
-            None => Camera::framing(bounds.0, bounds.1, 4.0 / 3.0),
+            Some((optics, w)) => {
+                let (cam, note) = camera::place(optics, *w, self.opts.camera, bounds);
+                if let Some(note) = note {
+                    eprintln!("note: {name}: {note}");
+                }
+                cam
+            }
+            None => Camera::framing(bounds.0, bounds.1),
         };
         self.scene.validate().map_err(|e| anyhow!("{name}: {e}"))?;
         Ok(self.scene)

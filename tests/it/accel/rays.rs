@@ -69,7 +69,7 @@ fn primary_rays_follow_the_renderer_camera() {
     let rays = primary_rays(&scene, w, h);
     assert_eq!(rays.len(), w * h);
     let mut cam = scene.camera;
-    cam.fit_aspect(w as f32 / h as f32);
+    cam.fit_to(w as f32, h as f32);
     // Row-major from the bottom-left pixel centre.
     assert_eq!(rays[0], cam.generate_ray(0.5 / w as f32, 0.5 / h as f32));
     assert_eq!(rays[w + 3], cam.generate_ray(3.5 / w as f32, 1.5 / h as f32));

@@ -390,7 +390,7 @@ fn unbound_symbol_gets_a_default_material_and_no_camera_gets_a_framing() {
     let m = &s.materials[s.mesh.material_ids[0] as usize];
     assert_eq!(m.bsdf, Bsdf::Diffuse { albedo: Vec3::splat(0.5) });
     let (lo, hi) = s.bounds().unwrap();
-    assert!(close(s.camera.position, wavepath::scene::Camera::framing(lo, hi, 4.0 / 3.0).position, 0.0));
+    assert!(close(s.camera.position, wavepath::scene::Camera::framing(lo, hi).position, 0.0));
 }
 
 // ---------------------------------------------------------------------------------------
