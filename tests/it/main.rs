@@ -6,6 +6,7 @@
 mod accel;
 mod cli;
 mod common;
+mod cs184;
 mod integrator;
 mod isa;
 mod layers;
