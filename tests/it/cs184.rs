@@ -29,15 +29,14 @@ fn file_camera(path: &Path) -> FileCamera {
     let text = std::fs::read_to_string(path).unwrap();
     let doc = roxmltree::Document::parse(&text).unwrap();
     let named = |n: &roxmltree::Node, tag: &str| n.tag_name().name() == tag;
-    let z_up = doc.descendants().find(|n| named(n, "up_axis")).and_then(|n| n.text()).is_some_and(|t| t.trim() == "Z_UP");
+    let z_up =
+        doc.descendants().find(|n| named(n, "up_axis")).and_then(|n| n.text()).is_some_and(|t| t.trim() == "Z_UP");
     let node = doc
         .descendants()
-        .filter(|n| named(n, "node") && n.children().any(|c| named(&c, "instance_camera")))
-        .last()
+        .rfind(|n| named(n, "node") && n.children().any(|c| named(&c, "instance_camera")))
         .expect("a camera node");
-    let numbers = |n: roxmltree::Node| -> Vec<f64> {
-        n.text().unwrap().split_whitespace().map(|t| t.parse().unwrap()).collect()
-    };
+    let numbers =
+        |n: roxmltree::Node| -> Vec<f64> { n.text().unwrap().split_whitespace().map(|t| t.parse().unwrap()).collect() };
     let m = numbers(node.children().find(|c| named(c, "matrix")).unwrap());
     let url = node.children().find(|c| named(c, "instance_camera")).unwrap().attribute("url").unwrap();
     let cam = doc.descendants().find(|n| named(n, "camera") && n.attribute("id") == Some(&url[1..])).unwrap();
@@ -268,13 +267,17 @@ fn files_without_a_camera_see_their_largest_face() {
     let cases: [(&str, Mesh, Vec3); 3] = [
         ("yz", grid(&|u, v| vec3(0.0, 2.0 * u, 3.0 * v)), Vec3::X),
         ("xz", grid(&|u, v| vec3(3.0 * u, 0.0, 2.0 * v)), Vec3::Y),
-        ("far", {
-            let mut m = icosphere(2);
-            for p in &mut m.positions {
-                *p = *p * 2.0 + vec3(2e5, -5e4, 3e5);
-            }
-            m
-        }, Vec3::Z),
+        (
+            "far",
+            {
+                let mut m = icosphere(2);
+                for p in &mut m.positions {
+                    *p = *p * 2.0 + vec3(2e5, -5e4, 3e5);
+                }
+                m
+            },
+            Vec3::Z,
+        ),
     ];
     for (name, mesh, face) in cases {
         let path = dir.join(format!("{name}.obj"));
@@ -312,7 +315,8 @@ fn a_clip_that_no_longer_covers_the_scene_is_widened() {
     assert!(farthest > 1000.0, "the test scene must lie beyond the file's far clip ({farthest})");
     assert!(scene.camera.fclip > farthest, "far clip {} < {farthest}", scene.camera.fclip);
     let out = dir.join("n.pfm");
-    let o = run_wavepath(&[path.to_str().unwrap(), "--shading", "normals", "-r", "64", "48", "-f", out.to_str().unwrap()]);
+    let o =
+        run_wavepath(&[path.to_str().unwrap(), "--shading", "normals", "-r", "64", "48", "-f", out.to_str().unwrap()]);
     assert!(o.status.success());
     let log = String::from_utf8_lossy(&o.stderr);
     let notes: Vec<&str> = log.lines().filter(|l| l.contains("widened")).collect();
@@ -360,7 +364,8 @@ fn half_edge_normals_as_the_reference_computes_them() {
     let a = cs184_vertex_normals(&ico.positions, &ico.triangles).unwrap();
     let b = wavepath::scene::area_weighted_vertex_normals(&ico.positions, &ico.triangles);
     assert!(a.iter().zip(&b).all(|(x, y)| (*x - *y).length() < 1e-5));
-    let fin = [vec3(0.0, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, -1.0, 0.0), vec3(0.0, 0.0, 1.0)];
+    let fin =
+        [vec3(0.0, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, -1.0, 0.0), vec3(0.0, 0.0, 1.0)];
     assert!(cs184_vertex_normals(&fin, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).is_none());
 }
 
@@ -426,10 +431,7 @@ fn png_bytes_truncate_for_cs184_and_round_for_srgb() {
     assert!(radiances.len() == 300);
     let film = Film { width: radiances.len(), height: 1, pixels: radiances.iter().map(|&l| Vec3::splat(l)).collect() };
     let dir = temp_dir("cs184-bytes");
-    for (tonemap, want) in [
-        (Tonemap::Cs184, &f64::floor as &dyn Fn(f64) -> f64),
-        (Tonemap::Srgb, &f64::round),
-    ] {
+    for (tonemap, want) in [(Tonemap::Cs184, &f64::floor as &dyn Fn(f64) -> f64), (Tonemap::Srgb, &f64::round)] {
         let out = dir.join(format!("{tonemap:?}.png"));
         write_image(&film, &out, tonemap).unwrap();
         let img = image::open(&out).unwrap().to_rgb8();
