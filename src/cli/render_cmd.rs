@@ -52,6 +52,12 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
     }
+    if s.cs184_light_pdf {
+        eprintln!(
+            "[wavepath] --cs184-light-pdf: area-light samples use the course renderer's pdf, dist / (area cos): \
+             biased, each estimate times the distance to the light"
+        );
+    }
     let (film, build) = wavepath::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
         let (accel, build) = wavepath::accel::build(&scene, s.use_bvh, s.isa);
