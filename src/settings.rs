@@ -69,6 +69,9 @@ pub struct Settings {
     /// The CS184 course renderer's biased area-light pdf (`--cs184-light-pdf`): see
     /// [`SampledLight::Area`](crate::lights::SampledLight::Area).
     pub cs184_light_pdf: bool,
+    /// Combine light sampling with the diffuse BSDF's own sample by multiple importance
+    /// sampling (`--no-mis` turns it off: light sampling alone, as the seed).
+    pub mis: bool,
 }
 
 impl Default for Settings {
@@ -93,6 +96,7 @@ impl Default for Settings {
             all_effects: false,
             isa: crate::cpu::Isa::default(),
             cs184_light_pdf: false,
+            mis: true,
         }
     }
 }

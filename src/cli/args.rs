@@ -155,6 +155,10 @@ pub struct RenderArgs {
     /// skeleton show (about 1.4x brighter Cornell boxes); for comparing with them.
     #[arg(long)]
     pub cs184_light_pdf: bool,
+    /// Light sampling alone at diffuse surfaces (the seed's estimator) instead of combining it
+    /// with the BSDF's sample by multiple importance sampling.
+    #[arg(long)]
+    pub no_mis: bool,
     /// Force every effect (stage and kernel feature) on, even those the scene does not need;
     /// the image is the same, only slower: for measuring what specialisation saves.
     #[arg(long)]

@@ -59,6 +59,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.integrator = a.integrator.into();
     s.all_effects = a.all_effects;
     s.cs184_light_pdf = a.cs184_light_pdf;
+    s.mis = !a.no_mis;
     s.shading = a.shading.map(Shading::from).unwrap_or(if s.max_depth > 1 { Shading::Global } else { Shading::Direct });
     if let Some(p) = &a.cell {
         for (name, v) in ["X", "Y", "DX", "DY"].iter().zip(p) {

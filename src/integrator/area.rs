@@ -65,6 +65,20 @@ pub fn area_ray(s: &ShadingPoint, l: &AreaLight, a: f32, b: f32) -> AreaRay {
     AreaRay { ray: Ray { origin, dir, tmin: 0.0, tmax }, g, valid }
 }
 
+/// An area-light sample's geometric factor `g`, times its MIS weight against the vertex's
+/// cosine-sampled continuation when `mis` (power heuristic, the light strategy counted `ns`
+/// times). The light's solid-angle density is `cos_s / g` and the BSDF's `cos_s / pi`, so the
+/// cosines cancel: `w = 1 / (1 + (g / (pi ns))^2)`. One function for the scalar and the lane
+/// kernels, so that both compute the same bits.
+#[inline(always)]
+pub fn mis_weighted(g: f32, ns: u32, mis: bool) -> f32 {
+    if !mis {
+        return g;
+    }
+    let r = g * (std::f32::consts::FRAC_1_PI / ns as f32);
+    g / (1.0 + r * r)
+}
+
 /// The cosine-weighted continuation ray about `s.ns` from `(a, b)` in [0, 1)^2.
 #[inline(always)]
 pub fn cosine_ray(s: &ShadingPoint, a: f32, b: f32) -> Ray {

@@ -2,7 +2,9 @@
 //! by both integrators and used only when the scene has such a material.
 //!
 //! Light is counted exactly once per path:
-//! - Lambertian vertices: light sampling only (as in the diffuse fast path).
+//! - Lambertian vertices: light sampling and the cosine-sampled continuation, weighted by the
+//!   power heuristic where the continuation is traced and its light counts
+//!   ([`Transport::diffuse_mis`]); light sampling alone elsewhere and with `--no-mis`.
 //! - Glossy vertices: light sampling and BSDF sampling, each weighted by the power
 //!   heuristic against the other (the light strategy counted `-l` times), so a small bright
 //!   light in a rough metal converges without fireflies. The BSDF-sampled ray counts what
@@ -69,9 +71,16 @@ impl Transport<'_> {
     /// [`direct_rays`](Self::direct_rays) for any material: none for delta materials,
     /// light samples weighted by MIS (or hemisphere probes) for glossy ones.
     #[inline]
-    pub fn direct_rays_shaded(&self, v: &Vertex, sh: &ShadingFrame, rng: Sampler, mut out: impl FnMut(DirectRay)) {
+    pub fn direct_rays_shaded(
+        &self,
+        v: &Vertex,
+        sh: &ShadingFrame,
+        depth: u32,
+        rng: Sampler,
+        mut out: impl FnMut(DirectRay),
+    ) {
         match sh.kind {
-            Kind::Diffuse => return self.direct_rays(v, rng, out),
+            Kind::Diffuse => return self.direct_rays(v, depth, rng, out),
             Kind::Delta => return,
             Kind::Glossy => {}
         }
@@ -124,7 +133,7 @@ impl Transport<'_> {
         rng: Sampler,
     ) -> Option<(Ray, Vec3, Bounce)> {
         let mis = match sh.kind {
-            Kind::Diffuse => return self.scatter(v, depth, rng).map(|(r, w)| (r, w, Bounce::DIFFUSE)),
+            Kind::Diffuse => return self.scatter(v, depth, rng),
             Kind::Glossy => !self.hemisphere,
             Kind::Delta => true,
         };

@@ -19,6 +19,7 @@ use crate::geometry::offset::{self, offset_origin, shadow_margin};
 
 use area::{AreaLight, ShadingPoint};
 
+use crate::bsdf::power_heuristic;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{LightSet, SampledLight};
 use crate::sampling::{Frame, Sampler, warp};
@@ -46,6 +47,9 @@ pub struct Transport<'a> {
     pub models: Vec<crate::bsdf::Model>,
     /// Some material is not Lambertian: shading goes through [`ShadingFrame`].
     pub non_diffuse: bool,
+    /// Diffuse vertices weigh their light samples against their BSDF sample by MIS
+    /// ([`diffuse_mis`](Self::diffuse_mis)); off with hemisphere sampling, which has no light pdf.
+    pub mis: bool,
     /// Albedo textures per material; empty lookups when the scene has none.
     pub textures: Textures,
     pub max_depth: u32,
@@ -157,6 +161,7 @@ impl<'a> Transport<'a> {
             emission: scene.materials.iter().map(|m| m.emission).collect(),
             models,
             non_diffuse,
+            mis: settings.mis && !settings.hemisphere,
             textures: Textures::new(scene),
             lights,
             max_depth,
@@ -184,6 +189,22 @@ impl<'a> Transport<'a> {
     #[inline]
     pub fn counts_direct(&self, depth: u32) -> bool {
         depth < self.max_depth && (self.accumulate || depth + 1 == self.max_depth)
+    }
+
+    /// Whether a diffuse vertex at `depth` combines its light samples with its continuation
+    /// ray by the power heuristic. Only where that ray is traced and the light it finds
+    /// counts: a vertex at the last depth keeps light sampling alone (no extra ray), as does
+    /// every vertex under `-o 0`.
+    #[inline(always)]
+    pub fn diffuse_mis(&self, depth: u32) -> bool {
+        self.mis && self.continues(depth) && self.counts_direct(depth)
+    }
+
+    /// Whether paths count the light their continuation rays find ([`arrival`](Self::arrival)):
+    /// after glossy and delta bounces, and after diffuse ones under MIS.
+    #[inline(always)]
+    pub fn counts_arrivals(&self) -> bool {
+        self.non_diffuse || self.mis
     }
 
     /// Whether a vertex of `depth` spawns a continuation ray.
@@ -228,9 +249,11 @@ impl<'a> Transport<'a> {
         Sampler::for_vertex(key, depth + 1)
     }
 
-    /// Direct-light rays of vertex `v` (throughput not applied), handed to `out`.
+    /// Direct-light rays of the diffuse vertex `v` at `depth` (throughput not applied), handed
+    /// to `out`; weighted by MIS against the cosine-sampled continuation where
+    /// [`diffuse_mis`](Self::diffuse_mis) says so.
     #[inline]
-    pub fn direct_rays(&self, v: &Vertex, mut rng: Sampler, mut out: impl FnMut(DirectRay)) {
+    pub fn direct_rays(&self, v: &Vertex, depth: u32, mut rng: Sampler, mut out: impl FnMut(DirectRay)) {
         let f = v.albedo * FRAC_1_PI;
         if f == Vec3::ZERO {
             return;
@@ -251,6 +274,7 @@ impl<'a> Transport<'a> {
             return;
         }
         let sp = v.shading_point();
+        let mis = self.diffuse_mis(depth);
         for (i, light) in self.lights.lights.iter().enumerate() {
             let ns = self.lights.samples_for(i, self.light_samples);
             let inv = f / ns as f32;
@@ -260,21 +284,28 @@ impl<'a> Transport<'a> {
                     let (a, b) = rng.next_2d();
                     let r = area::area_ray(&sp, al, a, b);
                     if r.valid {
-                        out(DirectRay { ray: r.ray, weight: c * r.g });
+                        out(DirectRay { ray: r.ray, weight: c * area::mis_weighted(r.g, ns, mis) });
                     }
                 }
                 continue;
             }
             for _ in 0..ns {
                 let u = light_numbers(&mut rng, light);
-                let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
+                let (ls, w) = if mis {
+                    let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
+                    let w = power_heuristic(ns as f32 * pdf_l, ls.wi.dot(v.ns).max(0.0) * FRAC_1_PI);
+                    (ls, w)
+                } else {
+                    let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
+                    (ls, 1.0)
+                };
                 let cos = ls.wi.dot(v.ns);
-                if cos <= 0.0 {
+                if cos <= 0.0 || w <= 0.0 {
                     continue;
                 }
                 let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
                 let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
-                out(DirectRay { ray, weight: inv * ls.weight * cos });
+                out(DirectRay { ray, weight: inv * ls.weight * (cos * w) });
             }
         }
     }
@@ -313,16 +344,29 @@ impl<'a> Transport<'a> {
         if p < ntri { self.scene.mesh.material_ids[p] as usize } else { self.scene.spheres[p - ntri].material as usize }
     }
 
-    /// The continuation ray of a vertex at `depth` and the factor its throughput is multiplied
+    /// The continuation ray of a vertex at `depth`, the factor its throughput is multiplied
     /// by (cosine-weighted sampling of the diffuse BSDF: f cos / pdf = albedo), Russian
-    /// roulette not yet applied. `None`: the path ends here.
+    /// roulette not yet applied, and what the light the ray finds means ([`Bounce`]).
+    /// `None`: the path ends here.
     #[inline]
-    pub fn scatter(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3)> {
+    pub fn scatter(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3, Bounce)> {
         if !self.continues(depth) || v.albedo == Vec3::ZERO {
             return None;
         }
         let (a, b) = rng.at(0).next_2d();
-        Some((area::cosine_ray(&v.shading_point(), a, b), v.albedo))
+        let sp = v.shading_point();
+        let ray = area::cosine_ray(&sp, a, b);
+        Some((ray, v.albedo, self.diffuse_bounce(&sp, &ray, depth)))
+    }
+
+    /// The [`Bounce`] of a cosine-sampled continuation `ray` from `sp` at `depth`.
+    #[inline(always)]
+    pub fn diffuse_bounce(&self, sp: &ShadingPoint, ray: &Ray, depth: u32) -> Bounce {
+        if self.diffuse_mis(depth) {
+            Bounce { n: sp.ns, pdf: ray.dir.dot(sp.ns).max(0.0) * FRAC_1_PI }
+        } else {
+            Bounce::DIFFUSE
+        }
     }
 
     /// Russian roulette for the continuation of a vertex at `depth`: `None` stops the path,
@@ -351,10 +395,10 @@ impl<'a> Transport<'a> {
 
     /// [`scatter`](Self::scatter) followed by [`roulette`](Self::roulette).
     #[inline]
-    pub fn continuation(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3)> {
-        let (ray, w) = self.scatter(v, depth, rng)?;
+    pub fn continuation(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3, Bounce)> {
+        let (ray, w, b) = self.scatter(v, depth, rng)?;
         let k = self.roulette(depth, rng)?;
-        Some((ray, w * k))
+        Some((ray, w * k, b))
     }
 
     /// The camera ray of sample `sample` of pixel (x, y): jittered inside the pixel (its

@@ -66,27 +66,27 @@ impl PathTracer<'_, '_> {
                 }
             };
             match &sh {
-                Some(sh) => transport.direct_rays_shaded(v, sh, rng, add),
-                None => transport.direct_rays(v, rng, &mut add),
+                Some(sh) => transport.direct_rays_shaded(v, sh, depth, rng, add),
+                None => transport.direct_rays(v, depth, rng, &mut add),
             }
             self.st.trace = trace;
             self.st.shadow += shadow;
         }
         let next = match &sh {
             Some(sh) => self.transport.continuation_shaded(v, sh, depth, rng),
-            None => self.transport.continuation(v, depth, rng).map(|(r, w)| (r, w, Bounce::DIFFUSE)),
+            None => self.transport.continuation(v, depth, rng),
         };
         if let Some((ray, w, bounce)) = next {
             self.st.extension += 1;
             match self.accel.closest_hit(&ray, &mut self.st.trace) {
                 Some(hit) => {
                     let next = self.transport.vertex(&ray, &hit);
-                    if self.transport.non_diffuse {
+                    if self.transport.counts_arrivals() {
                         l += w * self.transport.arrival(bounce, &ray, Some(&hit), next.emission, depth + 1);
                     }
                     l += w * self.at_least_one_bounce(&ray, &next, depth + 1);
                 }
-                None if self.transport.non_diffuse => {
+                None if self.transport.counts_arrivals() => {
                     l += w * self.transport.arrival(bounce, &ray, None, Vec3::ZERO, depth + 1)
                 }
                 None => {}

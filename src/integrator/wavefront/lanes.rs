@@ -15,7 +15,7 @@ use super::Features;
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
 use crate::cpu::Avx2;
 use crate::geometry::{Hit, Ray};
-use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
+use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, orient};
 use crate::lights::SampledLight;
 use crate::sampling::{Sampler, rng8};
@@ -262,11 +262,17 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                 if F::ENVIRONMENT && depth == 0 && sees_emission {
                     q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
                 }
+                if t.mis && depth > 0 {
+                    q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
+                }
                 continue;
             };
             let m = t.material_of(hit.prim);
             if F::EMISSION && depth == 0 && sees_emission {
                 q.radiance[i] += t.emission[m];
+            }
+            if t.mis && depth > 0 {
+                q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), t.emission[m], depth);
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;
@@ -317,9 +323,10 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                     }
                     let tp = q.throughput[base + j];
                     let owner = (base + j) as u32;
+                    let mis = t.diffuse_mis(q.depth[base + j]);
                     for p in samples {
                         rs[w] = p.ray(j);
-                        ws[w] = c[j] * p.g[j] * tp;
+                        ws[w] = c[j] * mis_weighted(p.g[j], ns, mis) * tp;
                         os[w] = owner;
                         w += p.valid[j] as usize;
                     }
@@ -337,6 +344,7 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                     let i = base + j;
                     let depth = q.depth[i];
                     q.ray[i] = rays.ray(j);
+                    q.bounce[i] = t.diffuse_bounce(&pts.get(j), &q.ray[i], depth);
                     q.throughput[i] *= albedo[j];
                     q.depth[i] = depth + 1;
                     q.alive[i] = true;
@@ -421,6 +429,7 @@ mod tests {
                 assert_eq!(q.radiance, qs.radiance);
                 assert_eq!(q.alive, qs.alive);
                 assert_eq!(q.depth, qs.depth);
+                assert_eq!(q.bounce, qs.bounce);
                 assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
                 shadow_rays += sl.len();
                 compact::compact(&mut q, &mut slot_radiance);

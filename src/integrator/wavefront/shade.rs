@@ -32,7 +32,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
             if F::ENVIRONMENT && depth == 0 && sees_emission {
                 q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
             }
-            if F::NON_DIFFUSE && depth > 0 {
+            if (F::NON_DIFFUSE || t.mis) && depth > 0 {
                 q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
             }
             continue;
@@ -41,7 +41,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
         if F::EMISSION && depth == 0 && sees_emission {
             q.radiance[i] += v.emission;
         }
-        if F::NON_DIFFUSE && depth > 0 {
+        if (F::NON_DIFFUSE || t.mis) && depth > 0 {
             q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
         }
         if !F::DIRECT && !F::INDIRECT {
@@ -52,7 +52,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
             let sh = t.shading(&v, q.ray[i].dir);
             if F::DIRECT && t.counts_direct(depth) {
                 let tp = q.throughput[i];
-                t.direct_rays_shaded(&v, &sh, rng, |d| {
+                t.direct_rays_shaded(&v, &sh, depth, rng, |d| {
                     shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
                 });
             }
@@ -70,15 +70,18 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
         }
         if F::DIRECT && t.counts_direct(depth) {
             let tp = q.throughput[i];
-            t.direct_rays(&v, rng, |d| shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 }));
+            t.direct_rays(&v, depth, rng, |d| {
+                shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+            });
         }
         if F::INDIRECT
-            && let Some((next, w)) = t.scatter(&v, depth, rng)
+            && let Some((next, w, bounce)) = t.scatter(&v, depth, rng)
         {
             q.ray[i] = next;
             q.throughput[i] *= w;
             q.depth[i] = depth + 1;
             q.alive[i] = true;
+            q.bounce[i] = bounce;
             roulette::<F>(t, q, i, depth, rng);
         }
     }

@@ -6,6 +6,7 @@ mod analytic;
 mod effects;
 mod envmap;
 mod lens;
+mod mis;
 mod offsets;
 mod stability;
 mod wavefront;
