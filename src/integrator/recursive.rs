@@ -3,7 +3,7 @@
 //! = zero-bounce + at-least-one-bounce radiance) so the wavefront integrator can be checked
 //! against something obviously right.
 
-use super::{Bounce, DirectRay, Transport, Vertex};
+use super::{DirectRay, Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::{Accumulator, PixelSums};
 use crate::geometry::Ray;
