@@ -48,7 +48,7 @@ pub struct Transport<'a> {
     /// Some material is not Lambertian: shading goes through [`ShadingFrame`].
     pub non_diffuse: bool,
     /// Diffuse vertices weigh their light samples against their BSDF sample by MIS
-    /// ([`diffuse_mis`](Self::diffuse_mis)); off with hemisphere sampling, which has no light pdf.
+    /// ([`diffuse_mis`](Self::diffuse_mis)) where the scene calls for it (the `mis` effect).
     pub mis: bool,
     /// Albedo textures per material; empty lookups when the scene has none.
     pub textures: Textures,
@@ -161,7 +161,7 @@ impl<'a> Transport<'a> {
             emission: scene.materials.iter().map(|m| m.emission).collect(),
             models,
             non_diffuse,
-            mis: settings.mis && !settings.hemisphere,
+            mis: crate::effects::Effects::of(scene, settings).mis,
             textures: Textures::new(scene),
             lights,
             max_depth,

@@ -15,8 +15,8 @@ use super::Features;
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
 use crate::cpu::Avx2;
 use crate::geometry::{Hit, Ray};
-use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted};
-use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, orient};
+use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
+use crate::integrator::{Bounce, DIM_DIRECT, DIM_ROULETTE, Transport, orient};
 use crate::lights::SampledLight;
 use crate::sampling::{Sampler, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
@@ -27,10 +27,10 @@ use std::f32::consts::FRAC_1_PI;
 const L: usize = 8;
 
 /// Whether the lane kernel can shade this render's paths: Lambertian materials without
-/// textures, light sampling (not hemisphere probes) and nothing but area lights. Decided once
+/// textures, light sampling (not hemisphere probes) without MIS, and nothing but area lights. Decided once
 /// per render, with the kernel (`super::Lanes`).
 pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
-    !non_diffuse && !t.hemisphere && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
+    !non_diffuse && !t.hemisphere && !t.mis && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
 }
 
 /// [`super::shade::shade`] eight paths at a time (for renders where [`can_shade`] holds).
@@ -262,17 +262,11 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                 if F::ENVIRONMENT && depth == 0 && sees_emission {
                     q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
                 }
-                if t.mis && depth > 0 {
-                    q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
-                }
                 continue;
             };
             let m = t.material_of(hit.prim);
             if F::EMISSION && depth == 0 && sees_emission {
                 q.radiance[i] += t.emission[m];
-            }
-            if t.mis && depth > 0 {
-                q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), t.emission[m], depth);
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;
@@ -323,10 +317,9 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                     }
                     let tp = q.throughput[base + j];
                     let owner = (base + j) as u32;
-                    let mis = t.diffuse_mis(q.depth[base + j]);
                     for p in samples {
                         rs[w] = p.ray(j);
-                        ws[w] = c[j] * mis_weighted(p.g[j], ns, mis) * tp;
+                        ws[w] = c[j] * p.g[j] * tp;
                         os[w] = owner;
                         w += p.valid[j] as usize;
                     }
@@ -344,7 +337,8 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                     let i = base + j;
                     let depth = q.depth[i];
                     q.ray[i] = rays.ray(j);
-                    q.bounce[i] = t.diffuse_bounce(&pts.get(j), &q.ray[i], depth);
+                    // As `Transport::diffuse_bounce` without MIS.
+                    q.bounce[i] = Bounce::DIFFUSE;
                     q.throughput[i] *= albedo[j];
                     q.depth[i] = depth + 1;
                     q.alive[i] = true;
