@@ -111,3 +111,20 @@ fn mis_bounds_the_variance_next_to_an_emitter_and_keeps_the_mean() {
     assert!(floor > W * H / 2, "{floor} floor pixels");
     assert!(var_with < 0.1 * var_without, "variance with MIS {var_with}, light sampling alone {var_without}");
 }
+
+/// MIS runs where the lights are emissive triangles (or an environment map), not for the
+/// CS184 area lights, never with `--no-mis`, `-H` or direct light only.
+#[test]
+fn mis_is_on_where_the_lights_call_for_it() {
+    use wavepath::effects::Effects;
+    let global = render::settings(W, H, 5, 1);
+    assert!(Effects::of(&scene(), &global).mis);
+    assert!(!Effects::of(&wavepath::load::default_scene(), &global).mis);
+    for off in [
+        Settings { mis: false, ..global.clone() },
+        Settings { hemisphere: true, ..global.clone() },
+        render::settings(W, H, 1, 1),
+    ] {
+        assert!(!Effects::of(&scene(), &off).mis, "{off:?}");
+    }
+}
