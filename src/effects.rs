@@ -272,7 +272,14 @@ const RULES: &[Rule] = &[
         flag: |e| &mut e.russian_roulette,
         rule: |f, _| {
             let p = f.settings.rr_continue;
-            (f.global_to(3) && p < 1.0).then(|| format!("-m {} > 2 and --rr {p} < 1", f.depth))
+            let from = f.settings.rr_depth.max(1);
+            if !f.global_to(from + 2) {
+                None
+            } else if f.settings.rr_throughput {
+                Some(format!("-m {} > {}, continue by path throughput from depth {from}", f.depth, from + 1))
+            } else {
+                (p < 1.0).then(|| format!("-m {} > {} and --rr {p} < 1 from depth {from}", f.depth, from + 1))
+            }
         },
     },
     Rule {

@@ -72,6 +72,13 @@ pub struct Settings {
     /// Combine light sampling with the diffuse BSDF's own sample by multiple importance
     /// sampling (`--no-mis` turns it off: light sampling alone, as the seed).
     pub mis: bool,
+    /// Russian roulette by the path's throughput (`--roulette throughput`): continue with
+    /// probability `min(1, max component of the throughput)`, as pbrt-v4 does, instead of the
+    /// fixed `rr_continue`.
+    pub rr_throughput: bool,
+    /// The first depth whose continuation plays Russian roulette (`--rr-depth`): 1, the
+    /// seed's rule, never stops the first indirect bounce; Mitsuba's default is 5.
+    pub rr_depth: u32,
 }
 
 impl Default for Settings {
@@ -97,6 +104,8 @@ impl Default for Settings {
             isa: crate::cpu::Isa::default(),
             cs184_light_pdf: false,
             mis: true,
+            rr_throughput: false,
+            rr_depth: 1,
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use super::choices::{Camera, Fov, Integrator, Shading, Split, Tonemap};
+use super::choices::{Camera, Fov, Integrator, Roulette, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::cpu::Isa;
@@ -127,6 +127,15 @@ pub struct RenderArgs {
     /// Russian roulette continue probability, in (0, 1].
     #[arg(long = "rr", value_name = "P", default_value_t = 0.65)]
     pub rr: f64,
+    /// Russian roulette: fixed (continue with --rr, as the seed) or throughput (continue with
+    /// the path's throughput, its largest component, as pbrt-v4 and Mitsuba). Default: fixed
+    /// for .dae files and the embedded scene (the seed's pictures), throughput for other files.
+    #[arg(long, value_enum)]
+    pub roulette: Option<Roulette>,
+    /// First depth whose continuation plays Russian roulette (1: from the second bounce, the
+    /// seed's rule). Default: 1 with fixed roulette, 5 with throughput roulette (Mitsuba's).
+    #[arg(long, value_name = "D")]
+    pub rr_depth: Option<i64>,
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,

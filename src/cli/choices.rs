@@ -116,3 +116,12 @@ impl Fov {
         cam.fit_to(width as f32, height as f32);
     }
 }
+
+/// How Russian roulette decides (a command-line choice: it sets `Settings::rr_throughput`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Roulette {
+    /// Continue with the fixed probability `--rr` from the second bounce on (the seed's rule).
+    Fixed,
+    /// Continue with the path's throughput (its largest component, at most 1), as pbrt-v4.
+    Throughput,
+}

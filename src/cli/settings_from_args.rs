@@ -1,5 +1,6 @@
 //! Checks every flag's range and turns the arguments into [`Settings`].
 
+use super::choices::Roulette;
 use super::RenderArgs;
 use anyhow::{Result, bail};
 use wavepath::settings::{Cell, Settings, Shading};
@@ -52,6 +53,16 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
         bail!("--rr must be in (0, 1], got {}", a.rr);
     }
     s.rr_continue = a.rr as f32;
+    // The seed's fixed roulette for its own scenes; for other files the estimator that reached
+    // a given error soonest in the end-to-end harness (docs/decisions.md, "Russian roulette").
+    let cs184 = a.scene.as_ref().is_none_or(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("dae")));
+    let roulette = a.roulette.unwrap_or(if cs184 { Roulette::Fixed } else { Roulette::Throughput });
+    s.rr_throughput = roulette == Roulette::Throughput;
+    s.rr_depth = match a.rr_depth {
+        Some(d) => in_range("--rr-depth", d, 1, 1 << 16)? as u32,
+        None if s.rr_throughput => 5,
+        None => 1,
+    };
     s.hemisphere = a.hemisphere;
     s.use_bvh = !a.no_bvh;
     s.isa = a.isa;

@@ -158,7 +158,8 @@ impl Transport<'_> {
         Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, s.weight, bounce))
     }
 
-    /// [`scatter_shaded`](Self::scatter_shaded) followed by [`roulette`](Self::roulette).
+    /// [`scatter_shaded`](Self::scatter_shaded) followed by [`roulette`](Self::roulette),
+    /// for a path whose throughput before this vertex is `throughput`.
     #[inline]
     pub fn continuation_shaded(
         &self,
@@ -166,9 +167,10 @@ impl Transport<'_> {
         sh: &ShadingFrame,
         depth: u32,
         rng: Sampler,
+        throughput: Vec3,
     ) -> Option<(Ray, Vec3, Bounce)> {
         let (ray, w, b) = self.scatter_shaded(v, sh, depth, rng)?;
-        let k = self.roulette(depth, rng)?;
+        let k = self.roulette(depth, rng, throughput * w)?;
         Some((ray, w * k, b))
     }
 

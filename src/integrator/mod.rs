@@ -57,6 +57,10 @@ pub struct Transport<'a> {
     pub hemisphere: bool,
     pub light_samples: u32,
     pub rr_continue: f32,
+    /// Continue probability from the path's throughput instead of `rr_continue`.
+    pub rr_throughput: bool,
+    /// First depth that plays roulette.
+    pub rr_depth: u32,
     pub seed: u64,
     /// Shadow (or hemisphere probe) rays one vertex casts at most.
     pub direct_per_vertex: u32,
@@ -169,6 +173,8 @@ impl<'a> Transport<'a> {
             hemisphere: settings.hemisphere,
             light_samples,
             rr_continue: settings.rr_continue.clamp(1e-3, 1.0),
+            rr_throughput: settings.rr_throughput,
+            rr_depth: settings.rr_depth.max(1),
             seed: settings.seed,
             direct_per_vertex,
             tan_half_fov: (
@@ -369,35 +375,50 @@ impl<'a> Transport<'a> {
         }
     }
 
-    /// Russian roulette for the continuation of a vertex at `depth`: `None` stops the path,
+    /// Russian roulette for the continuation of a vertex at `depth` whose path throughput,
+    /// the continuation's BSDF weight included, is `throughput`: `None` stops the path,
     /// otherwise the factor (1 / continue probability) its throughput is multiplied by. It
-    /// never stops the first indirect bounce (the continuation of the camera's hit).
+    /// is played from depth `rr_depth` on (at least 1: it never stops the first indirect
+    /// bounce, the continuation of the camera's hit).
     #[inline]
-    pub fn roulette(&self, depth: u32, rng: Sampler) -> Option<f32> {
+    pub fn roulette(&self, depth: u32, rng: Sampler, throughput: Vec3) -> Option<f32> {
         if !self.plays_roulette(depth) {
             return Some(1.0);
         }
-        self.roulette_with(rng.at(DIM_ROULETTE).next_f32())
+        self.roulette_with(rng.at(DIM_ROULETTE).next_f32(), throughput)
     }
 
     /// Whether the continuation of a vertex at `depth` plays Russian roulette.
     #[inline(always)]
     pub fn plays_roulette(&self, depth: u32) -> bool {
-        depth != 0 && self.rr_continue < 1.0
+        depth >= self.rr_depth && (self.rr_throughput || self.rr_continue < 1.0)
     }
 
     /// [`roulette`](Self::roulette) where it is played, from the vertex stream's number at
-    /// [`DIM_ROULETTE`] (drawn eight paths at a time by the lane kernel).
+    /// [`DIM_ROULETTE`] (drawn eight paths at a time by the lane kernel). By throughput, the
+    /// surviving path's throughput has its largest component at most 1: its weight stays
+    /// bounded, and paths that carry little are the ones that stop.
     #[inline(always)]
-    pub fn roulette_with(&self, u: f32) -> Option<f32> {
-        (u < self.rr_continue).then_some(1.0 / self.rr_continue)
+    pub fn roulette_with(&self, u: f32, throughput: Vec3) -> Option<f32> {
+        let p = if self.rr_throughput { throughput.max_element().min(1.0) } else { self.rr_continue };
+        if p >= 1.0 {
+            return Some(1.0);
+        }
+        (u < p).then(|| 1.0 / p)
     }
 
-    /// [`scatter`](Self::scatter) followed by [`roulette`](Self::roulette).
+    /// [`scatter`](Self::scatter) followed by [`roulette`](Self::roulette), for a path whose
+    /// throughput before this vertex is `throughput`.
     #[inline]
-    pub fn continuation(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3, Bounce)> {
+    pub fn continuation(
+        &self,
+        v: &Vertex,
+        depth: u32,
+        rng: Sampler,
+        throughput: Vec3,
+    ) -> Option<(Ray, Vec3, Bounce)> {
         let (ray, w, b) = self.scatter(v, depth, rng)?;
-        let k = self.roulette(depth, rng)?;
+        let k = self.roulette(depth, rng, throughput * w)?;
         Some((ray, w * k, b))
     }
 

@@ -43,12 +43,14 @@ impl PathTracer<'_, '_> {
         let v = self.transport.vertex(ray, &hit);
         let mut l = if self.transport.counts_emission() { v.emission } else { Vec3::ZERO };
         if self.transport.max_depth >= 1 {
-            l += self.at_least_one_bounce(ray, &v, 0);
+            l += self.at_least_one_bounce(ray, &v, 0, Vec3::ONE);
         }
         l
     }
 
-    fn at_least_one_bounce(&mut self, ray: &Ray, v: &Vertex, depth: u32) -> Vec3 {
+    /// Light leaving `v` (the vertex at `depth`) toward `ray`'s origin, for a path whose
+    /// throughput up to `v` is `throughput` (what throughput roulette plays with).
+    fn at_least_one_bounce(&mut self, ray: &Ray, v: &Vertex, depth: u32, throughput: Vec3) -> Vec3 {
         let rng = self.transport.sampler(self.pixel, self.sample, depth);
         let mut l = Vec3::ZERO;
         let sh = self.transport.non_diffuse.then(|| self.transport.shading(v, ray.dir));
@@ -73,8 +75,8 @@ impl PathTracer<'_, '_> {
             self.st.shadow += shadow;
         }
         let next = match &sh {
-            Some(sh) => self.transport.continuation_shaded(v, sh, depth, rng),
-            None => self.transport.continuation(v, depth, rng),
+            Some(sh) => self.transport.continuation_shaded(v, sh, depth, rng, throughput),
+            None => self.transport.continuation(v, depth, rng, throughput),
         };
         if let Some((ray, w, bounce)) = next {
             self.st.extension += 1;
@@ -84,7 +86,7 @@ impl PathTracer<'_, '_> {
                     if self.transport.counts_arrivals() {
                         l += w * self.transport.arrival(bounce, &ray, Some(&hit), next.emission, depth + 1);
                     }
-                    l += w * self.at_least_one_bounce(&ray, &next, depth + 1);
+                    l += w * self.at_least_one_bounce(&ray, &next, depth + 1, throughput * w);
                 }
                 None if self.transport.counts_arrivals() => {
                     l += w * self.transport.arrival(bounce, &ray, None, Vec3::ZERO, depth + 1)

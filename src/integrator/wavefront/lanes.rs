@@ -344,7 +344,7 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                     q.alive[i] = true;
                     // As `super::shade::roulette`.
                     if F::ROULETTE && t.plays_roulette(depth) {
-                        match t.roulette_with(rr[j]) {
+                        match t.roulette_with(rr[j], q.throughput[i]) {
                             Some(f) => q.throughput[i] *= f,
                             None => q.alive[i] = false,
                         }
@@ -379,7 +379,9 @@ mod tests {
     /// triangles with and without corner normals, with spheres and without any.
     #[test]
     fn lanes_match_the_scalar_kernel() {
-        for (with_normals, with_spheres) in [(false, true), (true, true), (true, false)] {
+        for (with_normals, with_spheres, rr_throughput) in
+            [(false, true, false), (true, true, false), (true, false, false), (true, true, true)]
+        {
             let mut scene = crate::load::default_scene();
             assert!(!scene.spheres.is_empty());
             if !with_spheres {
@@ -400,6 +402,8 @@ mod tests {
                 light_samples: 3,
                 max_depth: 5,
                 shading: Shading::Global,
+                rr_throughput,
+                rr_depth: 1 + rr_throughput as u32,
                 ..Settings::default()
             };
             let t = Transport::new(&scene, &s);

@@ -93,7 +93,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
 #[inline(always)]
 pub(super) fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
     if F::ROULETTE {
-        match t.roulette(depth, rng) {
+        match t.roulette(depth, rng, q.throughput[i]) {
             Some(f) => q.throughput[i] *= f,
             None => q.alive[i] = false,
         }

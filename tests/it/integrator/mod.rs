@@ -8,5 +8,6 @@ mod envmap;
 mod lens;
 mod mis;
 mod offsets;
+mod roulette;
 mod stability;
 mod wavefront;
