@@ -1,7 +1,7 @@
 //! Checks every flag's range and turns the arguments into [`Settings`].
 
-use super::choices::Roulette;
 use super::RenderArgs;
+use super::choices::Roulette;
 use anyhow::{Result, bail};
 use wavepath::settings::{Cell, Settings, Shading};
 

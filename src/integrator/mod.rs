@@ -410,13 +410,7 @@ impl<'a> Transport<'a> {
     /// [`scatter`](Self::scatter) followed by [`roulette`](Self::roulette), for a path whose
     /// throughput before this vertex is `throughput`.
     #[inline]
-    pub fn continuation(
-        &self,
-        v: &Vertex,
-        depth: u32,
-        rng: Sampler,
-        throughput: Vec3,
-    ) -> Option<(Ray, Vec3, Bounce)> {
+    pub fn continuation(&self, v: &Vertex, depth: u32, rng: Sampler, throughput: Vec3) -> Option<(Ray, Vec3, Bounce)> {
         let (ray, w, b) = self.scatter(v, depth, rng)?;
         let k = self.roulette(depth, rng, throughput * w)?;
         Some((ray, w * k, b))

@@ -59,3 +59,37 @@ fn roulette_runs_only_where_paths_reach_its_depth() {
     assert!(!Effects::of(&scene, &s(6, 5)).russian_roulette);
     assert!(Effects::of(&scene, &s(7, 5)).russian_roulette);
 }
+
+/// The command line's default roulette follows the file: the seed's fixed 0.65 from the
+/// second bounce for `.dae` (the CS184 pictures), throughput from depth 5 for other formats
+/// (the same scene, written as OBJ); the stats say which ran.
+#[test]
+fn the_default_roulette_follows_the_format() {
+    let dir = crate::common::temp_dir("roulette-default");
+    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for (file, want) in [("cornell_mesh.dae", "--rr 0.65"), ("cornell_mesh.obj", "throughput from depth 5")] {
+        let stats = dir.join("s.json");
+        let path = scenes.join(file);
+        let o = crate::common::run_wavepath(&[
+            path.to_str().unwrap(),
+            "-r",
+            "16",
+            "12",
+            "-m",
+            "8",
+            "--stats",
+            stats.to_str().unwrap(),
+            "-f",
+            dir.join("o.pfm").to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        let reasons = json["effect_reasons"].as_array().unwrap();
+        let reason = reasons
+            .iter()
+            .find(|e| e["name"] == "russian-roulette")
+            .and_then(|e| e["reason"].as_str())
+            .unwrap_or_default();
+        assert!(reason.contains(want), "{file}: {reason} ({})", json["effect_reasons"]);
+    }
+}
