@@ -94,16 +94,35 @@ fn thin_lens_agrees() {
 
 #[test]
 fn image_is_identical_for_any_thread_count() {
+    // 96x72 at 4 samples: 6912 pixels in waves of 1024 (4096 paths), seven waves per frame,
+    // so every pool has work to share; with and without adaptive sampling.
     let scene = default_scene();
-    let s = Settings { adaptive: Some((4, 0.05)), ..settings(4, 16) };
-    let run = |threads| {
-        rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap().install(|| wavefront(&scene, &s).0)
-    };
-    let one = run(1);
-    let two = run(2);
-    assert_eq!(one.to_film(), two.to_film());
-    assert_eq!(one.samples_taken(), two.samples_taken());
-    assert!(one.to_film().pixels.iter().any(|p| *p != Vec3::ZERO));
+    let accel = wavepath::accel::build(&scene, true, Default::default()).0;
+    let base = Settings { width: 96, height: 72, ..settings(3, 4) };
+    for s in [base.clone(), Settings { spp: 8, adaptive: Some((4, 0.05)), ..base.clone() }] {
+        let run = |threads| {
+            let waves = std::sync::atomic::AtomicUsize::new(0);
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            let acc = pool.install(|| {
+                wavepath::integrator::wavefront::render_wavefront(&scene, accel.as_ref(), &s, &|_| {
+                    waves.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                })
+                .0
+            });
+            (acc, waves.into_inner())
+        };
+        let (one, waves) = run(1);
+        assert!(waves >= 7, "{waves} waves: the pools would have nothing to share");
+        assert!(one.to_film().pixels.iter().filter(|p| **p != Vec3::ZERO).count() > 96 * 72 / 5);
+        let bits = |a: &wavepath::film::Accumulator| -> Vec<[u32; 3]> {
+            a.to_film().pixels.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+        };
+        for threads in [2, 3, 8] {
+            let (other, _) = run(threads);
+            assert_eq!(bits(&one), bits(&other), "{threads} threads, adaptive {:?}", s.adaptive);
+            assert_eq!(one.samples_taken(), other.samples_taken());
+        }
+    }
 }
 
 #[test]
