@@ -64,7 +64,9 @@ fn rmse_falls_as_one_over_sqrt_spp() {
         }
         let slope = log_log_slope(&pts);
         eprintln!("depth {depth}: log-log slope of RMSE vs spp = {slope:.3}; points {pts:?}");
-        assert!((-0.6..=-0.4).contains(&slope), "depth {depth}: slope {slope}");
+        // -1/2 within the fit's noise (-0.482 with these fixed seeds); a bias as large as the
+        // 256-spp standard error would flatten the fit to about -0.44, outside the band.
+        assert!((-0.56..=-0.455).contains(&slope), "depth {depth}: slope {slope}");
         // The render's own variance estimate predicts its error against the reference
         // (E[squared error] = variance of the mean), and the mean 95% half-width is 1.96
         // times the mean sigma, which is below the root mean square of sigma.
