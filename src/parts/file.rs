@@ -11,6 +11,7 @@ use crate::film::{Accumulator, PixelSums};
 use anyhow::{Context, Result, anyhow, bail};
 use exr::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Version of the part-file layout; a merge refuses any other.
@@ -120,12 +121,25 @@ pub fn encode(meta: &PartMeta, acc: &Accumulator) -> Result<Vec<u8>> {
 /// part that crashes or is killed never leaves a file a merge would take, and a re-run
 /// replaces the old part in one step.
 pub fn write(path: &Path, meta: &PartMeta, acc: &Accumulator) -> Result<()> {
+    write_via(path, meta, acc, |f| Box::new(f))
+}
+
+/// [`write`], with the bytes going through `wrap` around the temporary file: a test can
+/// make the write fail part-way (a full disk, a lost mount) and check what is left.
+pub fn write_via(
+    path: &Path,
+    meta: &PartMeta,
+    acc: &Accumulator,
+    wrap: impl FnOnce(std::fs::File) -> Box<dyn std::io::Write>,
+) -> Result<()> {
     let bytes = encode(meta, acc).with_context(|| path.display().to_string())?;
     let tmp = temporary_name(path);
     let result = (|| -> std::io::Result<()> {
-        use std::io::Write;
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(&bytes)?;
+        let f = std::fs::File::create(&tmp)?;
+        let mut w = wrap(f.try_clone()?);
+        w.write_all(&bytes)?;
+        w.flush()?;
+        drop(w);
         f.sync_all()?;
         std::fs::rename(&tmp, path)
     })();

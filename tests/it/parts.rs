@@ -249,22 +249,43 @@ fn part_flags_are_checked() {
     assert_eq!(exr_bits(&dir.join("one.exr")), exr_bits(&dir.join("ab.exr")));
 }
 
-/// A part killed while rendering leaves nothing a merge would take; a re-run replaces a
-/// part in one step and leaves no temporary files behind.
+/// A writer that fails after `left` bytes, as a full disk does part-way through a file.
+struct FailsAfter {
+    inner: std::fs::File,
+    left: usize,
+}
+
+impl std::io::Write for FailsAfter {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        if self.left == 0 {
+            return Err(std::io::Error::other("no space left on device (injected)"));
+        }
+        let n = buf.len().min(self.left);
+        self.left -= n;
+        self.inner.write(&buf[..n])
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+/// A part whose write fails part-way leaves nothing under its name, keeps the previous
+/// part there intact, and leaves no temporary file; a re-run replaces a part in one step.
 #[test]
-fn killed_parts_leave_no_file_and_reruns_replace_atomically() {
+fn failed_part_writes_leave_nothing_and_reruns_replace_atomically() {
+    use wavepath::parts::file::{read, write_via};
     let dir = temp_dir("parts-kill");
     let out = dir.join("p0.exr");
-    // Far more work than the test waits for.
-    let mut child = Command::new(common::wavepath_bin())
-        .args(["-s", "100000", "-m", "5", "-r", "320", "240", "--part", "0/2", "-f", s(&out)])
-        .spawn()
-        .unwrap();
-    std::thread::sleep(std::time::Duration::from_millis(300));
-    child.kill().unwrap();
-    let status = child.wait().unwrap();
-    assert!(!status.success(), "the part finished before it was killed");
-    assert!(!out.exists(), "a killed part left {}", out.display());
+    ok(&["-s", "2", "-r", "16", "12", "--part", "0/2", "-f", s(&out)]);
+    let before = std::fs::read(&out).unwrap();
+    let part = read(&out).unwrap();
+    for (target, cut) in [(dir.join("fresh.exr"), 100), (out.clone(), before.len() / 2)] {
+        let e = write_via(&target, &part.meta, &part.acc, |f| Box::new(FailsAfter { inner: f, left: cut }))
+            .expect_err("the injected failure is reported");
+        assert!(format!("{e:#}").contains("injected"), "{e:#}");
+    }
+    assert!(!dir.join("fresh.exr").exists(), "a failed write left a part under its final name");
+    assert_eq!(std::fs::read(&out).unwrap(), before, "a failed rewrite touched the previous part");
 
     let base = ["-s", "2", "-r", "16", "12"];
     let part = |extra: &[&str], label: &str, out: &Path| {
@@ -284,6 +305,9 @@ fn killed_parts_leave_no_file_and_reruns_replace_atomically() {
         std::fs::read_dir(&dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
     names.sort();
     assert!(names.iter().all(|n| !n.starts_with('.') && !n.contains("partial")), "left behind: {names:?}");
+    // The same write without the injected failure is a valid part again.
+    write_via(&dir.join("again.exr"), &read(&out).unwrap().meta, &read(&out).unwrap().acc, |f| Box::new(f)).unwrap();
+    assert!(read(&dir.join("again.exr")).is_ok());
 }
 
 /// The merged stats list exactly the stages the single process lists: with direct light
