@@ -344,3 +344,21 @@ fn merged_stats_keep_absent_stages_absent() {
         assert_eq!(single.iter().any(|k| k == "compact"), m != "1", "-m {m}: {single:?}");
     }
 }
+
+/// Parts rendered with different thread counts (one with 1, one with 2) merge into the image
+/// a single process renders with 2: the thread count is not part of the result.
+#[test]
+fn parts_rendered_with_different_thread_counts_merge_bit_for_bit() {
+    let dir = temp_dir("parts-threads");
+    let base = ["-s", "4", "-m", "3", "-r", "64", "48"];
+    let run = |extra: &[&str]| {
+        let mut a = base.to_vec();
+        a.extend_from_slice(extra);
+        ok(&a);
+    };
+    run(&["-t", "1", "--part", "0/2", "-f", s(&dir.join("a.exr"))]);
+    run(&["-t", "2", "--part", "1/2", "-f", s(&dir.join("b.exr"))]);
+    ok(&["merge", s(&dir.join("a.exr")), s(&dir.join("b.exr")), "-f", s(&dir.join("m.exr"))]);
+    run(&["-t", "2", "-f", s(&dir.join("one.exr"))]);
+    assert_eq!(exr_bits(&dir.join("one.exr")), exr_bits(&dir.join("m.exr")));
+}
