@@ -10,4 +10,5 @@ mod mis;
 mod offsets;
 mod roulette;
 mod stability;
+mod transport;
 mod wavefront;

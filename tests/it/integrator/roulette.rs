@@ -2,15 +2,14 @@
 //! fixed probability and the throughput rule (from any starting depth) agree with no
 //! roulette at all on a scene where deep paths carry most of the light.
 
-use crate::common::render;
-use glam::Vec3;
+use crate::common::{agree, render};
 use wavepath::effects::Effects;
 use wavepath::load::default_scene;
 use wavepath::settings::Settings;
 
 /// The embedded Cornell box at depth 8, 32x24, 64 spp: per 8x8 region, each roulette's mean
-/// against no roulette's within 5 standard errors of their difference (a false failure
-/// below 1e-5 per region and channel for these bounded estimators; fixed seeds).
+/// against no roulette's (the shared z-test of `common::agree`: false failures below 1e-6,
+/// fixed seeds).
 #[test]
 fn every_roulette_converges_to_the_same_image() {
     let scene = default_scene();
@@ -25,28 +24,7 @@ fn every_roulette_converges_to_the_same_image() {
         let (acc, st) = render::wavefront(&scene, &s);
         let (_, st_none) = render::wavefront(&scene, &base);
         assert!(st.extension_rays < st_none.extension_rays, "{what}: roulette stopped no path");
-        for ry in 0..3 {
-            for rx in 0..4 {
-                let (mut a, mut b, mut var) = (Vec3::ZERO.as_dvec3(), Vec3::ZERO.as_dvec3(), Vec3::ZERO.as_dvec3());
-                for y in ry * 8..ry * 8 + 8 {
-                    for x in rx * 8..rx * 8 + 8 {
-                        let (p, q) = (&acc.pixels[y * 32 + x], &none.pixels[y * 32 + x]);
-                        a += p.mean().as_dvec3();
-                        b += q.mean().as_dvec3();
-                        var += p.variance_of_mean() + q.variance_of_mean();
-                    }
-                }
-                for c in 0..3 {
-                    assert!(
-                        (a[c] - b[c]).abs() <= 5.0 * var[c].sqrt() + 1e-6,
-                        "{what}: region ({rx},{ry}) channel {c}: {} against {} without roulette (sd {})",
-                        a[c],
-                        b[c],
-                        var[c].sqrt()
-                    );
-                }
-            }
-        }
+        agree::assert_regions_agree(&acc, &none, 8, 0.0, what);
     }
 }
 

@@ -3,7 +3,7 @@
 //! confidence bounds computed from the per-pixel sample variances.
 
 use crate::common;
-use crate::common::agree::assert_agree;
+use crate::common::agree::assert_regions_agree;
 use crate::common::render::{recursive, wavefront};
 use glam::Vec3;
 use wavepath::load::default_scene;
@@ -21,7 +21,7 @@ fn compare(scene: &Scene, s: &Settings, what: &str) {
     assert_eq!(sa.invalid_samples, 0, "{what}");
     assert_eq!(sb.invalid_samples, 0, "{what}");
     assert!(a.to_film().all_finite());
-    let z = assert_agree(&a, &b, what);
+    let z = assert_regions_agree(&a, &b, 8, 0.0, what);
     eprintln!("{what}: worst |z| = {z:.2}");
 }
 
@@ -57,7 +57,7 @@ fn russian_roulette_on_and_off_agree() {
     // Roulette changes the estimator, not the expectation: with and without must agree too.
     let (a, _) = wavefront(&scene, &Settings { rr_continue: 0.5, ..settings(6, 32) });
     let (b, _) = recursive(&scene, &Settings { rr_continue: 1.0, seed: 77, ..settings(6, 32) });
-    assert_agree(&a, &b, "--rr 0.5 vs --rr 1");
+    assert_regions_agree(&a, &b, 8, 0.0, "--rr 0.5 vs --rr 1");
 }
 
 #[test]
@@ -72,7 +72,7 @@ fn adaptive_sampling_agrees_and_stops_pixels_early() {
     let s = Settings { adaptive: Some((8, 0.1)), ..settings(3, 128) };
     let (a, sa) = wavefront(&scene, &s);
     let (b, sb) = recursive(&scene, &Settings { seed: 5, ..s.clone() });
-    assert_agree(&a, &b, "adaptive");
+    assert_regions_agree(&a, &b, 8, 0.0, "adaptive");
     for st in [&sa, &sb] {
         let (mean, min, max) = st.spp_summary();
         assert!(min >= 8 && max <= 128 && mean < 128.0, "({mean}, {min}, {max})");

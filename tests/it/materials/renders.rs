@@ -3,7 +3,7 @@
 //! the recursive reference for every material.
 
 use crate::common;
-use crate::common::agree::assert_agree;
+use crate::common::agree::assert_regions_agree;
 use crate::common::meshgen::quad;
 use glam::{Vec3, vec3};
 use wavepath::film::Accumulator;
@@ -134,7 +134,7 @@ fn box_with(m: Bsdf, m2: Bsdf) -> Scene {
 fn compare(scene: &Scene, s: &Settings, what: &str) {
     let a = wavefront(scene, s);
     let b = recursive(scene, &Settings { seed: s.seed + 1000, ..s.clone() });
-    let z = assert_agree(&a, &b, what);
+    let z = assert_regions_agree(&a, &b, 8, 0.0, what);
     eprintln!("{what}: worst |z| = {z:.2}");
 }
 
