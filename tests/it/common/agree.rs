@@ -72,7 +72,12 @@ pub fn assert_regions_agree(a: &Accumulator, b: &Accumulator, size: usize, rel_t
                 let sd = (2.0 * ra.var[c].max(rb.var[c])).sqrt();
                 let tol = rel_tol * ra.mean[c].abs().max(rb.mean[c].abs()) + 1e-9 * ra.pixels as f64;
                 if sd == 0.0 {
-                    assert!(d <= tol, "{what}: region ({rx},{ry}) channel {c}: {} vs {} with zero variance", ra.mean[c], rb.mean[c]);
+                    assert!(
+                        d <= tol,
+                        "{what}: region ({rx},{ry}) channel {c}: {} vs {} with zero variance",
+                        ra.mean[c],
+                        rb.mean[c]
+                    );
                     continue;
                 }
                 tested += 1;
@@ -132,7 +137,13 @@ pub fn assert_regions_match(
                 let d = (r.mean[c] - e[c]).abs();
                 let tol = rel_tol * e[c].abs() + 1e-7 * n;
                 let sd = r.var[c].sqrt();
-                let z = if sd > 0.0 { (d - tol).max(0.0) / sd } else if d <= tol { 0.0 } else { f64::INFINITY };
+                let z = if sd > 0.0 {
+                    (d - tol).max(0.0) / sd
+                } else if d <= tol {
+                    0.0
+                } else {
+                    f64::INFINITY
+                };
                 worst = worst.max(z);
                 assert!(
                     z < z_max,

@@ -110,8 +110,11 @@ fn conductor_f(wo: DVec3, wi: DVec3, alpha: f64) -> DVec3 {
     let g = 1.0 / (1.0 + beckmann_lambda(co, alpha) + beckmann_lambda(ci, alpha));
     let v = beckmann_d(h.y, alpha) * g / (4.0 * co * ci);
     let c = wi.dot(h);
-    DVec3::new(fresnel_conductor(c, ETA[0], K[0]), fresnel_conductor(c, ETA[1], K[1]), fresnel_conductor(c, ETA[2], K[2]))
-        * v
+    DVec3::new(
+        fresnel_conductor(c, ETA[0], K[0]),
+        fresnel_conductor(c, ETA[1], K[1]),
+        fresnel_conductor(c, ETA[2], K[2]),
+    ) * v
 }
 
 // ---- A conductor plane under a square emitter.
@@ -129,11 +132,7 @@ fn plane_scene(alpha: f32, light: Emitter) -> Scene {
     let h = 10.0;
     quad(&mut mesh, [vec3(-h, 0.0, -h), vec3(-h, 0.0, h), vec3(h, 0.0, h), vec3(h, 0.0, -h)], 0);
     let (c, a) = (light.centre, light.side / 2.0);
-    quad(
-        &mut mesh,
-        [c + vec3(-a, 0.0, -a), c + vec3(a, 0.0, -a), c + vec3(a, 0.0, a), c + vec3(-a, 0.0, a)],
-        1,
-    );
+    quad(&mut mesh, [c + vec3(-a, 0.0, -a), c + vec3(a, 0.0, -a), c + vec3(a, 0.0, a), c + vec3(-a, 0.0, a)], 1);
     let metal = Bsdf::Microfacet { alpha, eta: Vec3::from(ETA.map(|x| x as f32)), k: Vec3::from(K.map(|x| x as f32)) };
     let mut camera = Camera::look_at(vec3(0.0, 0.6, 2.0), vec3(0.0, 0.0, -0.3), Vec3::Y, 50.0, W as f32 / H as f32);
     camera.nclip = 1e-3;
@@ -149,12 +148,12 @@ fn plane_scene(alpha: f32, light: Emitter) -> Scene {
     }
 }
 
-/// The floor points of pixel (x, y) on a SUB x SUB grid, with the direction back to the
+/// The floor points of pixel (x, y) on a `sub` x `sub` grid, with the direction back to the
 /// camera; `None` when any of them misses the floor or sees the emitter first.
-fn floor_points(cam: &Camera, light: Emitter, x: usize, y: usize) -> Option<Vec<(DVec3, DVec3)>> {
+fn floor_points(cam: &Camera, light: Emitter, sub: usize, x: usize, y: usize) -> Option<Vec<(DVec3, DVec3)>> {
     let mut out = Vec::new();
-    for k in 0..SUB * SUB {
-        let (fx, fy) = (((k % SUB) as f32 + 0.5) / SUB as f32, ((k / SUB) as f32 + 0.5) / SUB as f32);
+    for k in 0..sub * sub {
+        let (fx, fy) = (((k % sub) as f32 + 0.5) / sub as f32, ((k / sub) as f32 + 0.5) / sub as f32);
         let r = cam.generate_ray((x as f32 + fx) / W as f32, (y as f32 + fy) / H as f32);
         let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
         let t = -o.y / d.y;
@@ -179,7 +178,11 @@ fn reflected(p: DVec3, wo: DVec3, alpha: f64, light: Emitter, n: usize) -> DVec3
     for j in 0..n {
         for i in 0..n {
             let q = light.centre.as_dvec3()
-                + DVec3::new(((i as f64 + 0.5) / n as f64 - 0.5) * side, 0.0, ((j as f64 + 0.5) / n as f64 - 0.5) * side);
+                + DVec3::new(
+                    ((i as f64 + 0.5) / n as f64 - 0.5) * side,
+                    0.0,
+                    ((j as f64 + 0.5) / n as f64 - 0.5) * side,
+                );
             let d = q - p;
             let r2 = d.length_squared();
             let wi = d / r2.sqrt();
@@ -189,9 +192,15 @@ fn reflected(p: DVec3, wo: DVec3, alpha: f64, light: Emitter, n: usize) -> DVec3
     sum * light.le as f64
 }
 
-fn expected_plane(scene: &Scene, alpha: f64, light: Emitter, n: usize) -> impl Fn(usize, usize) -> Option<DVec3> + '_ {
+fn expected_plane(
+    scene: &Scene,
+    alpha: f64,
+    light: Emitter,
+    sub: usize,
+    n: usize,
+) -> impl Fn(usize, usize) -> Option<DVec3> + '_ {
     move |x, y| {
-        let pts = floor_points(&scene.camera, light, x, y)?;
+        let pts = floor_points(&scene.camera, light, sub, x, y)?;
         Some(pts.iter().map(|&(p, wo)| reflected(p, wo, alpha, light, n)).sum::<DVec3>() / pts.len() as f64)
     }
 }
@@ -202,7 +211,7 @@ fn expected_plane(scene: &Scene, alpha: f64, light: Emitter, n: usize) -> impl F
 fn rough_conductor_under_an_area_light_matches_quadrature() {
     let light = Emitter { centre: vec3(0.0, 0.8, -0.5), side: 0.5, le: 4.0 };
     let scene = plane_scene(0.3, light);
-    let expect = expected_plane(&scene, 0.3, light, 48);
+    let expect = expected_plane(&scene, 0.3, light, SUB, 48);
     let acc = render(&scene, &Settings { light_samples: 2, ..render::settings(W, H, 1, 64) });
     let (z, checked) = assert_regions_match(&acc, 8, &expect, 2e-3, "copper alpha 0.3");
     assert!(checked > W * H / 2, "{checked} pixels checked");
@@ -213,31 +222,32 @@ fn rough_conductor_under_an_area_light_matches_quadrature() {
     eprintln!("copper alpha 0.3: worst |z| {z:.2}");
 }
 
-/// A 0.15-wide emitter of radiance 50 in copper of roughness 0.02. Per sample, light sampling
+/// A 0.4-wide emitter of radiance 20 in copper of roughness 0.01. Per sample, light sampling
 /// weighs a direction by f cos / p_light, which in so sharp a lobe is tens of times Le; the
 /// power heuristic caps each light sample at ns Le w / 2 and the BSDF sample at Le w, where
 /// w = F G (wo.h) / (cos_o cos_h) <= (wo.h) / (cos_o cos_h) is the BSDF sample's weight. So
 /// X <= Xmax = Le (1 + ns / 2) max w, and the sample variance E[X^2] - E[X]^2 <= Xmax E[X].
 #[test]
 fn mis_keeps_a_small_bright_light_in_a_sharp_lobe_within_its_variance_bound() {
-    let light = Emitter { centre: vec3(0.0, 0.8, -0.5), side: 0.15, le: 50.0 };
-    let alpha = 0.02;
+    let light = Emitter { centre: vec3(0.0, 0.8, -0.5), side: 0.4, le: 20.0 };
+    let alpha = 0.01;
     let scene = plane_scene(alpha as f32, light);
     let ns = 1;
     let acc = render(&scene, &Settings { light_samples: ns, ..render::settings(W, H, 1, 256) });
-    let expect = expected_plane(&scene, alpha, light, 96);
-    let (z, checked) = assert_regions_match(&acc, 8, &expect, 5e-3, "copper alpha 0.02");
+    let expect = expected_plane(&scene, alpha, light, 3, 80);
+    let (z, checked) = assert_regions_match(&acc, 8, &expect, 5e-3, "copper alpha 0.01");
     assert!(checked > W * H / 2);
-    let mut lit = 0;
+    let (mut lit, mut worst) = (0, 0.0f64);
     for y in 0..H {
         for x in 0..W {
-            let Some(pts) = floor_points(&scene.camera, light, x, y) else { continue };
+            let Some(pts) = floor_points(&scene.camera, light, 3, x, y) else { continue };
             let mut w_max = 0.0f64;
             for &(p, wo) in &pts {
                 for j in 0..=8 {
                     for i in 0..=8 {
                         let s = light.side as f64;
-                        let q = light.centre.as_dvec3() + DVec3::new((i as f64 / 8.0 - 0.5) * s, 0.0, (j as f64 / 8.0 - 0.5) * s);
+                        let q = light.centre.as_dvec3()
+                            + DVec3::new((i as f64 / 8.0 - 0.5) * s, 0.0, (j as f64 / 8.0 - 0.5) * s);
                         let wi = (q - p).normalize();
                         let h = (wo + wi).normalize();
                         w_max = w_max.max(wo.dot(h) / (wo.y * h.y));
@@ -251,13 +261,18 @@ fn mis_keeps_a_small_bright_light_in_a_sharp_lobe_within_its_variance_bound() {
             let var = px.variance_of_mean().y * px.valid as f64;
             if mean > 0.01 {
                 lit += 1;
+                worst = worst.max(var / (x_max * mean));
             }
             // 1.5: the sample variance of 256 samples bounded by Xmax is itself noisy.
-            assert!(var <= 1.5 * x_max * mean + 1e-9, "pixel ({x},{y}): variance {var}, mean {mean}, bound {}", x_max * mean);
+            assert!(
+                var <= 1.5 * x_max * mean + 1e-9,
+                "pixel ({x},{y}): variance {var}, mean {mean}, bound {}",
+                x_max * mean
+            );
         }
     }
     assert!(lit >= 4, "{lit} pixels see the highlight");
-    eprintln!("copper alpha 0.02: worst |z| {z:.2}, {lit} lit pixels");
+    eprintln!("copper alpha 0.01: worst |z| {z:.2}, {lit} lit pixels, variance up to {worst:.2} of the bound");
 }
 
 // ---- Furnace spheres.
@@ -316,8 +331,9 @@ fn furnace_spheres_reflect_the_environment_times_their_albedo() {
         };
         // A(cos_o) tabulated and interpolated linearly (smooth in cos_o).
         let nodes = 64;
-        let table: Vec<f64> =
-            (0..=nodes).map(|i| if alpha == 0.0 { 1.0 } else { albedo((i as f64 / nodes as f64).max(1e-3), alpha) }).collect();
+        let table: Vec<f64> = (0..=nodes)
+            .map(|i| if alpha == 0.0 { 1.0 } else { albedo((i as f64 / nodes as f64).max(1e-3), alpha) })
+            .collect();
         let a_of = |c: f64| {
             let f = c.clamp(0.0, 1.0) * nodes as f64;
             let i = (f as usize).min(nodes - 1);
