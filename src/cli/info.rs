@@ -5,13 +5,13 @@ use anyhow::Result;
 use serde_json::json;
 use std::time::Instant;
 use wavepath::effects::Effects;
-use wavepath::load::{LoadOptions, load};
+use wavepath::load::LoadOptions;
 use wavepath::scene::{Environment, Scene};
 use wavepath::settings::Settings;
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
-    let mut scene = load(&a.scene, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?;
+    let mut scene = super::load_scene(&a.scene, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?;
     if let Some(e) = &a.envmap {
         scene.env = Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
     }

@@ -51,3 +51,12 @@ pub fn main() -> i32 {
         }
     }
 }
+
+/// Loads a scene file and prints the loader's notes, which only a scene that loaded has.
+fn load_scene(path: &std::path::Path, opts: &wavepath::load::LoadOptions) -> anyhow::Result<wavepath::scene::Scene> {
+    let scene = wavepath::load::load(path, opts)?;
+    for n in &scene.notes {
+        eprintln!("{n}");
+    }
+    Ok(scene)
+}

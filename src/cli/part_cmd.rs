@@ -40,6 +40,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         height: s.height,
         spp: s.spp,
         stats: stats.clone(),
+        pixels: String::new(),
     };
     wavepath::parts::file::write(&out, &meta, &acc)?;
     let _: &PartStats = &stats;

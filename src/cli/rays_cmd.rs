@@ -4,7 +4,7 @@ use super::args::{DumpArgs, TraceArgs};
 use anyhow::{Result, bail};
 use std::time::Instant;
 use wavepath::accel::{Bvh, TraceCounters};
-use wavepath::load::{LoadOptions, load};
+use wavepath::load::LoadOptions;
 use wavepath::rayfile::file::{HitRecord, read_rays, write_hits, write_rays};
 use wavepath::rayfile::{diffuse_rays, primary_rays, trace_all};
 
@@ -14,7 +14,7 @@ pub fn run_dump(args: &DumpArgs) -> Result<()> {
         Some([w, h]) if *w > 0 && *h > 0 => (*w as usize, *h as usize),
         Some(_) => bail!("{}: -r needs a width and a height above 0", args.scene.display()),
     };
-    let scene = load(&args.scene, &LoadOptions::default())?;
+    let scene = super::load_scene(&args.scene, &LoadOptions::default())?;
     let primary = primary_rays(&scene, w, h);
     let rays = match args.kind.as_str() {
         "primary" => primary,
@@ -32,7 +32,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let threads = args.threads.or(args.threads_pos).unwrap_or(1).max(1);
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
-    let scene = load(&args.mesh, &LoadOptions::default())?;
+    let scene = super::load_scene(&args.mesh, &LoadOptions::default())?;
     let bvh = Bvh::build(&scene).with_isa(args.isa);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];

@@ -6,7 +6,7 @@ use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use wavepath::effects::Effects;
-use wavepath::load::{LoadOptions, default_scene, load};
+use wavepath::load::{LoadOptions, default_scene};
 use wavepath::scene::{Scene, read_camera_file};
 use wavepath::settings::Settings;
 use wavepath::stats::RenderStats;
@@ -14,7 +14,7 @@ use wavepath::stats::RenderStats;
 /// Loads the scene the arguments name (or the default) with the camera adjustments applied.
 pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     let mut scene = match &a.scene {
-        Some(p) => load(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
+        Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
         None => default_scene(),
     };
     if let Some(c) = &a.camera_file {

@@ -4,7 +4,7 @@ use super::choices::{Camera, Sweep};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
-use wavepath::load::{CameraMode, LoadOptions, default_scene, load};
+use wavepath::load::{CameraMode, LoadOptions, default_scene};
 use wavepath::settings::{Settings, Shading};
 use wavepath::study::StudyConfig;
 
@@ -112,7 +112,7 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
 pub fn run(a: &StudyArgs) -> Result<()> {
     let cfg = config(a)?;
     let mut scene = match &a.scene {
-        Some(p) => load(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
+        Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
         None => default_scene(),
     };
     a.fov.apply(&mut scene.camera, cfg.base.width, cfg.base.height);

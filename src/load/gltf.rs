@@ -9,6 +9,7 @@ use crate::scene::texture::{Filter, TextureImage, Wrap};
 use crate::scene::{Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
 use anyhow::{Result, anyhow};
 use glam::{Mat3, Mat4, Vec2, Vec3};
+use gltf::accessor::{DataType, Dimensions};
 use gltf::khr_lights_punctual::Kind;
 use gltf::texture::{MagFilter, WrappingMode};
 use std::path::{Path, PathBuf};
@@ -28,6 +29,7 @@ fn read(path: &Path) -> Result<Scene, String> {
     if bytes.starts_with(b"glTF") && glb_length_is_bad(&bytes) {
         return Err("binary glTF header length does not match the file".into());
     }
+    precheck(&bytes)?;
     let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| e.to_string())?;
     let base = path.parent().unwrap_or(Path::new("."));
     for b in gltf.document.buffers() {
@@ -41,7 +43,8 @@ fn read(path: &Path) -> Result<Scene, String> {
     let buffers = gltf::import_buffers(&gltf.document, Some(base), gltf.blob.clone()).map_err(|e| e.to_string())?;
     let doc = &gltf.document;
 
-    let images = decode_images(doc, base, &buffers, path)?;
+    let mut notes = Vec::new();
+    let images = decode_images(doc, base, &buffers, path, &mut notes)?;
     let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images)).collect();
     let default_material = materials.len() as u32;
     materials.push(Material::default());
@@ -62,13 +65,13 @@ fn read(path: &Path) -> Result<Scene, String> {
         let Some(m) = node.mesh() else { continue };
         for prim in m.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
-                eprintln!(
+                notes.push(format!(
                     "warning: {}: mesh {} primitive {} has mode {:?}; only triangles are loaded",
                     path.display(),
                     m.index(),
                     prim.index(),
                     prim.mode()
-                );
+                ));
                 continue;
             }
             let mat = prim.material().index().map_or(default_material, |i| i as u32);
@@ -85,9 +88,44 @@ fn read(path: &Path) -> Result<Scene, String> {
         return Err("no triangles in the default scene".into());
     }
     let has_camera = camera.is_some();
-    let mut scene = Scene { mesh, materials, lights, camera: camera.unwrap_or_default(), ..Scene::default() };
+    let mut scene = Scene { mesh, materials, lights, camera: camera.unwrap_or_default(), notes, ..Scene::default() };
     super::finish_mesh_only(&mut scene, has_camera);
     Ok(scene)
+}
+
+/// The references that the gltf crate follows before range-checking them (its validation
+/// reads a primitive's POSITION accessor, and an image in a buffer view its mimeType, with
+/// an unchecked index or unwrap): a damaged file would panic inside the crate.
+fn precheck(bytes: &[u8]) -> Result<(), String> {
+    let json: std::borrow::Cow<[u8]> = if bytes.starts_with(b"glTF") {
+        gltf::Glb::from_slice(bytes).map_err(|e| e.to_string())?.json
+    } else {
+        bytes.into()
+    };
+    // A document that does not parse is reported by the crate itself.
+    let Ok(root) = gltf::json::deserialize::from_slice::<gltf::json::Root>(&json) else { return Ok(()) };
+    let accessors = root.accessors.len();
+    for (mi, m) in root.meshes.iter().enumerate() {
+        for (pi, p) in m.primitives.iter().enumerate() {
+            let refs = p.attributes.values().chain(p.indices.as_ref());
+            if let Some(a) = refs.map(|a| a.value()).find(|&a| a >= accessors) {
+                return Err(format!("mesh {mi} primitive {pi}: accessor {a} does not exist ({accessors} accessors)"));
+            }
+        }
+    }
+    for (i, img) in root.images.iter().enumerate() {
+        match (&img.buffer_view, &img.uri) {
+            (Some(v), _) if v.value() >= root.buffer_views.len() => {
+                return Err(format!("image {i}: buffer view {} does not exist", v.value()));
+            }
+            (Some(_), _) if img.mime_type.is_none() => {
+                return Err(format!("image {i} is in a buffer view but has no mimeType"));
+            }
+            (None, None) => return Err(format!("image {i} has neither a uri nor a buffer view")),
+            _ => {}
+        }
+    }
+    Ok(())
 }
 
 /// A .glb whose declared length exceeds the data or is shorter than its own header.
@@ -131,7 +169,34 @@ fn flatten(doc: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, Mat4)>, String> 
     Ok(out)
 }
 
+/// Refuses an accessor whose component type or shape is not one the semantic allows: the
+/// gltf crate reads such data with debug-only checks, so it would panic or read garbage.
+fn check_accessor(acc: Option<gltf::Accessor>, what: &str, types: &[DataType], dims: Dimensions) -> Result<(), String> {
+    let Some(acc) = acc else { return Ok(()) };
+    if !types.contains(&acc.data_type()) || acc.dimensions() != dims {
+        return Err(format!(
+            "{what} accessor {} holds {:?} {:?}, not {:?} of {:?}",
+            acc.index(),
+            acc.dimensions(),
+            acc.data_type(),
+            dims,
+            types
+        ));
+    }
+    Ok(())
+}
+
 fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat4, mat: u32) -> Result<Mesh, String> {
+    use gltf::Semantic;
+    check_accessor(prim.get(&Semantic::Positions), "POSITION", &[DataType::F32], Dimensions::Vec3)?;
+    check_accessor(prim.get(&Semantic::Normals), "NORMAL", &[DataType::F32], Dimensions::Vec3)?;
+    check_accessor(
+        prim.get(&Semantic::TexCoords(0)),
+        "TEXCOORD_0",
+        &[DataType::F32, DataType::U8, DataType::U16],
+        Dimensions::Vec2,
+    )?;
+    check_accessor(prim.indices(), "index", &[DataType::U8, DataType::U16, DataType::U32], Dimensions::Scalar)?;
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<Vec3> = reader
         .read_positions()
@@ -213,6 +278,7 @@ fn decode_images(
     base: &Path,
     buffers: &[gltf::buffer::Data],
     path: &Path,
+    notes: &mut Vec<String>,
 ) -> Result<Vec<Option<Arc<TextureImage>>>, String> {
     let used: std::collections::HashSet<usize> = doc
         .materials()
@@ -233,7 +299,11 @@ fn decode_images(
                 Some(TextureImage::decode_srgb(bytes).map_err(|e| format!("image {}: {e}", img.index()))?)
             }
             gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-                eprintln!("warning: {}: image {} is a data URI; not supported, ignored", path.display(), img.index());
+                notes.push(format!(
+                    "warning: {}: image {} is a data URI; not supported, ignored",
+                    path.display(),
+                    img.index()
+                ));
                 None
             }
             gltf::image::Source::Uri { uri, .. } => {
@@ -241,7 +311,7 @@ fn decode_images(
                 if file.is_file() {
                     Some(TextureImage::open_srgb(&file).map_err(|e| e.to_string())?)
                 } else {
-                    eprintln!("warning: {}: texture {} not found", path.display(), file.display());
+                    notes.push(format!("warning: {}: texture {} not found", path.display(), file.display()));
                     None
                 }
             }

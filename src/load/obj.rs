@@ -20,6 +20,7 @@ use std::path::Path;
 struct MtlState {
     materials: Vec<Material>,
     error: Option<String>,
+    notes: Vec<String>,
 }
 
 pub fn load(path: &Path) -> Result<Scene> {
@@ -43,7 +44,9 @@ pub fn load(path: &Path) -> Result<Scene> {
     if let Some(e) = state.error {
         bail!("{shown}: {e}");
     }
-    build_scene(path, models, state.materials).map_err(|e| anyhow!("{shown}: {e}"))
+    let mut scene = build_scene(path, models, state.materials).map_err(|e| anyhow!("{shown}: {e}"))?;
+    scene.notes = state.notes;
+    Ok(scene)
 }
 
 /// tobj's errors carry no position; parse errors stop right after the offending line.
@@ -66,7 +69,10 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
     let text = match std::fs::read_to_string(path) {
         Ok(t) => t,
         Err(e) => {
-            eprintln!("warning: {}: cannot read material library ({e}); using the default material", path.display());
+            state.borrow_mut().notes.push(format!(
+                "warning: {}: cannot read material library ({e}); using the default material",
+                path.display()
+            ));
             return Err(tobj::LoadError::OpenFileFailed);
         }
     };
@@ -77,7 +83,7 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
             for m in &mut mats {
                 let Some(t) = &mut m.albedo_texture else { continue };
                 if !t.path.is_file() {
-                    eprintln!("warning: {}: texture {} not found", path.display(), t.path.display());
+                    state.notes.push(format!("warning: {}: texture {} not found", path.display(), t.path.display()));
                     continue;
                 }
                 match crate::scene::texture::TextureImage::open_srgb(&t.path) {

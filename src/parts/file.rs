@@ -15,7 +15,7 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 /// Version of the part-file layout; a merge refuses any other.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 /// The header attribute that holds [`PartMeta`] as JSON.
 pub const META_ATTRIBUTE: &str = "wavepath.part";
 
@@ -32,6 +32,9 @@ pub struct PartMeta {
     pub height: usize,
     pub spp: u32,
     pub stats: PartStats,
+    /// [`super::identity::pixels_hash`] of the sums, set when the part is encoded and
+    /// checked when it is read.
+    pub pixels: String,
 }
 
 /// The f64 fields of [`PixelSums`], in channel order.
@@ -106,7 +109,8 @@ pub fn encode(meta: &PartMeta, acc: &Accumulator) -> Result<Vec<u8>> {
         channels.push(AnyChannel::new(format!("wavepath.{name}.lo").as_str(), FlatSamples::U32(lo)));
     }
     let mut attrs = LayerAttributes::named("wavepath part");
-    let json = ascii_json(&serde_json::to_string(meta)?);
+    let meta = PartMeta { pixels: super::identity::pixels_hash(acc), ..meta.clone() };
+    let json = ascii_json(&serde_json::to_string(&meta)?);
     attrs.other.insert(Text::from(META_ATTRIBUTE), AttributeValue::Text(Text::new_or_panic(json)));
     let layer = Layer::new((w, h), attrs, Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
     let mut bytes = Vec::new();
@@ -248,6 +252,9 @@ pub fn read(path: &Path) -> Result<Part> {
             }
             set_f64_fields(p, v);
         }
+    }
+    if super::identity::pixels_hash(&acc) != meta.pixels {
+        bail!("{name}: the pixel data is damaged (its checksum does not match the header's)");
     }
     Ok(Part { path: path.to_path_buf(), meta, acc })
 }

@@ -84,6 +84,10 @@ pub struct Scene {
     pub lights: Vec<Light>,
     pub camera: Camera,
     pub env: Environment,
+    /// Lines for the log about what the loader skipped or changed ("warning: FILE: ..."),
+    /// kept with the scene rather than printed, so that a file that then fails to load gets
+    /// its one-line error alone.
+    pub notes: Vec<String>,
 }
 
 impl Scene {

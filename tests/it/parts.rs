@@ -107,6 +107,7 @@ fn sample_parts_merge_within_the_summation_order_bound() {
             height: st.height,
             spp: st.spp,
             stats,
+            pixels: String::new(),
         };
         let p = dir.join(format!("s{i}.exr"));
         wavepath::parts::file::write(&p, &meta, &acc).unwrap();

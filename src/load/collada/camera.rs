@@ -68,7 +68,11 @@ pub fn place(o: &Optics, w: Mat4, mode: CameraMode, (lo, hi): (Vec3, Vec3)) -> (
             let d = (w * Vec4::new(0.0, 0.0, -1.0, 1.0)).truncate();
             cam.cs184_place(d.normalize_or_zero(), lo, hi);
             cam.fit = FovFit::cs184(o.hfov_deg, o.vfov_deg);
-            note = cam.cover_bounds(lo, hi);
+            // A camera already broken (bounds of 1e20 square to infinity) is refused by the
+            // scene's validation: no note before that one-line error.
+            if cam.validate().is_ok() {
+                note = cam.cover_bounds(lo, hi);
+            }
         }
         CameraMode::File => {
             cam.fit = if o.has_xfov { FovFit::Horizontal } else { FovFit::Vertical };

@@ -166,7 +166,7 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
             Some((optics, w)) => {
                 let (cam, note) = camera::place(optics, *w, self.opts.camera, bounds);
                 if let Some(note) = note {
-                    eprintln!("note: {name}: {note}");
+                    self.scene.notes.push(format!("note: {name}: {note}"));
                 }
                 cam
             }

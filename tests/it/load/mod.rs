@@ -2,5 +2,6 @@
 //! files, and one scene written in three formats loading alike.
 
 mod collada;
+mod damaged;
 mod formats_agree;
 mod mesh_loaders;
