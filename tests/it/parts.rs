@@ -363,3 +363,32 @@ fn parts_rendered_with_different_thread_counts_merge_bit_for_bit() {
     run(&["-t", "2", "-f", s(&dir.join("one.exr"))]);
     assert_eq!(exr_bits(&dir.join("one.exr")), exr_bits(&dir.join("m.exr")));
 }
+
+/// Pixel data changed after the part was written, in a way the EXR decoder cannot see (a
+/// file whose header is another render's): the checksum refuses it, naming the part.
+#[test]
+fn parts_with_damaged_pixels_are_refused() {
+    use wavepath::parts::file::{read, write};
+    let dir = temp_dir("parts-damaged");
+    let out = dir.join("p0.exr");
+    ok(&["-s", "2", "-r", "16", "12", "--part", "0/2", "-f", s(&out)]);
+    ok(&["-s", "2", "-r", "16", "12", "--part", "1/2", "-f", s(&dir.join("p1.exr"))]);
+    let part = read(&out).unwrap();
+    let mut other = part.acc.clone();
+    other.pixels[7].sum.x += 0.25;
+    let changed = dir.join("changed.exr");
+    write(&changed, &part.meta, &other).unwrap();
+    let hash = |acc| wavepath::parts::identity::pixels_hash(acc);
+    let (good, bad) = (hash(&part.acc), hash(&other));
+    assert_ne!(good, bad);
+    // The changed pixels under the original header's checksum.
+    let bytes = std::fs::read(&changed).unwrap();
+    let at = bytes.windows(bad.len()).position(|w| w == bad.as_bytes()).expect("checksum in the header");
+    let mut forged = bytes.clone();
+    forged[at..at + good.len()].copy_from_slice(good.as_bytes());
+    std::fs::write(&changed, &forged).unwrap();
+    let e = format!("{:#}", read(&changed).err().expect("a damaged part is refused"));
+    assert!(e.contains("changed.exr") && e.contains("checksum"), "{e}");
+    let e = refused(&["merge", s(&changed), s(&dir.join("p1.exr")), "-f", s(&dir.join("x.exr"))]);
+    assert!(e.contains("changed.exr"), "{e}");
+}
