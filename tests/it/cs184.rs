@@ -458,8 +458,8 @@ fn png_bytes_truncate_for_cs184_and_round_for_srgb() {
 /// computed here by a 200 x 200 midpoint rule in f64. Hemisphere sampling (`-H`) does not use
 /// the light's pdf and is unchanged by the switch.
 ///
-/// Regions of 8x8 pixels are compared at 5 standard errors (from the render's own per-pixel
-/// variance): a false failure has probability below 1e-5 per region; seeds are fixed.
+/// Regions of 8x8 pixels are compared by the shared z-test of `common::agree` (false
+/// failures below 1e-6, fixed seeds).
 #[test]
 fn cs184_light_pdf_weights_each_light_sample_by_its_distance() {
     let (w, h) = (32, 24);
@@ -511,24 +511,8 @@ fn cs184_light_pdf_weights_each_light_sample_by_its_distance() {
     let s = Settings { light_samples: 4, ..render::settings(w, h, 1, 16) };
     for (biased, power) in [(false, 2), (true, 1)] {
         let acc = render::wavefront(&scene, &Settings { cs184_light_pdf: biased, ..s.clone() }).0;
-        for ry in 0..h / 8 {
-            for rx in 0..w / 8 {
-                let (mut got, mut want, mut var) = (0.0, 0.0, 0.0);
-                for y in ry * 8..ry * 8 + 8 {
-                    for x in rx * 8..rx * 8 + 8 {
-                        let px = &acc.pixels[y * w + x];
-                        got += px.mean().x as f64;
-                        var += px.variance_of_mean().x;
-                        want += expected(floor_point(x, y), power);
-                    }
-                }
-                assert!(
-                    (got - want).abs() <= 5.0 * var.sqrt() + 1e-4 * want,
-                    "cs184 pdf {biased}: region ({rx},{ry}) sums to {got}, expected {want} (sd {})",
-                    var.sqrt()
-                );
-            }
-        }
+        let want = |x, y| Some(glam::DVec3::splat(expected(floor_point(x, y), power)));
+        crate::common::agree::assert_regions_match(&acc, 8, want, 1e-4, &format!("cs184 pdf {biased}"));
     }
     let hemi = Settings { hemisphere: true, ..s.clone() };
     let a = render::wavefront(&scene, &hemi).0;
