@@ -115,8 +115,14 @@ fn png_exr_and_stats_are_written() {
     let stats = dir.join("s.json");
     for f in [&png, &exr] {
         let o = run_wavepath(&[
-            "--shading",
-            "normals",
+            "-s",
+            "4",
+            "-m",
+            "1",
+            "--tonemap",
+            "cs184",
+            "--fov",
+            "frame",
             "-r",
             "32",
             "24",
@@ -129,48 +135,61 @@ fn png_exr_and_stats_are_written() {
         ]);
         assert!(o.status.success(), "{}", stderr(&o));
     }
-    let img = image::open(&png).unwrap();
+    let img = image::open(&png).unwrap().to_rgb8();
     assert_eq!((img.width(), img.height()), (32, 24));
     let exr_img = image::open(&exr).unwrap().into_rgb32f();
     assert_eq!((exr_img.width(), exr_img.height()), (32, 24));
+    // The PNG is the EXR's radiance through the transfer curve, byte for byte (values within
+    // 1e-3 of a byte boundary, where f32 and f64 may round apart, are skipped); both files
+    // have row 0 at the top.
+    let curve = |l: f32| (2f64.sqrt() * l as f64).powf(1.0 / 2.2).clamp(0.0, 1.0) * 255.0;
+    let mut checked = 0;
+    for (p, e) in img.pixels().zip(exr_img.pixels()) {
+        for c in 0..3 {
+            let v = curve(e[c]);
+            if (v - v.round()).abs() > 1e-3 || v == 0.0 || v == 255.0 {
+                assert_eq!(p[c] as f64, v.floor(), "PNG byte {} for radiance {}", p[c], e[c]);
+                checked += 1;
+            }
+        }
+    }
+    assert!(checked > 32 * 24 * 3 * 9 / 10, "{checked}");
+    assert!(exr_img.pixels().any(|e| e[0] != e[1]), "a coloured picture");
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&stats).unwrap()).unwrap();
     for key in
         ["scene", "triangles", "spheres", "effects", "bvh", "rays", "stages", "samples_per_pixel", "invalid_samples"]
     {
         assert!(v.get(key).is_some(), "stats lack {key}: {v}");
     }
-    assert_eq!(v["rays"]["camera"], 32 * 24);
+    assert_eq!(v["rays"]["camera"], 32 * 24 * 4);
     assert_eq!(v["threads"], 1);
 }
 
+/// A cell (`-p`) renders exactly the full render's pixels inside it, bit for bit (each
+/// pixel's samples are its own), and nothing outside.
 #[test]
 fn cell_renders_only_that_rectangle() {
     let dir = temp_dir("cli-cell");
-    let out = dir.join("c.pfm");
-    let o = run_wavepath(&[
-        "--shading",
-        "normals",
-        "-r",
-        "40",
-        "30",
-        "-p",
-        "10",
-        "5",
-        "20",
-        "10",
-        "-f",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let (w, _, px) = read_pfm(&out);
-    for (i, p) in px.iter().enumerate() {
+    let (cell, full) = (dir.join("c.pfm"), dir.join("f.pfm"));
+    let base = ["-s", "4", "-m", "3", "-r", "40", "30"];
+    for (out, extra) in [(&cell, &["-p", "10", "5", "20", "10"][..]), (&full, &[][..])] {
+        let mut args = base.to_vec();
+        args.extend_from_slice(extra);
+        args.extend(["-f", out.to_str().unwrap()]);
+        let o = run_wavepath(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    }
+    let (w, _, px) = read_pfm(&cell);
+    let (_, _, all) = read_pfm(&full);
+    for (i, (p, q)) in px.iter().zip(&all).enumerate() {
         let (x, y) = (i % w, i / w);
-        let inside = (10..30).contains(&x) && (5..15).contains(&y);
-        if !inside {
+        if (10..30).contains(&x) && (5..15).contains(&y) {
+            assert_eq!(p.map(f32::to_bits), q.map(f32::to_bits), "pixel ({x},{y}) differs from the full render");
+        } else {
             assert_eq!(*p, [0.0; 3], "pixel ({x},{y}) outside the cell was rendered");
         }
     }
-    assert!(px.iter().any(|p| *p != [0.0; 3]));
+    assert!(px.iter().filter(|p| **p != [0.0; 3]).count() > 150);
 }
 
 /// Each bad flag gets exactly one line on stderr, naming the problem, and a non-zero exit.
