@@ -134,13 +134,35 @@ fn obj_polygons_groups_and_relative_indices_keep_file_order() {
     assert!(scene.mesh.normals.is_none());
 }
 
+/// One vertex per distinct corner the faces use (the file has one object and plain `v`
+/// indices), triangles in file order with the file's coordinates.
 #[test]
 fn obj_shares_positions_of_a_big_mesh() {
     let Some(path) = common::scene("meshes/lucy_100k.obj") else { return };
     let text = std::fs::read_to_string(&path).unwrap();
-    let file_vertices = text.lines().filter(|l| l.starts_with("v ")).count();
+    assert!(!text.lines().any(|l| l.starts_with("o ") || l.starts_with("g ")), "one object");
+    let file_positions: Vec<Vec3> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let c: Vec<f32> = l.split_whitespace().map(|x| x.parse().unwrap()).collect();
+            vec3(c[0], c[1], c[2])
+        })
+        .collect();
+    let faces: Vec<Vec<usize>> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("f "))
+        .map(|l| l.split_whitespace().map(|c| c.split('/').next().unwrap().parse::<usize>().unwrap() - 1).collect())
+        .collect();
+    assert!(faces.iter().all(|f| f.len() == 3), "triangles only");
+    let used: std::collections::HashSet<usize> = faces.iter().flatten().copied().collect();
     let scene = load_ok(&path);
-    assert!(scene.mesh.positions.len() <= file_vertices, "{} > {file_vertices}", scene.mesh.positions.len());
+    assert_eq!(scene.mesh.positions.len(), used.len(), "one vertex per distinct corner");
+    assert_eq!(scene.mesh.triangles.len(), faces.len());
+    for (i, f) in faces.iter().enumerate() {
+        let want = [file_positions[f[0]], file_positions[f[1]], file_positions[f[2]]];
+        assert_eq!(scene.mesh.corners(i), want, "triangle {i}");
+    }
     assert!(scene.mesh.normals.is_none(), "no vn lines: no normals");
 }
 
