@@ -178,6 +178,39 @@ fn command_writes_csv_plots_and_report() {
     assert_eq!(rows[0], study::report::CSV_HEADER);
     // Fixed spp 1..128 (8 renders) and 5 tolerances.
     assert_eq!(rows.len(), 1 + 8 + 5, "{csv}");
+    let header: Vec<&str> = rows[0].split(',').collect();
+    let table: Vec<Vec<&str>> = rows[1..].iter().map(|r| r.split(',').collect()).collect();
+    let col = |row: &[&str], name: &str| -> f64 {
+        let i = header.iter().position(|h| *h == name).unwrap();
+        row[i].parse().unwrap_or_else(|_| panic!("{name} = {}", row[i]))
+    };
+    let (fixed, adaptive) = table.split_at(8);
+    for (k, row) in fixed.iter().enumerate() {
+        let spp = (1u32 << k) as f64;
+        assert_eq!((col(row, "spp"), col(row, "mean_spp")), (spp, spp), "{row:?}");
+        // At least one camera ray per sample, and rays grow with samples.
+        assert!(col(row, "rays") >= 16.0 * 12.0 * spp, "{row:?}");
+        if k > 0 {
+            let ratio = col(row, "rays") / col(&fixed[k - 1], "rays");
+            assert!((1.8..2.2).contains(&ratio), "rays x{ratio} from {} to {spp} spp", spp / 2.0);
+        }
+    }
+    assert!(col(&fixed[7], "rel_mse") < col(&fixed[0], "rel_mse") / 8.0, "error does not fall with samples");
+    let mut last = 0.0;
+    for (row, tol) in adaptive.iter().zip([0.2, 0.1, 0.05, 0.02, 0.01]) {
+        assert_eq!(col(row, "adaptive_tolerance"), tol);
+        let m = col(row, "mean_spp");
+        // Batches of 64 up to 128: every pixel takes 64 or 128; tighter tolerances take more.
+        assert!((64.0..=128.0).contains(&m) && m >= last, "tolerance {tol}: mean spp {m}");
+        last = m;
+    }
+    for row in &table {
+        assert_eq!(col(row, "invalid_samples"), 0.0);
+        assert_eq!(col(row, "ref_floor"), col(&table[0], "ref_floor"), "one reference for every row");
+        for name in ["rmse", "rel_mse", "seconds"] {
+            assert!(col(row, name).is_finite() && col(row, name) >= 0.0, "{name} in {row:?}");
+        }
+    }
     for name in ["error_vs_time.png", "error_vs_time.svg", "reference.png", "report.md", "adaptive_rate.png"] {
         assert!(out.join(name).is_file(), "{name} missing");
     }

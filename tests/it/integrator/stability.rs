@@ -500,30 +500,20 @@ mod slow {
         }
     }
 
-    /// Every scene file in WAVEPATH_SCENES at the study's settings (24x18, 2 spp, -m 5), with
-    /// light sampling and with hemisphere sampling.
+    /// Every scene file in WAVEPATH_SCENES loads and renders finite at the study's settings
+    /// (24x18, 2 spp, -m 5), with light sampling and with hemisphere sampling.
     #[test]
     fn no_nan_or_inf_on_any_scene() {
         let Some(dir) = common::scenes_dir() else { return };
         let files = common::files_with_ext(&dir, &["dae", "obj", "ply", "gltf", "glb"]);
         assert!(!files.is_empty());
-        let mut rendered = 0;
         for f in &files {
-            let mut scene = match load(f, &LoadOptions::default()) {
-                Ok(s) => s,
-                Err(e) => {
-                    eprintln!("skipped (does not load): {e:#}");
-                    continue;
-                }
-            };
+            let mut scene = load(f, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"));
             scene.camera.fit_aspect(24.0 / 18.0);
             for hemisphere in [false, true] {
                 let s = Settings { hemisphere, ..settings(24, 18, 2, 5) };
                 render(&scene, &s);
             }
-            rendered += 1;
         }
-        eprintln!("{rendered} of {} scenes rendered finite", files.len());
-        assert!(rendered * 10 >= files.len() * 9, "only {rendered} of {} scenes loaded", files.len());
     }
 }

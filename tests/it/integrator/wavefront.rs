@@ -135,7 +135,8 @@ fn ray_counts_add_up() {
     // One area light sampled -l 2 times per hit, minus samples facing away from the light.
     assert!(st.shadow_rays > 0 && st.shadow_rays <= st.camera_rays * 2);
     assert_eq!(st.counters.rays, st.total_rays());
-    assert!(st.stages.traverse.is_some_and(|t| t > 0.0) && st.stages.shade.is_some_and(|t| t > 0.0));
+    // The stages ran (their times are measurements, not properties).
+    assert!(st.stages.traverse.is_some() && st.stages.shade.is_some());
     assert_eq!(st.stages.compact, None, "-m 1 runs no bounce stage");
 }
 
