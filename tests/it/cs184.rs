@@ -195,6 +195,78 @@ fn camera_files_keep_their_fields_of_view_and_drop_their_lens() {
     assert_eq!(cam.position, vec3(0.0, 1.0, 4.0));
 }
 
+/// `double` as C++ `<<` writes it: %g with 6 significant digits (what the reference's
+/// settings dump holds).
+fn cpp_double(v: f64) -> String {
+    if v == 0.0 {
+        return if v.is_sign_negative() { "-0".into() } else { "0".into() };
+    }
+    let exp = v.abs().log10().floor() as i32;
+    let trim = |s: String| if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s };
+    if !(-4..6).contains(&exp) {
+        let s = format!("{v:.5e}");
+        let (m, e) = s.split_once('e').unwrap();
+        let e: i32 = e.parse().unwrap();
+        format!("{}e{}{:02}", trim(m.to_string()), if e < 0 { '-' } else { '+' }, e.abs())
+    } else {
+        trim(format!("{v:.*}", (5 - exp).max(0) as usize))
+    }
+}
+
+/// A settings file laid out as the reference's dump writes one (fields of view, aspect and
+/// clip; position and target; the orbit angles; c2w row by row; screen size and distance;
+/// lens), with its 6-digit numbers, for the camera CS184 places in CBspheres at 800x600:
+/// read with `-c`, it shows the picture `--fov frame` shows (the whole 800x600 view), up to
+/// the dump's rounding. A transposed c2w or a swapped line would show another picture.
+#[test]
+fn a_settings_dump_as_the_reference_writes_it_reproduces_its_view() {
+    let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
+    let mut cam = load(&path, &LoadOptions::default()).unwrap().camera;
+    cam.fit_to(800.0, 600.0);
+    let f = |v: f32| cpp_double(v as f64);
+    let (p, m) = (cam.position, cam.c2w);
+    let target = p - 3.0 * m.z_axis;
+    let dump = format!(
+        "{} {} {} {} {}\n{} {} {} {} {} {} \n{} {} {} {} {}\n{}\n800 600 {}\n4.7 0\n",
+        f(cam.hfov_deg),
+        f(cam.vfov_deg),
+        f(4.0 / 3.0),
+        f(cam.nclip),
+        f(cam.fclip),
+        f(p.x),
+        f(p.y),
+        f(p.z),
+        f(target.x),
+        f(target.y),
+        f(target.z),
+        f(m.z_axis.y.acos()),
+        f(m.z_axis.x.atan2(m.z_axis.z)),
+        f(3.0),
+        f(0.2),
+        f(40.0),
+        (0..9).map(|i| f(m.col(i % 3)[i / 3]) + " ").collect::<String>(),
+        f(300.0 / (cam.vfov_deg.to_radians() / 2.0).tan()),
+    );
+    let dir = temp_dir("cs184-dump");
+    std::fs::write(dir.join("cam.txt"), &dump).unwrap();
+    let render = |extra: &[&str], name: &str| {
+        let out = dir.join(name);
+        let mut args = vec![path.to_str().unwrap(), "--shading", "normals", "-r", "160", "120", "-f", out.to_str().unwrap()];
+        args.extend_from_slice(extra);
+        let o = run_wavepath(&args);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        read_pfm(&out)
+    };
+    let from_dump = render(&["-c", dir.join("cam.txt").to_str().unwrap()], "dump.pfm");
+    let framed = render(&["--fov", "frame"], "frame.pfm");
+    let same = from_dump.iter().zip(&framed).filter(|(a, b)| (**a - **b).abs().max_element() < 1e-2).count();
+    assert!(same * 100 >= framed.len() * 99, "{same} of {} pixels agree\n{dump}", framed.len());
+    assert!(framed.iter().filter(|p| **p != Vec3::ZERO).count() > framed.len() / 4);
+    assert_eq!(cpp_double(1.5e-5), "1.5e-05");
+    assert_eq!(cpp_double(-0.000123456789), "-0.000123457");
+    assert_eq!(cpp_double(49.13434), "49.1343");
+}
+
 /// The fit rules, each against its definition.
 #[test]
 fn fit_rules_follow_their_definitions() {
