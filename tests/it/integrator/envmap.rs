@@ -4,6 +4,7 @@
 use crate::common;
 use glam::{DVec3, Vec3};
 use std::f64::consts::PI;
+use std::path::Path;
 use std::sync::Arc;
 use wavepath::accel::BruteForce;
 use wavepath::lights::Infinite;
@@ -220,18 +221,31 @@ fn camera_misses_show_the_map_in_the_right_direction() {
     assert!(map.texel_of(Vec3::new(0.0, 0.999, 0.01).normalize()).1 < 20);
 }
 
-/// `-e` with a missing or broken file is a one-line error naming it.
+/// `-e` with a missing or broken file is a one-line error naming it (damaged maps of every
+/// kind: `load::damaged`).
 #[test]
 fn bad_environment_map_is_a_one_line_error() {
-    let out = std::process::Command::new(common::wavepath_bin())
-        .args(["-r", "8", "8", "-e", "/nonexistent/sky.exr", "-f"])
-        .arg(std::env::temp_dir().join("wavepath-envmap-bad.png"))
-        .output()
-        .unwrap();
-    assert!(!out.status.success());
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("/nonexistent/sky.exr"), "{err}");
-    assert_eq!(err.trim().lines().count(), 1, "{err}");
+    let dir = common::temp_dir("envmap-bad");
+    let text = dir.join("sky.hdr");
+    std::fs::write(&text, "this is not a Radiance picture\n").unwrap();
+    let empty = dir.join("empty.exr");
+    std::fs::write(&empty, b"").unwrap();
+    for map in [Path::new("/nonexistent/sky.exr"), &text, &empty] {
+        let out = common::run_wavepath(&[
+            "-r",
+            "8",
+            "8",
+            "-e",
+            map.to_str().unwrap(),
+            "-f",
+            dir.join("out.png").to_str().unwrap(),
+        ]);
+        assert!(!out.status.success());
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(map.to_str().unwrap()), "{err}");
+        assert_eq!(err.trim().lines().count(), 1, "{err}");
+    }
+    assert!(!dir.join("out.png").exists(), "no image for a bad map");
 }
 
 /// `info -e` loads the map and reports its size (read from the file's own header) and the

@@ -325,7 +325,7 @@ fn furnace_spheres_reflect_the_environment_times_their_albedo() {
             name: format!("furnace {what}"),
             spheres: vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }],
             materials: vec![Material { bsdf, ..Material::diffuse("conductor", Vec3::ONE) }],
-            camera: camera.clone(),
+            camera,
             env: Environment::Constant(Vec3::splat(0.5)),
             ..Scene::default()
         };

@@ -366,7 +366,7 @@ fn check_all(formats: &[Format], root: &Path) {
         let handles: Vec<_> = formats
             .iter()
             .enumerate()
-            .map(|(i, f)| s.spawn(move || run_cases(f, root, 0x2545_f491_4f6c_dd1d ^ (i as u64 + 1) * 0x9e37_79b9)))
+            .map(|(i, f)| s.spawn(move || run_cases(f, root, 0x2545_f491_4f6c_dd1d ^ ((i as u64 + 1) * 0x9e37_79b9))))
             .collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
