@@ -36,7 +36,7 @@ fn default_scene_normals_show_the_floor_and_walls() {
     let dir = temp_dir("cli-normals");
     let out = dir.join("n.pfm");
     // The whole 800x600 picture, small (the CS184 rule would show its centre 80x60 only).
-    let o = run_wavepath(&["--shading", "normals", "--fov", "frame", "-r", "80", "60", "-f", out.to_str().unwrap()]);
+    let o = run_wavepath(["--shading", "normals", "--fov", "frame", "-r", "80", "60", "-f", out.to_str().unwrap()]);
     assert!(o.status.success(), "{}", stderr(&o));
     let (w, h, px) = read_pfm(&out);
     assert_eq!((w, h), (80, 60));
@@ -114,7 +114,7 @@ fn png_exr_and_stats_are_written() {
     let exr = dir.join("a.exr");
     let stats = dir.join("s.json");
     for f in [&png, &exr] {
-        let o = run_wavepath(&[
+        let o = run_wavepath([
             "-s",
             "4",
             "-m",
@@ -244,7 +244,7 @@ fn bad_flags_fail_with_one_line() {
 
 #[test]
 fn help_lists_every_cs184_flag() {
-    let o = run_wavepath(&["--help"]);
+    let o = run_wavepath(["--help"]);
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     for flag in [

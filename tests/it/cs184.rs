@@ -391,7 +391,7 @@ fn a_clip_that_no_longer_covers_the_scene_is_widened() {
     assert!(scene.camera.fclip > farthest, "far clip {} < {farthest}", scene.camera.fclip);
     let out = dir.join("n.pfm");
     let o =
-        run_wavepath(&[path.to_str().unwrap(), "--shading", "normals", "-r", "64", "48", "-f", out.to_str().unwrap()]);
+        run_wavepath([path.to_str().unwrap(), "--shading", "normals", "-r", "64", "48", "-f", out.to_str().unwrap()]);
     assert!(o.status.success());
     let log = String::from_utf8_lossy(&o.stderr);
     let notes: Vec<&str> = log.lines().filter(|l| l.contains("widened")).collect();

@@ -225,7 +225,7 @@ fn part_flags_are_checked() {
         assert!(e.contains(says), "{args:?}: {e}");
     }
     // `auto` outside a scheduler has nothing to go on; inside one it reads the environment.
-    let o2 = run_wavepath(&["--part", "auto", "-f", o]);
+    let o2 = run_wavepath(["--part", "auto", "-f", o]);
     assert!(!o2.status.success());
     let env_run = |vars: &[(&str, &str)], out: &Path| {
         let mut c = Command::new(common::wavepath_bin());

@@ -220,6 +220,6 @@ fn command_writes_csv_plots_and_report() {
     assert!(svg.contains("render time (s)"));
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     assert!(md.contains("![error vs time](error_vs_time.png)") && md.contains("adaptive_rate.png"));
-    let help = std::process::Command::new(common::wavepath_bin()).args(["study", "--help"]).output().unwrap();
+    let help = common::run_wavepath(["study", "--help"]);
     assert!(help.status.success() && String::from_utf8_lossy(&help.stdout).contains("--sweep"));
 }

@@ -56,7 +56,7 @@ fn bad_ray_files_give_one_line_errors() {
     // The CLI reports it in one line and fails, whatever the mesh.
     let f = temp_dir("rays-bad").join("trunc.bin");
     std::fs::write(&f, &good[..40]).unwrap();
-    let out = Command::new(common::wavepath_bin()).args(["rays", "trace", "nothing.obj"]).arg(&f).output().unwrap();
+    let out = common::run_wavepath(["rays", "trace", "nothing.obj", f.to_str().unwrap()]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("trunc.bin") && err.trim().lines().count() == 1, "{err}");

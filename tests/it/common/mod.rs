@@ -85,9 +85,27 @@ pub fn wavepath_bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_wavepath"))
 }
 
-/// Runs the built `wavepath` binary with `args` and waits for it.
-pub fn run_wavepath(args: &[&str]) -> Output {
+/// Runs the built `wavepath` binary with `args` (strings or paths) and waits for it.
+pub fn run_wavepath<S: AsRef<std::ffi::OsStr>>(args: impl IntoIterator<Item = S>) -> Output {
     Command::new(wavepath_bin()).args(args).output().expect("wavepath runs")
+}
+
+/// xorshift64: a fixed, reproducible stream for damaging files (not a sampler: tests of
+/// sampling use the renderer's own streams or `common::chi2`).
+pub struct Xorshift(pub u64);
+
+impl Xorshift {
+    pub fn next(&mut self) -> u64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        self.0
+    }
+
+    /// Uniform in 0..n (n > 0; 0 is treated as 1).
+    pub fn below(&mut self, n: usize) -> usize {
+        (self.next() % n.max(1) as u64) as usize
+    }
 }
 
 /// A fresh, empty folder under the system temp dir, unique to `name` and this process (the

@@ -231,7 +231,7 @@ fn bad_environment_map_is_a_one_line_error() {
     let empty = dir.join("empty.exr");
     std::fs::write(&empty, b"").unwrap();
     for map in [Path::new("/nonexistent/sky.exr"), &text, &empty] {
-        let out = common::run_wavepath(&[
+        let out = common::run_wavepath([
             "-r",
             "8",
             "8",
@@ -257,31 +257,19 @@ fn info_reports_the_environment_map() {
     else {
         return;
     };
-    let out = std::process::Command::new(common::wavepath_bin())
-        .arg("info")
-        .arg(&scene)
-        .arg("-e")
-        .arg(&map)
-        .arg("--json")
-        .output()
-        .unwrap();
+    let (scene, map) = (scene.to_str().unwrap(), map.to_str().unwrap());
+    let out = common::run_wavepath(["info", scene, "-e", map, "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
-    let (w, h) = image::image_dimensions(&map).unwrap();
+    let (w, h) = image::image_dimensions(map).unwrap();
     let env = v["environment"].as_str().unwrap();
     assert!(env.contains(&format!("{w}x{h}")) && env.contains("uffizi"), "{env}");
     assert!(v["effects"].as_array().unwrap().iter().any(|e| e == "environment-map"), "{v}");
     // Without -e the same scene has no map.
-    let out =
-        std::process::Command::new(common::wavepath_bin()).arg("info").arg(&scene).arg("--json").output().unwrap();
+    let out = common::run_wavepath(["info", scene, "--json"]);
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(!v["effects"].as_array().unwrap().iter().any(|e| e == "environment-map"), "{v}");
-    let out = std::process::Command::new(common::wavepath_bin())
-        .arg("info")
-        .arg(&scene)
-        .args(["-e", "/nonexistent/sky.hdr"])
-        .output()
-        .unwrap();
+    let out = common::run_wavepath(["info", scene, "-e", "/nonexistent/sky.hdr"]);
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!out.status.success() && err.contains("/nonexistent/sky.hdr") && err.trim().lines().count() == 1, "{err}");
 }

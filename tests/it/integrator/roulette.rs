@@ -48,7 +48,7 @@ fn the_default_roulette_follows_the_format() {
     for (file, want) in [("cornell_mesh.dae", "--rr 0.65"), ("cornell_mesh.obj", "throughput from depth 5")] {
         let stats = dir.join("s.json");
         let path = scenes.join(file);
-        let o = crate::common::run_wavepath(&[
+        let o = crate::common::run_wavepath([
             path.to_str().unwrap(),
             "-r",
             "16",

@@ -571,21 +571,15 @@ fn damaged_real_file_never_panics() {
     let Some(path) = common::scene("cs184/sky/CBspheres_lambertian.dae") else { return };
     let text = std::fs::read_to_string(&path).unwrap();
     let bytes = text.as_bytes();
-    let mut state = 0x2545_f491_4f6c_dd1du64;
-    let mut next = move || {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        state
-    };
+    let mut rng = common::Xorshift(0x2545_f491_4f6c_dd1d);
     for k in 0..400 {
         let mut b = bytes.to_vec();
         if k % 2 == 0 {
-            b.truncate(next() as usize % b.len());
+            b.truncate(rng.below(b.len()));
         } else {
             for _ in 0..4 {
-                let i = next() as usize % b.len();
-                b[i] = b"0123456789 -.<>/\"#e"[next() as usize % 19];
+                let i = rng.below(b.len());
+                b[i] = b"0123456789 -.<>/\"#e"[rng.below(19)];
             }
         }
         let Ok(t) = String::from_utf8(b) else { continue };

@@ -7,9 +7,8 @@
 //! The mutations come from a fixed-seed generator, so a failure reproduces; the case number
 //! and its kind are in the message.
 
-use crate::common::{self, temp_dir};
+use crate::common::{self, Xorshift, temp_dir};
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 /// Cases per source file, cycling through the four kinds of damage.
 const CASES: usize = 64;
@@ -23,21 +22,6 @@ enum Damage {
 }
 
 const KINDS: [Damage; 4] = [Damage::Truncate, Damage::RandomBytes, Damage::HugeCount, Damage::NotANumber];
-
-/// xorshift64: a fixed stream of damage.
-struct Stream(u64);
-
-impl Stream {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        self.0
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
 
 /// Byte ranges of the decimal numbers in `b` (text formats).
 fn numbers(b: &[u8]) -> Vec<(usize, usize)> {
@@ -56,7 +40,7 @@ fn numbers(b: &[u8]) -> Vec<(usize, usize)> {
     out
 }
 
-fn damage(src: &[u8], kind: Damage, text: bool, rng: &mut Stream) -> Vec<u8> {
+fn damage(src: &[u8], kind: Damage, text: bool, rng: &mut Xorshift) -> Vec<u8> {
     let mut b = src.to_vec();
     let splice = |b: &mut Vec<u8>, (s, e): (usize, usize), with: &[u8]| {
         b.splice(s..e, with.iter().copied());
@@ -118,7 +102,7 @@ struct Format {
 }
 
 fn run_cases(f: &Format, root: &Path, seed: u64) -> (usize, usize) {
-    let mut rng = Stream(seed);
+    let mut rng = Xorshift(seed);
     let (mut failed, mut ok) = (0, 0);
     for case in 0..CASES {
         let kind = KINDS[case % KINDS.len()];
@@ -129,7 +113,7 @@ fn run_cases(f: &Format, root: &Path, seed: u64) -> (usize, usize) {
         }
         std::fs::write(dir.join(f.name), damage(&f.source, kind, f.text, &mut rng)).unwrap();
         let args: Vec<String> = f.args.iter().map(|a| a.replace("{}", dir.to_str().unwrap())).collect();
-        let out = Command::new(common::wavepath_bin()).args(&args).output().unwrap();
+        let out = common::run_wavepath(&args);
         let err = String::from_utf8_lossy(&out.stderr);
         let what = format!("{} case {case} ({kind:?})", f.what);
         assert!(out.status.code().is_some(), "{what}: killed by a signal; stderr: {err}");
@@ -310,13 +294,13 @@ fn damaged_environment_maps_and_part_files_fail_with_one_line_through_the_binary
     // Two parts of a tiny render, the second damaged in each case.
     let part = |i: u32| {
         let p = root.join(format!("part{i}.exr"));
-        let out = common::run_wavepath(&["-r", "8", "6", "--part", &format!("{i}/2"), "-f", p.to_str().unwrap()]);
+        let out = common::run_wavepath(["-r", "8", "6", "--part", &format!("{i}/2"), "-f", p.to_str().unwrap()]);
         assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
         std::fs::read(p).unwrap()
     };
     let (p0, p1) = (part(0), part(1));
     let intact = root.join("intact.exr");
-    let merged = common::run_wavepath(&[
+    let merged = common::run_wavepath([
         "merge",
         root.join("part0.exr").to_str().unwrap(),
         root.join("part1.exr").to_str().unwrap(),
