@@ -45,6 +45,8 @@ fn read(path: &Path) -> Result<Scene, String> {
 
     let mut notes = Vec::new();
     let images = decode_images(doc, base, &buffers, path, &mut notes)?;
+    // One line per drawing mode, however many primitives use it.
+    let mut skipped_modes = std::collections::BTreeMap::new();
     let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images)).collect();
     let default_material = materials.len() as u32;
     materials.push(Material::default());
@@ -65,13 +67,7 @@ fn read(path: &Path) -> Result<Scene, String> {
         let Some(m) = node.mesh() else { continue };
         for prim in m.primitives() {
             if prim.mode() != gltf::mesh::Mode::Triangles {
-                notes.push(format!(
-                    "warning: {}: mesh {} primitive {} has mode {:?}; only triangles are loaded",
-                    path.display(),
-                    m.index(),
-                    prim.index(),
-                    prim.mode()
-                ));
+                *skipped_modes.entry(format!("{:?}", prim.mode())).or_insert(0usize) += 1;
                 continue;
             }
             let mat = prim.material().index().map_or(default_material, |i| i as u32);
@@ -80,6 +76,12 @@ fn read(path: &Path) -> Result<Scene, String> {
             all_normals &= part.normals.is_some();
             mesh.append(part);
         }
+    }
+    for (mode, n) in skipped_modes {
+        notes.push(format!(
+            "warning: {}: {n} primitives of mode {mode} skipped; only triangles are loaded",
+            path.display()
+        ));
     }
     if !all_normals {
         mesh.normals = None;
@@ -93,6 +95,9 @@ fn read(path: &Path) -> Result<Scene, String> {
     Ok(scene)
 }
 
+/// Extensions a file may require: the ones the loader reads.
+const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+
 /// The references that the gltf crate follows before range-checking them (its validation
 /// reads a primitive's POSITION accessor, and an image in a buffer view its mimeType, with
 /// an unchecked index or unwrap): a damaged file would panic inside the crate.
@@ -102,6 +107,21 @@ fn precheck(bytes: &[u8]) -> Result<(), String> {
     } else {
         bytes.into()
     };
+    // The real cause first: a file of another glTF version, or one that requires an extension
+    // the loader does not read, would otherwise be reported through the symptoms the
+    // crate's validation finds (for a Draco file, hundreds of "missing data").
+    if let Ok(v) = serde_json::from_slice::<serde_json::Value>(&json) {
+        let version = v["asset"]["version"].as_str().unwrap_or("");
+        if !version.starts_with("2.") {
+            return Err(format!("glTF version '{version}' is not supported; convert the file to glTF 2.0"));
+        }
+        let required = v["extensionsRequired"].as_array().map(Vec::as_slice).unwrap_or_default();
+        let unsupported: Vec<&str> =
+            required.iter().filter_map(|e| e.as_str()).filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+        if !unsupported.is_empty() {
+            return Err(format!("requires {}, which wavepath does not support", unsupported.join(", ")));
+        }
+    }
     // A document that does not parse is reported by the crate itself.
     let Ok(root) = gltf::json::deserialize::from_slice::<gltf::json::Root>(&json) else { return Ok(()) };
     let accessors = root.accessors.len();

@@ -10,9 +10,9 @@ mod mtl;
 use crate::scene::{Material, Mesh, Scene};
 use anyhow::{Context, Result, anyhow, bail};
 use glam::{Vec2, Vec3};
+use std::borrow::Cow;
 use std::cell::RefCell;
-use std::fs::File;
-use std::io::{BufRead, BufReader, Read};
+use std::io::{BufRead, Read};
 use std::path::Path;
 
 /// What the material callback learnt while tobj parsed the OBJ.
@@ -25,15 +25,16 @@ struct MtlState {
 
 pub fn load(path: &Path) -> Result<Scene> {
     let shown = path.display();
-    let file = File::open(path).with_context(|| format!("{shown}: cannot open"))?;
+    let bytes = std::fs::read(path).with_context(|| format!("{shown}: cannot open"))?;
+    let (text, skipped) = prepare(&bytes);
     let dir = path.parent().unwrap_or(Path::new("."));
     let state = RefCell::new(MtlState::default());
-    let mut reader = LineCounter { inner: BufReader::new(file), newlines: 0, at_line_start: true };
+    let mut reader = LineCounter { inner: std::io::Cursor::new(text.as_bytes()), newlines: 0, at_line_start: true };
     let opts = tobj::LoadOptions { single_index: true, triangulate: true, ignore_points: true, ignore_lines: true };
     // tobj computes face indices with plain arithmetic; absurd indices overflow (a panic in
     // builds with overflow checks). Catch it so bad input stays an error.
     let parsed = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        tobj::load_obj_buf(&mut reader, &opts, |rel| load_mtl(&dir.join(rel), &state))
+        tobj::load_obj_buf(&mut reader, &opts, |rel| load_mtllib(dir, rel, &state))
     }));
     let models = match parsed {
         Ok(Ok((models, _))) => models,
@@ -46,7 +47,90 @@ pub fn load(path: &Path) -> Result<Scene> {
     }
     let mut scene = build_scene(path, models, state.materials).map_err(|e| anyhow!("{shown}: {e}"))?;
     scene.notes = state.notes;
+    if skipped.lines + skipped.points > 0 {
+        scene.notes.push(format!(
+            "warning: {shown}: skipped {} line and {} point elements (only faces are rendered)",
+            skipped.lines, skipped.points
+        ));
+    }
     Ok(scene)
+}
+
+/// Elements of the file that are not rendered.
+#[derive(Default)]
+struct Skipped {
+    lines: usize,
+    points: usize,
+}
+
+/// Text as exporters write it: UTF-8, or else Latin-1 (a single accented byte in a material
+/// name would otherwise refuse the whole file, and the MTL is decoded the same way, so the
+/// names still match).
+pub(super) fn decode_text(bytes: &[u8]) -> Cow<'_, str> {
+    match std::str::from_utf8(bytes) {
+        Ok(t) => Cow::Borrowed(t),
+        Err(_) => Cow::Owned(bytes.iter().map(|&b| b as char).collect()),
+    }
+}
+
+/// The OBJ text for tobj, and the line and point elements it skips. Line and point elements
+/// become comments (tobj would fill a polyline of three or more points as a polygon); an
+/// empty `usemtl` (Rhino and Blender write it for "no material"; tobj refuses it) becomes a
+/// name no library can define, so those faces take the default material. Line numbers are
+/// unchanged.
+fn prepare(bytes: &[u8]) -> (Cow<'_, str>, Skipped) {
+    let text = decode_text(bytes);
+    let mut skipped = Skipped::default();
+    let mut empty_usemtl = false;
+    for line in text.lines() {
+        let mut w = line.split_whitespace();
+        match w.next() {
+            Some("l") => skipped.lines += 1,
+            Some("p") => skipped.points += 1,
+            Some("usemtl") => empty_usemtl |= w.next().is_none(),
+            _ => {}
+        }
+    }
+    if !empty_usemtl && skipped.lines + skipped.points == 0 {
+        return (text, skipped);
+    }
+    let mut out = String::with_capacity(text.len() + 64);
+    for line in text.split_inclusive('\n') {
+        let body = line.trim_end_matches(['\r', '\n']);
+        let mut words = body.split_whitespace();
+        match (words.next(), words.next()) {
+            (Some("usemtl"), None) => out.push_str(NO_MATERIAL),
+            // tobj fills a polyline of three or more points as a polygon.
+            (Some("l" | "p"), _) => out.push('#'),
+            _ => out.push_str(body),
+        }
+        out.push_str(&line[body.len()..]);
+    }
+    (Cow::Owned(out), skipped)
+}
+
+/// What an empty `usemtl` is read as: a name with a control character, which no `newmtl`
+/// line can hold.
+const NO_MATERIAL: &str = "usemtl \u{1}none";
+
+/// One `mtllib` statement: the names it lists (several, separated by spaces, unless the whole
+/// rest of the line names a file), with Windows separators (`.\\a.mtl`) read as `/`.
+fn load_mtllib(dir: &Path, rel: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
+    let rel = rel.to_string_lossy().replace('\\', "/");
+    let whole = dir.join(&rel);
+    let files: Vec<std::path::PathBuf> = if whole.is_file() || !rel.contains(char::is_whitespace) {
+        vec![whole]
+    } else {
+        rel.split_whitespace().map(|r| dir.join(r)).collect()
+    };
+    let (mut names, mut pairs) = (Vec::new(), Vec::new());
+    for f in files {
+        let (n, m) = load_mtl(&f, state)?;
+        let offset = names.len();
+        names.extend(n);
+        pairs.extend(m.into_iter().map(|(k, i)| (k, i + offset)));
+    }
+    Ok((names, pairs.into_iter().collect()))
 }
 
 /// tobj's errors carry no position; parse errors stop right after the offending line.
@@ -66,8 +150,8 @@ fn describe(e: &tobj::LoadError, line: usize) -> String {
 /// tobj's material ids index `state.materials`. A missing .mtl is a warning (the faces get
 /// the default material); a malformed one is an error.
 fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
-    let text = match std::fs::read_to_string(path) {
-        Ok(t) => t,
+    let text = match std::fs::read(path) {
+        Ok(b) => decode_text(&b).into_owned(),
         Err(e) => {
             state.borrow_mut().notes.push(format!(
                 "warning: {}: cannot read material library ({e}); using the default material",

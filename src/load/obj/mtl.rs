@@ -36,7 +36,8 @@ pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
             "map_Kd" => {
                 // Options (`-bm 1 ...`) come first; the file name is the last word.
                 let Some(file) = rest.last() else { return Err(at("map_Kd without a file name")) };
-                mat.albedo_texture = Some(Texture::obj(dir.join(file)));
+                // Windows exporters write `.\\tex\\a.png`.
+                mat.albedo_texture = Some(Texture::obj(dir.join(file.replace('\\', "/"))));
             }
             _ => {}
         }

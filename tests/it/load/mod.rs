@@ -3,5 +3,6 @@
 
 mod collada;
 mod damaged;
+mod exporters;
 mod formats_agree;
 mod mesh_loaders;

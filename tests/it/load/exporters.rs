@@ -1,0 +1,123 @@
+//! Files as exporters write them: OBJ with Latin-1 material names, an empty `usemtl`, several
+//! libraries on one `mtllib` line, Windows paths, and line and point elements.
+
+use crate::common::temp_dir;
+use glam::{Vec3, vec3};
+use std::path::Path;
+use wavepath::load::{LoadOptions, load};
+use wavepath::scene::Scene;
+
+fn write(dir: &Path, name: &str, contents: impl AsRef<[u8]>) {
+    if let Some(parent) = dir.join(name).parent() {
+        std::fs::create_dir_all(parent).unwrap();
+    }
+    std::fs::write(dir.join(name), contents).unwrap();
+}
+
+fn load_ok(path: &Path) -> Scene {
+    load(path, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"))
+}
+
+/// The diffuse albedo of each triangle, in file order.
+fn albedos(s: &Scene) -> Vec<Vec3> {
+    s.mesh.material_ids.iter().map(|&m| s.materials[m as usize].bsdf.diffuse_albedo()).collect()
+}
+
+const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";
+
+#[test]
+fn latin1_material_names_match_their_library() {
+    let d = temp_dir("exporters-latin1");
+    // "café" and "crème" in Latin-1 (one byte each for é and è), in both files.
+    write(&d, "m.mtl", b"newmtl caf\xe9\nKd 0.1 0.2 0.3\nnewmtl cr\xe8me\nKd 0.9 0.8 0.7\n");
+    let mut obj = format!("mtllib m.mtl\n{QUAD}").into_bytes();
+    obj.extend(b"usemtl caf\xe9\nf 1 2 3\nusemtl cr\xe8me\nf 1 3 4\n");
+    write(&d, "a.obj", obj);
+    let s = load_ok(&d.join("a.obj"));
+    assert_eq!(albedos(&s), [vec3(0.1, 0.2, 0.3), vec3(0.9, 0.8, 0.7)]);
+    assert!(
+        s.materials.iter().any(|m| m.name == "café"),
+        "{:?}",
+        s.materials.iter().map(|m| &m.name).collect::<Vec<_>>()
+    );
+}
+
+#[test]
+fn an_empty_usemtl_means_the_default_material() {
+    let d = temp_dir("exporters-empty-usemtl");
+    write(&d, "m.mtl", "newmtl red\nKd 0.8 0.1 0.1\nnewmtl blue\nKd 0.1 0.1 0.8\n");
+    write(&d, "a.obj", format!("mtllib m.mtl\n{QUAD}usemtl red\nf 1 2 3\nusemtl\nf 1 3 4\nusemtl \r\nf 2 3 4\n"));
+    let s = load_ok(&d.join("a.obj"));
+    assert_eq!(albedos(&s), [vec3(0.8, 0.1, 0.1), Vec3::splat(0.5), Vec3::splat(0.5)]);
+}
+
+#[test]
+fn one_mtllib_line_can_name_several_libraries_and_windows_paths() {
+    let d = temp_dir("exporters-mtllib");
+    write(&d, "a.mtl", "newmtl red\nKd 0.8 0.1 0.1\n");
+    write(&d, "sub/b.mtl", "newmtl blue\nKd 0.1 0.1 0.8\nmap_Kd .\\tex\\t.png\n");
+    write(&d, "a.obj", format!("mtllib a.mtl .\\sub\\b.mtl\n{QUAD}usemtl blue\nf 1 2 3\nusemtl red\nf 1 3 4\n"));
+    let s = load_ok(&d.join("a.obj"));
+    assert_eq!(albedos(&s), [vec3(0.1, 0.1, 0.8), vec3(0.8, 0.1, 0.1)]);
+    let blue = &s.materials[s.mesh.material_ids[0] as usize];
+    let tex = blue.albedo_texture.as_ref().expect("the texture is kept");
+    assert_eq!(tex.path, d.join("sub").join("./tex/t.png"));
+    // A file name with a space still loads when it exists as written.
+    write(&d, "with space.mtl", "newmtl green\nKd 0.1 0.8 0.1\n");
+    write(&d, "b.obj", format!("mtllib with space.mtl\n{QUAD}usemtl green\nf 1 2 3\n"));
+    assert_eq!(albedos(&load_ok(&d.join("b.obj"))), [vec3(0.1, 0.8, 0.1)]);
+}
+
+#[test]
+fn line_and_point_elements_are_skipped_and_counted() {
+    let d = temp_dir("exporters-lines");
+    write(&d, "a.obj", format!("{QUAD}f 1 2 3 4\nl 1 2 3\nl 3 4\nl 4 1\np 1\np 2 3\n"));
+    let s = load_ok(&d.join("a.obj"));
+    assert_eq!(s.mesh.triangles.len(), 2, "the quad only");
+    assert!(s.notes.iter().any(|n| n.contains("skipped 3 line and 2 point elements")), "{:?}", s.notes);
+    // Only lines: nothing to render, one line saying so.
+    write(&d, "lines.obj", format!("{QUAD}l 1 2 3 4 1\n"));
+    let e = format!("{:#}", load(&d.join("lines.obj"), &LoadOptions::default()).unwrap_err());
+    assert!(e.contains("lines.obj") && e.contains("no faces") && !e.contains('\n'), "{e}");
+}
+
+/// A glTF document with one buffer of `bin` (as a data URI) and the given extra JSON members.
+fn gltf_doc(version: &str, extra: &str) -> String {
+    format!(
+        r#"{{"asset":{{"version":"{version}"}},{extra}
+          "buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}}],
+          "bufferViews":[{{"buffer":0,"byteLength":36}}],
+          "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}]}}"#
+    )
+}
+
+#[test]
+fn gltf_errors_name_the_real_cause() {
+    let d = temp_dir("exporters-gltf");
+    let err = |name: &str, text: &str| {
+        write(&d, name, text);
+        let e = format!("{:#}", load(&d.join(name), &LoadOptions::default()).unwrap_err());
+        assert!(e.contains(name) && !e.contains('\n'), "{e}");
+        e
+    };
+    let e = err("old.gltf", r#"{"asset":{"version":"1.0"},"meshes":{"m":{}}}"#);
+    assert!(e.contains("glTF version '1.0' is not supported; convert the file to glTF 2.0"), "{e}");
+    let e = err(
+        "draco.gltf",
+        &gltf_doc(
+            "2.0",
+            r#""extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}],"#,
+        ),
+    );
+    assert!(e.contains("requires KHR_draco_mesh_compression, which wavepath does not support"), "{e}");
+    // A triangle and many line primitives: the lines are skipped with one warning, counted.
+    let lines = vec![r#"{"attributes":{"POSITION":0},"mode":1}"#; 40].join(",");
+    let mesh = format!(
+        r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}},{lines}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],"#
+    );
+    write(&d, "lines.gltf", gltf_doc("2.0", &mesh));
+    let s = load(&d.join("lines.gltf"), &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"));
+    assert_eq!(s.mesh.triangles.len(), 1);
+    assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
+    assert!(s.notes[0].contains("40 primitives of mode Lines skipped"), "{:?}", s.notes);
+}
