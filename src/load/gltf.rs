@@ -12,6 +12,7 @@ use glam::{Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::khr_lights_punctual::Kind;
 use gltf::texture::{MagFilter, WrappingMode};
+use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -265,7 +266,7 @@ fn material(m: &gltf::Material, path: &Path, images: &[Option<Arc<TextureImage>>
         let source = tex.source();
         let path = match source.source() {
             gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
-                path.parent().unwrap_or(Path::new(".")).join(uri)
+                path.parent().unwrap_or(Path::new(".")).join(uri_path(uri))
             }
             _ => PathBuf::from(format!("{}#image{}", path.display(), source.index())),
         };
@@ -290,9 +291,9 @@ fn material(m: &gltf::Material, path: &Path, images: &[Option<Arc<TextureImage>>
     }
 }
 
-/// Decodes every image a base-colour texture uses (sRGB), once: from a buffer view (.glb,
-/// embedded) or a file beside the scene. A missing file is a warning (the material keeps its
-/// factor); an undecodable image is an error naming it.
+/// Decodes every image a base-colour texture uses (sRGB), once: from a buffer view (.glb),
+/// a data URI (glTF-Embedded) or a file beside the scene (percent-escapes decoded). An image
+/// that cannot be read or decoded is a warning: the material keeps its factor.
 fn decode_images(
     doc: &gltf::Document,
     base: &Path,
@@ -310,35 +311,66 @@ fn decode_images(
             out.push(None);
             continue;
         }
-        let decoded = match img.source() {
-            gltf::image::Source::View { view, .. } => {
-                let bytes = buffers
+        let what = format!("image {}", img.index());
+        // A texture that cannot be had leaves the material its colour factor, with a warning:
+        // one unsupported image (KTX2, Basis) should not cost the whole model.
+        let mut warn = |why: String| {
+            notes.push(format!("warning: {}: {why}; the material keeps its colour factor", path.display()))
+        };
+        let bytes: Option<Cow<[u8]>> = match img.source() {
+            gltf::image::Source::View { view, .. } => Some(Cow::Borrowed(
+                buffers
                     .get(view.buffer().index())
                     .and_then(|b| b.0.get(view.offset()..view.offset() + view.length()))
-                    .ok_or(format!("image {}: buffer view outside its buffer", img.index()))?;
-                Some(TextureImage::decode_srgb(bytes).map_err(|e| format!("image {}: {e}", img.index()))?)
-            }
-            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => {
-                notes.push(format!(
-                    "warning: {}: image {} is a data URI; not supported, ignored",
-                    path.display(),
-                    img.index()
-                ));
-                None
-            }
-            gltf::image::Source::Uri { uri, .. } => {
-                let file = base.join(uri);
-                if file.is_file() {
-                    Some(TextureImage::open_srgb(&file).map_err(|e| e.to_string())?)
-                } else {
-                    notes.push(format!("warning: {}: texture {} not found", path.display(), file.display()));
+                    .ok_or(format!("{what}: buffer view outside its buffer"))?,
+            )),
+            gltf::image::Source::Uri { uri, .. } if uri.starts_with("data:") => match data_uri(uri) {
+                Ok(b) => Some(Cow::Owned(b)),
+                Err(e) => {
+                    warn(format!("{what}: {e}"));
                     None
+                }
+            },
+            gltf::image::Source::Uri { uri, .. } => {
+                let file = base.join(uri_path(uri));
+                match std::fs::read(&file) {
+                    Ok(b) => Some(Cow::Owned(b)),
+                    Err(e) => {
+                        warn(format!("texture {} cannot be read ({e})", file.display()));
+                        None
+                    }
                 }
             }
         };
+        let decoded = bytes.and_then(|b| match TextureImage::decode_srgb(&b) {
+            Ok(t) => Some(t),
+            Err(e) => {
+                warn(format!("{what} cannot be decoded ({e})"));
+                None
+            }
+        });
         out.push(decoded.map(Arc::new));
     }
     Ok(out)
+}
+
+/// A relative URI as a file path: percent-escapes decoded ("Box%20With%20Spaces.png").
+fn uri_path(uri: &str) -> PathBuf {
+    PathBuf::from(urlencoding::decode(uri).map_or_else(|_| uri.to_string(), |s| s.into_owned()))
+}
+
+/// The bytes of a `data:[<mime>][;base64],<payload>` URI (RFC 2397): base64, or
+/// percent-encoded text.
+fn data_uri(uri: &str) -> Result<Vec<u8>, String> {
+    use base64::Engine;
+    let (head, payload) = uri.split_once(',').ok_or("data URI without a ','")?;
+    if head.ends_with(";base64") {
+        base64::engine::general_purpose::STANDARD
+            .decode(payload.trim())
+            .map_err(|e| format!("data URI is not valid base64 ({e})"))
+    } else {
+        Ok(urlencoding::decode_binary(payload.as_bytes()).into_owned())
+    }
 }
 
 /// Rotation part of a node's world matrix with scale and shear removed: columns right, up,

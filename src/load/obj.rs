@@ -170,12 +170,10 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
                     state.notes.push(format!("warning: {}: texture {} not found", path.display(), t.path.display()));
                     continue;
                 }
+                // An image that does not decode leaves the material its Kd, with a warning.
                 match crate::scene::texture::TextureImage::open_srgb(&t.path) {
                     Ok(img) => t.image = Some(std::sync::Arc::new(img)),
-                    Err(e) => {
-                        state.error.get_or_insert(e.to_string());
-                        return Err(tobj::LoadError::MaterialParseError);
-                    }
+                    Err(e) => state.notes.push(format!("warning: {}: {e:#}; using Kd", path.display())),
                 }
             }
             let names: Vec<tobj::Material> =

@@ -50,7 +50,11 @@ pub fn srgb_to_linear(c: f32) -> f32 {
 impl TextureImage {
     /// Decodes an encoded image (PNG, JPEG, ...) whose colours are sRGB.
     pub fn decode_srgb(bytes: &[u8]) -> Result<TextureImage> {
-        let img = image::load_from_memory(bytes).map_err(|e| anyhow!("{e}"))?.into_rgb8();
+        Self::from_srgb(image::load_from_memory(bytes).map_err(|e| anyhow!("{e}"))?)
+    }
+
+    fn from_srgb(img: image::DynamicImage) -> Result<TextureImage> {
+        let img = img.into_rgb8();
         let (w, h) = (img.width() as usize, img.height() as usize);
         if w == 0 || h == 0 {
             bail!("image has no pixels");
@@ -64,8 +68,13 @@ impl TextureImage {
 
     /// Reads and decodes an image file; errors are one line naming the file.
     pub fn open_srgb(path: &Path) -> Result<TextureImage> {
-        let bytes = std::fs::read(path).map_err(|e| anyhow!("{}: cannot read texture: {e}", path.display()))?;
-        Self::decode_srgb(&bytes).map_err(|e| anyhow!("{}: not a readable texture: {e}", path.display()))
+        // The content decides the format where it can; the extension where it cannot (TGA has
+        // no signature).
+        let reader = image::ImageReader::open(path)
+            .and_then(|r| r.with_guessed_format())
+            .map_err(|e| anyhow!("{}: cannot read texture: {e}", path.display()))?;
+        let img = reader.decode().map_err(|e| anyhow!("{}: not a readable texture: {e}", path.display()))?;
+        Self::from_srgb(img).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
 
     #[inline]

@@ -121,3 +121,62 @@ fn gltf_errors_name_the_real_cause() {
     assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
     assert!(s.notes[0].contains("40 primitives of mode Lines skipped"), "{:?}", s.notes);
 }
+
+/// A 2x1 image, red then blue, encoded as `format`.
+fn two_texels(format: image::ImageFormat) -> Vec<u8> {
+    let img =
+        image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 0, 0]) } else { image::Rgb([0, 0, 255]) });
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, format).unwrap();
+    out.into_inner()
+}
+
+/// The texels a material's albedo texture decoded to (linear: sRGB 255 is 1).
+fn texels(s: &Scene, tri: usize) -> Vec<Vec3> {
+    let m = &s.materials[s.mesh.material_ids[tri] as usize];
+    m.albedo_texture.as_ref().and_then(|t| t.image.as_ref()).expect("a decoded texture").texels.clone()
+}
+
+#[test]
+fn obj_textures_in_bmp_and_tga_load_and_an_undecodable_one_is_a_warning() {
+    let d = temp_dir("exporters-bmp");
+    let want = [vec3(1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0)];
+    for (ext, format) in [("bmp", image::ImageFormat::Bmp), ("tga", image::ImageFormat::Tga)] {
+        write(&d, &format!("t.{ext}"), two_texels(format));
+        write(&d, "m.mtl", format!("newmtl t\nKd 0.3 0.3 0.3\nmap_Kd t.{ext}\n"));
+        write(&d, "a.obj", format!("mtllib m.mtl\n{QUAD}vt 0 0\nusemtl t\nf 1/1 2/1 3/1\n"));
+        assert_eq!(texels(&load_ok(&d.join("a.obj")), 0), want, "{ext}");
+    }
+    write(&d, "bad.png", "not a picture");
+    write(&d, "m.mtl", "newmtl t\nKd 0.3 0.3 0.3\nmap_Kd bad.png\n");
+    let s = load_ok(&d.join("a.obj"));
+    assert!(s.notes.iter().any(|n| n.contains("bad.png") && n.contains("using Kd")), "{:?}", s.notes);
+    assert_eq!(albedos(&s), [Vec3::splat(0.3)]);
+}
+
+#[test]
+fn gltf_images_from_data_uris_and_percent_encoded_names() {
+    use base64::Engine;
+    let d = temp_dir("exporters-gltf-images");
+    let png = two_texels(image::ImageFormat::Png);
+    write(&d, "Box With Spaces.png", &png);
+    let data = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&png));
+    let want = [vec3(1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0)];
+    for (name, uri) in [("embedded", data.as_str()), ("spaces", "Box%20With%20Spaces.png"), ("ktx2", "missing.ktx2")] {
+        let body = format!(
+            r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+               "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}],
+               "textures":[{{"source":0}}],"images":[{{"uri":"{uri}"}}],"#
+        );
+        write(&d, &format!("{name}.gltf"), gltf_doc("2.0", &body));
+        let s = load_ok(&d.join(format!("{name}.gltf")));
+        if name == "ktx2" {
+            // An image that cannot be had: the model loads untextured, with a warning.
+            assert!(s.notes.iter().any(|n| n.contains("missing.ktx2")), "{:?}", s.notes);
+            assert!(s.materials[0].albedo_texture.as_ref().is_none_or(|t| t.image.is_none()));
+        } else {
+            assert_eq!(texels(&s, 0), want, "{name}");
+            assert!(s.notes.is_empty(), "{name}: {:?}", s.notes);
+        }
+    }
+}
