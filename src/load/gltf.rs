@@ -67,7 +67,8 @@ fn read(path: &Path) -> Result<Scene, String> {
         }
         let Some(m) = node.mesh() else { continue };
         for prim in m.primitives() {
-            if prim.mode() != gltf::mesh::Mode::Triangles {
+            use gltf::mesh::Mode;
+            if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
                 *skipped_modes.entry(format!("{:?}", prim.mode())).or_insert(0usize) += 1;
                 continue;
             }
@@ -190,6 +191,26 @@ fn flatten(doc: &gltf::Document) -> Result<Vec<(gltf::Node<'_>, Mat4)>, String> 
     Ok(out)
 }
 
+/// The triangles of a primitive's index list. Strips alternate their winding so that every
+/// triangle keeps the first one's orientation (glTF 2.0 spec, 3.7.2.1); fans share the first
+/// vertex. Degenerate triangles (repeated indices, used to stitch strips) are dropped.
+fn triangles_of(mode: gltf::mesh::Mode, idx: &[u32]) -> Result<Vec<[u32; 3]>, String> {
+    use gltf::mesh::Mode;
+    let all: Vec<[u32; 3]> = match mode {
+        Mode::TriangleStrip => (2..idx.len())
+            .map(|i| if i % 2 == 0 { [idx[i - 2], idx[i - 1], idx[i]] } else { [idx[i - 2], idx[i], idx[i - 1]] })
+            .collect(),
+        Mode::TriangleFan => (2..idx.len()).map(|i| [idx[0], idx[i - 1], idx[i]]).collect(),
+        _ => {
+            if !idx.len().is_multiple_of(3) {
+                return Err(format!("{} indices is not a multiple of 3", idx.len()));
+            }
+            return Ok(idx.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect());
+        }
+    };
+    Ok(all.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect())
+}
+
 /// Refuses an accessor whose component type or shape is not one the semantic allows: the
 /// gltf crate reads such data with debug-only checks, so it would panic or read garbage.
 fn check_accessor(acc: Option<gltf::Accessor>, what: &str, types: &[DataType], dims: Dimensions) -> Result<(), String> {
@@ -243,10 +264,7 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
     if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
         return Err(format!("index {bad} is out of range for {n} vertices"));
     }
-    if !indices.len().is_multiple_of(3) {
-        return Err(format!("{} indices is not a multiple of 3", indices.len()));
-    }
-    let triangles: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+    let triangles = triangles_of(prim.mode(), &indices)?;
     let material_ids = vec![mat; triangles.len()];
     Ok(Mesh { positions, normals, uvs, triangles, material_ids })
 }

@@ -180,3 +180,50 @@ fn gltf_images_from_data_uris_and_percent_encoded_names() {
         }
     }
 }
+
+/// A glTF document whose one buffer holds `positions` (a data URI), one mesh of primitives
+/// `prims` (JSON objects using accessor 0), in the default scene.
+fn gltf_positions(positions: &[[f32; 3]], prims: &str) -> String {
+    use base64::Engine;
+    let bytes: Vec<u8> = positions.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"meshes":[{{"primitives":[{prims}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+          "buffers":[{{"byteLength":{len},"uri":"data:application/octet-stream;base64,{uri}"}}],
+          "bufferViews":[{{"buffer":0,"byteLength":{len}}}],
+          "accessors":[{{"bufferView":0,"componentType":5126,"count":{n},"type":"VEC3","min":[-2,-2,0],"max":[2,2,0]}}]}}"#,
+        len = bytes.len(),
+        n = positions.len()
+    )
+}
+
+/// Strips and fans: the triangles the glTF specification defines, all facing +Z (strips
+/// alternate their winding to keep it), areas summing to the polygon's.
+#[test]
+fn gltf_triangle_strips_and_fans() {
+    let d = temp_dir("exporters-strips");
+    // A zig-zag strip over a 3x1 row of unit squares, and a regular hexagon as a fan.
+    let strip: Vec<[f32; 3]> = (0..8).map(|i| [(i / 2) as f32, (1 - i % 2) as f32, 0.0]).collect();
+    let hexagon: Vec<[f32; 3]> = (0..6)
+        .map(|k| {
+            let a = k as f32 * std::f32::consts::PI / 3.0;
+            [a.cos(), a.sin(), 0.0]
+        })
+        .collect();
+    for (name, pts, mode, count, area) in
+        [("strip", &strip, 5, 6, 3.0f32), ("fan", &hexagon, 6, 4, 1.5 * 3f32.sqrt())]
+    {
+        write(&d, &format!("{name}.gltf"), gltf_positions(pts, &format!(r#"{{"attributes":{{"POSITION":0}},"mode":{mode}}}"#)));
+        let s = load_ok(&d.join(format!("{name}.gltf")));
+        assert_eq!(s.mesh.triangles.len(), count, "{name}");
+        let mut total = 0.0;
+        for i in 0..count {
+            let [a, b, c] = s.mesh.corners(i);
+            let n = (b - a).cross(c - a);
+            assert!(n.z > 0.0 && n.x.abs() + n.y.abs() < 1e-6, "{name} triangle {i} faces {n}");
+            total += 0.5 * n.length();
+        }
+        assert!((total - area).abs() < 1e-5, "{name}: area {total}");
+        assert!(s.notes.is_empty(), "{:?}", s.notes);
+    }
+}
