@@ -31,7 +31,12 @@ fn read(path: &Path) -> Result<Scene, String> {
         return Err("binary glTF header length does not match the file".into());
     }
     precheck(&bytes)?;
-    let gltf = gltf::Gltf::from_slice(&bytes).map_err(|e| e.to_string())?;
+    let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
+    let mut json = raw.document.into_json();
+    // The crate refuses required extensions it does not know; this loader reads this one itself.
+    json.extensions_required.retain(|e| e != "EXT_mesh_gpu_instancing");
+    let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
+    let gltf = gltf::Gltf { document, blob: raw.blob };
     let base = path.parent().unwrap_or(Path::new("."));
     for b in gltf.document.buffers() {
         if let gltf::buffer::Source::Uri(uri) = b.source()
@@ -66,6 +71,8 @@ fn read(path: &Path) -> Result<Scene, String> {
             lights.push(make_light(&light, &world));
         }
         let Some(m) = node.mesh() else { continue };
+        let worlds =
+            instances(&node, doc, &buffers)?.map_or_else(|| vec![world], |l| l.iter().map(|i| world * *i).collect());
         for prim in m.primitives() {
             use gltf::mesh::Mode;
             if !matches!(prim.mode(), Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
@@ -73,10 +80,12 @@ fn read(path: &Path) -> Result<Scene, String> {
                 continue;
             }
             let mat = prim.material().index().map_or(default_material, |i| i as u32);
-            let part = primitive(&prim, &buffers, &world, mat)
-                .map_err(|e| format!("mesh {} primitive {}: {e}", m.index(), prim.index()))?;
-            all_normals &= part.normals.is_some();
-            mesh.append(part);
+            for w in &worlds {
+                let part = primitive(&prim, &buffers, w, mat)
+                    .map_err(|e| format!("mesh {} primitive {}: {e}", m.index(), prim.index()))?;
+                all_normals &= part.normals.is_some();
+                mesh.append(part);
+            }
         }
     }
     for (mode, n) in skipped_modes {
@@ -98,7 +107,72 @@ fn read(path: &Path) -> Result<Scene, String> {
 }
 
 /// Extensions a file may require: the ones the loader reads.
-const SUPPORTED_EXTENSIONS: [&str; 2] = ["KHR_lights_punctual", "KHR_materials_emissive_strength"];
+const SUPPORTED_EXTENSIONS: [&str; 3] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "EXT_mesh_gpu_instancing"];
+
+/// The instance transforms of a node's `EXT_mesh_gpu_instancing` (TRANSLATION, ROTATION as
+/// a unit quaternion x y z w, SCALE; f32 accessors of one count), each applied before the
+/// node's own transform; `None` when the node is not instanced.
+fn instances(
+    node: &gltf::Node,
+    doc: &gltf::Document,
+    buffers: &[gltf::buffer::Data],
+) -> Result<Option<Vec<Mat4>>, String> {
+    let Some(ext) = node.extension_value("EXT_mesh_gpu_instancing") else { return Ok(None) };
+    let what = |m: &str| format!("node {}: EXT_mesh_gpu_instancing: {m}", node.index());
+    let attrs = ext["attributes"].as_object().ok_or_else(|| what("no attributes"))?;
+    let read = |name: &str, dims: Dimensions| -> Result<Option<Vec<f32>>, String> {
+        let Some(i) = attrs.get(name) else { return Ok(None) };
+        let acc = i
+            .as_u64()
+            .and_then(|i| doc.accessors().nth(i as usize))
+            .ok_or_else(|| what(&format!("{name} accessor does not exist")))?;
+        check_accessor(Some(acc.clone()), name, &[DataType::F32], dims).map_err(|e| what(&e))?;
+        let view = acc.view().ok_or_else(|| what(&format!("{name} has no buffer view")))?;
+        let data = buffers.get(view.buffer().index()).map(|d| &d.0[..]).unwrap_or_default();
+        let n = acc.dimensions().multiplicity();
+        let stride = view.stride().unwrap_or(4 * n);
+        let start = view.offset() + acc.offset();
+        // Checked before anything is allocated: a damaged count must not ask for terabytes.
+        let end = acc.count().checked_mul(stride).and_then(|b| b.checked_add(start));
+        if end.is_none_or(|e| e > data.len() + stride) {
+            return Err(what(&format!("{name} data outside its buffer")));
+        }
+        let mut out = Vec::with_capacity(acc.count() * n);
+        for k in 0..acc.count() {
+            for c in 0..n {
+                let at = start + k * stride + 4 * c;
+                let b = data.get(at..at + 4).ok_or_else(|| what(&format!("{name} data outside its buffer")))?;
+                out.push(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+            }
+        }
+        Ok(Some(out))
+    };
+    let t = read("TRANSLATION", Dimensions::Vec3)?;
+    let r = read("ROTATION", Dimensions::Vec4)?;
+    let s = read("SCALE", Dimensions::Vec3)?;
+    let counts: Vec<usize> =
+        [t.as_ref().map(|v| v.len() / 3), r.as_ref().map(|v| v.len() / 4), s.as_ref().map(|v| v.len() / 3)]
+            .into_iter()
+            .flatten()
+            .collect();
+    let Some(&n) = counts.first() else { return Err(what("no TRANSLATION, ROTATION or SCALE")) };
+    if counts.iter().any(|&c| c != n) {
+        return Err(what("attributes of different counts"));
+    }
+    let mut out = Vec::with_capacity(n);
+    for k in 0..n {
+        let tr = t.as_ref().map_or(Vec3::ZERO, |v| Vec3::from_slice(&v[3 * k..]));
+        let rot = r.as_ref().map_or(glam::Quat::IDENTITY, |v| glam::Quat::from_slice(&v[4 * k..]).normalize());
+        let sc = s.as_ref().map_or(Vec3::ONE, |v| Vec3::from_slice(&v[3 * k..]));
+        let m = Mat4::from_scale_rotation_translation(sc, rot, tr);
+        if !m.is_finite() {
+            return Err(what(&format!("instance {k} has a non-finite transform")));
+        }
+        out.push(m);
+    }
+    Ok(Some(out))
+}
 
 /// The references that the gltf crate follows before range-checking them (its validation
 /// reads a primitive's POSITION accessor, and an image in a buffer view its mimeType, with

@@ -210,10 +210,13 @@ fn gltf_triangle_strips_and_fans() {
             [a.cos(), a.sin(), 0.0]
         })
         .collect();
-    for (name, pts, mode, count, area) in
-        [("strip", &strip, 5, 6, 3.0f32), ("fan", &hexagon, 6, 4, 1.5 * 3f32.sqrt())]
+    for (name, pts, mode, count, area) in [("strip", &strip, 5, 6, 3.0f32), ("fan", &hexagon, 6, 4, 1.5 * 3f32.sqrt())]
     {
-        write(&d, &format!("{name}.gltf"), gltf_positions(pts, &format!(r#"{{"attributes":{{"POSITION":0}},"mode":{mode}}}"#)));
+        write(
+            &d,
+            &format!("{name}.gltf"),
+            gltf_positions(pts, &format!(r#"{{"attributes":{{"POSITION":0}},"mode":{mode}}}"#)),
+        );
         let s = load_ok(&d.join(format!("{name}.gltf")));
         assert_eq!(s.mesh.triangles.len(), count, "{name}");
         let mut total = 0.0;
@@ -225,5 +228,57 @@ fn gltf_triangle_strips_and_fans() {
         }
         assert!((total - area).abs() < 1e-5, "{name}: area {total}");
         assert!(s.notes.is_empty(), "{:?}", s.notes);
+    }
+}
+
+/// `EXT_mesh_gpu_instancing`: each instance's translation, rotation and scale, then the
+/// node's own transform, applied to the mesh.
+#[test]
+fn gltf_gpu_instancing_places_every_instance() {
+    use base64::Engine;
+    let d = temp_dir("exporters-instancing");
+    let tri = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let translations = [[0.0f32, 0.0, 0.0], [5.0, 0.0, 0.0], [0.0, 0.0, -3.0]];
+    let s = std::f32::consts::FRAC_1_SQRT_2;
+    // Identity; a quarter turn about +Z; a scale of 2.
+    let rotations = [[0.0f32, 0.0, 0.0, 1.0], [0.0, 0.0, s, s], [0.0, 0.0, 0.0, 1.0]];
+    let scales = [[1.0f32; 3], [1.0; 3], [2.0; 3]];
+    let mut bytes = Vec::new();
+    for v in tri.iter().chain(&translations) {
+        bytes.extend(v.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    for q in &rotations {
+        bytes.extend(q.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    for v in &scales {
+        bytes.extend(v.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
+    let doc = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["EXT_mesh_gpu_instancing"],"extensionsRequired":["EXT_mesh_gpu_instancing"],
+          "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}}}}]}}],
+          "nodes":[{{"mesh":0,"translation":[0,10,0],"extensions":{{"EXT_mesh_gpu_instancing":{{"attributes":{{"TRANSLATION":1,"ROTATION":2,"SCALE":3}}}}}}}}],
+          "scenes":[{{"nodes":[0]}}],
+          "buffers":[{{"byteLength":{len},"uri":"data:application/octet-stream;base64,{uri}"}}],
+          "bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}},
+                         {{"buffer":0,"byteOffset":72,"byteLength":48}},{{"buffer":0,"byteOffset":120,"byteLength":36}}],
+          "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                       {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}},
+                       {{"bufferView":2,"componentType":5126,"count":3,"type":"VEC4"}},
+                       {{"bufferView":3,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#,
+        len = bytes.len()
+    );
+    write(&d, "inst.gltf", doc);
+    let scene = load_ok(&d.join("inst.gltf"));
+    assert_eq!(scene.mesh.triangles.len(), 3);
+    let want = [
+        [vec3(0.0, 10.0, 0.0), vec3(1.0, 10.0, 0.0), vec3(0.0, 11.0, 0.0)],
+        [vec3(5.0, 10.0, 0.0), vec3(5.0, 11.0, 0.0), vec3(4.0, 10.0, 0.0)],
+        [vec3(0.0, 10.0, -3.0), vec3(2.0, 10.0, -3.0), vec3(0.0, 12.0, -3.0)],
+    ];
+    for (i, w) in want.iter().enumerate() {
+        for (got, want) in scene.mesh.corners(i).iter().zip(w) {
+            assert!(got.distance(*want) < 1e-5, "instance {i}: {got} vs {want}");
+        }
     }
 }
