@@ -229,7 +229,7 @@ impl<'a> Transport<'a> {
             p_error: sp.p_error,
             ng,
             ns,
-            albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]),
+            albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]) * sp.color,
             emission: self.emission[m],
             material: sp.material,
             front,

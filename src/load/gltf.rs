@@ -313,6 +313,14 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
         Dimensions::Vec2,
     )?;
     check_accessor(prim.indices(), "index", &[DataType::U8, DataType::U16, DataType::U32], Dimensions::Scalar)?;
+    let color_types = [DataType::F32, DataType::U8, DataType::U16];
+    if let Some(c) = prim.get(&Semantic::Colors(0))
+        && c.dimensions() != Dimensions::Vec4
+    {
+        check_accessor(Some(c), "COLOR_0", &color_types, Dimensions::Vec3)?;
+    } else {
+        check_accessor(prim.get(&Semantic::Colors(0)), "COLOR_0", &color_types, Dimensions::Vec4)?;
+    }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
     let positions: Vec<Vec3> = reader
         .read_positions()
@@ -340,7 +348,10 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
     }
     let triangles = triangles_of(prim.mode(), &indices)?;
     let material_ids = vec![mat; triangles.len()];
-    Ok(Mesh { positions, normals, uvs, triangles, material_ids })
+    // COLOR_0 is linear RGB(A) (f32, or normalised u8/u16); alpha is not used.
+    let colors: Option<Vec<Vec3>> =
+        reader.read_colors(0).map(|c| c.into_rgb_f32().map(Vec3::from).collect::<Vec<_>>()).filter(|v| v.len() == n);
+    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
 }
 
 fn material(m: &gltf::Material, path: &Path, images: &[Option<Arc<TextureImage>>]) -> Material {

@@ -222,7 +222,10 @@ fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Materia
             }),
         };
         let material_ids = vec![id; triangles.len()];
-        mesh.append(Mesh { positions, normals, uvs, triangles, material_ids });
+        // `v x y z r g b`: colours as written (0..1, taken as linear).
+        let colors = (m.vertex_color.len() == m.positions.len())
+            .then(|| m.vertex_color.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect());
+        mesh.append(Mesh { positions, normals, uvs, colors, triangles, material_ids });
     }
     if mesh.triangles.is_empty() {
         return Err("no faces".into());

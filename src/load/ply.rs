@@ -67,6 +67,7 @@ fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, 
     let has = |k: &str| vdef.properties.contains_key(k);
     let with_normals = has("nx") && has("ny") && has("nz");
     let with_uvs = (has("u") && has("v")) || (has("s") && has("t")) || (has("texture_u") && has("texture_v"));
+    let with_colors = has("red") && has("green") && has("blue");
     if let Some(i) = verts.iter().position(|v| !v.p.iter().all(|c| c.is_finite())) {
         return Err(format!("vertex {i} has a NaN or infinite coordinate"));
     }
@@ -88,9 +89,10 @@ fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, 
     }
     let normals = with_normals.then(|| verts.iter().map(|v| Vec3::from(v.n)).collect());
     let uvs = with_uvs.then(|| verts.iter().map(|v| Vec2::from(v.uv)).collect());
+    let colors = with_colors.then(|| verts.iter().map(|v| Vec3::from(v.c)).collect());
     let positions = verts.iter().map(|v| Vec3::from(v.p)).collect();
     let material_ids = vec![0; triangles.len()];
-    Ok(Mesh { positions, normals, uvs, triangles, material_ids })
+    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
 }
 
 /// ply-rs-bw's messages span several lines (message, offending text, cause); errors here are one line.
@@ -154,6 +156,9 @@ struct Vertex {
     p: [f32; 3],
     n: [f32; 3],
     uv: [f32; 2],
+    /// Linear RGB: bytes are sRGB (as scanners and MeshLab write them), floats are taken as
+    /// they are.
+    c: [f32; 3],
 }
 
 impl PropertyAccess for Vertex {
@@ -162,6 +167,15 @@ impl PropertyAccess for Vertex {
     }
 
     fn set_property(&mut self, name: &str, property: Property) -> PropertyAccessResult {
+        if let Some(k) = ["red", "green", "blue"].iter().position(|c| *c == name) {
+            self.c[k] = match property {
+                Property::UChar(v) => crate::scene::texture::srgb_to_linear(v as f32 / 255.0),
+                Property::Float(v) => v,
+                Property::Double(v) => v as f32,
+                _ => return PropertyAccessResult::Ignored,
+            };
+            return PropertyAccessResult::Set;
+        }
         let value = match property {
             Property::Float(v) => v,
             Property::Double(v) => v as f32,

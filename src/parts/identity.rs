@@ -59,6 +59,9 @@ pub fn scene_hash(scene: &Scene) -> String {
     if let Some(uv) = &m.uvs {
         h.tagged("uvs", bytemuck::cast_slice(uv));
     }
+    if let Some(c) = &m.colors {
+        h.tagged("colors", bytemuck::cast_slice(c));
+    }
     let rest =
         format!("{:?}|{:?}|{:?}|{:?}|{:?}", scene.spheres, scene.materials, scene.lights, scene.camera, scene.env);
     h.tagged("rest", rest.as_bytes());

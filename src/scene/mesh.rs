@@ -11,6 +11,9 @@ pub struct Mesh {
     pub positions: Vec<Vec3>,
     pub normals: Option<Vec<Vec3>>,
     pub uvs: Option<Vec<Vec2>>,
+    /// Linear RGB per vertex (glTF `COLOR_0`, OBJ `v x y z r g b`, PLY red green blue): it
+    /// multiplies the material's base colour.
+    pub colors: Option<Vec<Vec3>>,
     pub triangles: Vec<[u32; 3]>,
     pub material_ids: Vec<u32>,
 }
@@ -32,6 +35,8 @@ impl Mesh {
         let add = other.positions.len();
         merge_attr(&mut self.normals, other.normals, had, add, Vec3::ZERO);
         merge_attr(&mut self.uvs, other.uvs, had, add, Vec2::ZERO);
+        // A part without colours is white: its base colour unchanged.
+        merge_attr(&mut self.colors, other.colors, had, add, Vec3::ONE);
         self.positions.extend(other.positions);
         self.triangles.extend(other.triangles.into_iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
         self.material_ids.extend(other.material_ids);
@@ -60,6 +65,14 @@ impl Mesh {
             }
             if normals.iter().any(|v| !v.is_finite()) {
                 return Err("a vertex normal is not finite".into());
+            }
+        }
+        if let Some(c) = &self.colors {
+            if c.len() != n {
+                return Err(format!("{} vertex colours for {n} vertices", c.len()));
+            }
+            if c.iter().any(|v| !v.is_finite() || v.min_element() < 0.0) {
+                return Err("a vertex colour is negative or not finite".into());
             }
         }
         if let Some(uvs) = &self.uvs {

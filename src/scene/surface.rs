@@ -15,6 +15,8 @@ pub struct SurfacePoint {
     /// Unit normal used for shading (interpolated vertex normals where the mesh has them).
     pub shading_normal: Vec3,
     pub uv: Vec2,
+    /// The interpolated vertex colour (white where the mesh has none).
+    pub color: Vec3,
     pub material: u32,
 }
 
@@ -46,12 +48,17 @@ impl Scene {
                 Some(t) => w * t[ia as usize] + u * t[ib as usize] + v * t[ic as usize],
                 None => Vec2::new(u, v),
             };
+            let color = match &self.mesh.colors {
+                Some(c) => w * c[ia as usize] + u * c[ib as usize] + v * c[ic as usize],
+                None => Vec3::ONE,
+            };
             SurfacePoint {
                 position,
                 p_error,
                 geometric_normal,
                 shading_normal,
                 uv,
+                color,
                 material: self.mesh.material_ids[prim],
             }
         } else {
@@ -65,7 +72,15 @@ impl Scene {
             } else {
                 Vec2::ZERO
             };
-            SurfacePoint { position, p_error, geometric_normal: n, shading_normal: n, uv, material: s.material }
+            SurfacePoint {
+                position,
+                p_error,
+                geometric_normal: n,
+                shading_normal: n,
+                uv,
+                color: Vec3::ONE,
+                material: s.material,
+            }
         }
     }
 }

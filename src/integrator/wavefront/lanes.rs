@@ -30,7 +30,12 @@ const L: usize = 8;
 /// textures, light sampling (not hemisphere probes) without MIS, and nothing but area lights. Decided once
 /// per render, with the kernel (`super::Lanes`).
 pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
-    !non_diffuse && !t.hemisphere && !t.mis && !t.textures.any() && t.area_lights.iter().all(Option::is_some)
+    !non_diffuse
+        && !t.hemisphere
+        && !t.mis
+        && !t.textures.any()
+        && t.scene.mesh.colors.is_none()
+        && t.area_lights.iter().all(Option::is_some)
 }
 
 /// [`super::shade::shade`] eight paths at a time (for renders where [`can_shade`] holds).

@@ -30,7 +30,7 @@ pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[
 
     if !file_normals && !has_uvs {
         // Vertices are exactly the file's positions.
-        return Mesh { positions, normals: Some(smooth_n), uvs: None, triangles: pos_tris, material_ids };
+        return Mesh { positions, normals: Some(smooth_n), uvs: None, colors: None, triangles: pos_tris, material_ids };
     }
 
     let nm = normal_matrix(world);
@@ -55,5 +55,12 @@ pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[
     };
     let triangles: Vec<[u32; 3]> =
         local.corners.chunks_exact(3).map(|c| [vertex(c[0]), vertex(c[1]), vertex(c[2])]).collect();
-    Mesh { positions: out_p, normals: Some(out_n), uvs: has_uvs.then_some(out_t), triangles, material_ids }
+    Mesh {
+        positions: out_p,
+        normals: Some(out_n),
+        uvs: has_uvs.then_some(out_t),
+        colors: None,
+        triangles,
+        material_ids,
+    }
 }

@@ -282,3 +282,77 @@ fn gltf_gpu_instancing_places_every_instance() {
         }
     }
 }
+
+/// sRGB byte to linear, from the sRGB definition.
+fn srgb_byte(b: u8) -> f32 {
+    let c = b as f64 / 255.0;
+    (if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }) as f32
+}
+
+/// Vertex colours from OBJ (`v x y z r g b`, as written), PLY (bytes, sRGB) and glTF
+/// (`COLOR_0`, linear floats); a mesh without them has none.
+#[test]
+fn vertex_colours_are_read_from_every_format() {
+    use base64::Engine;
+    let d = temp_dir("exporters-colours");
+    write(&d, "c.obj", "v 0 0 0 1 0.5 0.25\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n");
+    let s = load_ok(&d.join("c.obj"));
+    assert_eq!(s.mesh.colors.as_deref(), Some(&[vec3(1.0, 0.5, 0.25), vec3(0.0, 1.0, 0.0), vec3(0.0, 0.0, 1.0)][..]));
+    write(
+        &d,
+        "c.ply",
+        "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n\
+         property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n\
+         property list uchar int vertex_indices\nend_header\n0 0 0 255 128 64\n1 0 0 0 10 200\n0 1 0 1 2 3\n3 0 1 2\n",
+    );
+    let s = load_ok(&d.join("c.ply"));
+    let want = [[255, 128, 64], [0, 10, 200], [1, 2, 3]].map(|c: [u8; 3]| Vec3::from(c.map(srgb_byte)));
+    let got = s.mesh.colors.clone().expect("PLY colours");
+    for (g, w) in got.iter().zip(&want) {
+        assert!((*g - *w).abs().max_element() < 1e-6, "{g} vs {w}");
+    }
+    let mut bytes: Vec<u8> =
+        [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+    bytes
+        .extend([[0.5f32, 0.25, 1.0], [1.0, 1.0, 1.0], [0.0, 0.0, 0.0]].iter().flatten().flat_map(|c| c.to_le_bytes()));
+    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
+    write(
+        &d,
+        "c.gltf",
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+              "buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{uri}"}}],
+              "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
+              "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                           {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
+        ),
+    );
+    let s = load_ok(&d.join("c.gltf"));
+    assert_eq!(s.mesh.colors.as_deref(), Some(&[vec3(0.5, 0.25, 1.0), Vec3::ONE, Vec3::ZERO][..]));
+    write(&d, "plain.obj", format!("{QUAD}f 1 2 3\n"));
+    assert!(load_ok(&d.join("plain.obj")).mesh.colors.is_none());
+}
+
+/// A vertex colour multiplies the base colour: a plane of albedo 0.8 coloured (1, 0.5, 0.25)
+/// at every vertex under the hemisphere light of radiance 1.5 has radiance 0.8 x colour x 1.5
+/// (the irradiance pi L times albedo / pi).
+#[test]
+fn vertex_colours_multiply_the_base_colour_in_a_render() {
+    let d = temp_dir("exporters-colour-render");
+    let h = 10.0;
+    write(
+        &d,
+        "plane.obj",
+        format!(
+            "mtllib m.mtl\nv {h} 0 {h} 1 0.5 0.25\nv {h} 0 -{h} 1 0.5 0.25\nv -{h} 0 -{h} 1 0.5 0.25\nv -{h} 0 {h} 1 0.5 0.25\nusemtl grey\nf 1 2 3 4\n"
+        ),
+    );
+    write(&d, "m.mtl", "newmtl grey\nKd 0.8 0.8 0.8\n");
+    let mut scene = load_ok(&d.join("plane.obj"));
+    scene.lights = vec![wavepath::scene::Light::Hemisphere { radiance: Vec3::splat(1.5) }];
+    scene.camera = wavepath::scene::Camera::look_at(vec3(0.0, 3.0, 0.5), Vec3::ZERO, Vec3::Y, 40.0, 4.0 / 3.0);
+    let acc = crate::common::render::wavefront(&scene, &crate::common::render::settings(32, 24, 1, 16)).0;
+    let want = (vec3(1.0, 0.5, 0.25) * 0.8 * 1.5).as_dvec3();
+    let (_, checked) = crate::common::agree::assert_regions_match(&acc, 8, |_, _| Some(want), 1e-4, "coloured plane");
+    assert_eq!(checked, 32 * 24);
+}
