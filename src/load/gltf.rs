@@ -33,8 +33,8 @@ fn read(path: &Path) -> Result<Scene, String> {
     precheck(&bytes)?;
     let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
     let mut json = raw.document.into_json();
-    // The crate refuses required extensions it does not know; this loader reads this one itself.
-    json.extensions_required.retain(|e| e != "EXT_mesh_gpu_instancing");
+    // The crate refuses required extensions it does not know; this loader reads these itself.
+    json.extensions_required.retain(|e| e != "EXT_mesh_gpu_instancing" && e != "KHR_mesh_quantization");
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     let gltf = gltf::Gltf { document, blob: raw.blob };
     let base = path.parent().unwrap_or(Path::new("."));
@@ -107,8 +107,8 @@ fn read(path: &Path) -> Result<Scene, String> {
 }
 
 /// Extensions a file may require: the ones the loader reads.
-const SUPPORTED_EXTENSIONS: [&str; 3] =
-    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "EXT_mesh_gpu_instancing"];
+const SUPPORTED_EXTENSIONS: [&str; 4] =
+    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "EXT_mesh_gpu_instancing", "KHR_mesh_quantization"];
 
 /// The instance transforms of a node's `EXT_mesh_gpu_instancing` (TRANSLATION, ROTATION as
 /// a unit quaternion x y z w, SCALE; f32 accessors of one count), each applied before the
@@ -285,6 +285,44 @@ fn triangles_of(mode: gltf::mesh::Mode, idx: &[u32]) -> Result<Vec<[u32; 3]>, St
     Ok(all.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect())
 }
 
+/// A non-sparse accessor of 8- or 16-bit integers as floats: normalised ones mapped to
+/// [0, 1] or [-1, 1] as the glTF specification defines (signed: max(c / (2^(n-1) - 1), -1)),
+/// others as their values.
+fn read_quantised(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Vec<f32>, String> {
+    let what = |m: &str| format!("accessor {}: {m}", acc.index());
+    if acc.sparse().is_some() {
+        return Err(what("sparse quantised data is not supported"));
+    }
+    let view = acc.view().ok_or_else(|| what("no buffer view"))?;
+    let data = buffers.get(view.buffer().index()).map(|d| &d.0[..]).unwrap_or_default();
+    let (n, size) = (acc.dimensions().multiplicity(), acc.data_type().size());
+    let stride = view.stride().unwrap_or(n * size);
+    let start = view.offset() + acc.offset();
+    // Checked before anything is allocated: a damaged count must not ask for terabytes.
+    let end = acc.count().checked_mul(stride).and_then(|b| b.checked_add(start));
+    if acc.count() > 0 && end.is_none_or(|e| e - stride + n * size > data.len()) {
+        return Err(what("data outside its buffer"));
+    }
+    let norm = acc.normalized();
+    let mut out = Vec::with_capacity(acc.count() * n);
+    for k in 0..acc.count() {
+        for c in 0..n {
+            let at = start + k * stride + c * size;
+            let b = &data[at..at + size];
+            let v = match acc.data_type() {
+                DataType::I8 => (b[0] as i8) as f32 / if norm { 127.0 } else { 1.0 },
+                DataType::U8 => b[0] as f32 / if norm { 255.0 } else { 1.0 },
+                DataType::I16 => i16::from_le_bytes([b[0], b[1]]) as f32 / if norm { 32767.0 } else { 1.0 },
+                DataType::U16 => u16::from_le_bytes([b[0], b[1]]) as f32 / if norm { 65535.0 } else { 1.0 },
+                DataType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
+                DataType::U32 => return Err(what("32-bit integers are not a vertex attribute type")),
+            };
+            out.push(if norm { v.max(-1.0) } else { v });
+        }
+    }
+    Ok(out)
+}
+
 /// Refuses an accessor whose component type or shape is not one the semantic allows: the
 /// gltf crate reads such data with debug-only checks, so it would panic or read garbage.
 fn check_accessor(acc: Option<gltf::Accessor>, what: &str, types: &[DataType], dims: Dimensions) -> Result<(), String> {
@@ -304,14 +342,11 @@ fn check_accessor(acc: Option<gltf::Accessor>, what: &str, types: &[DataType], d
 
 fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat4, mat: u32) -> Result<Mesh, String> {
     use gltf::Semantic;
-    check_accessor(prim.get(&Semantic::Positions), "POSITION", &[DataType::F32], Dimensions::Vec3)?;
-    check_accessor(prim.get(&Semantic::Normals), "NORMAL", &[DataType::F32], Dimensions::Vec3)?;
-    check_accessor(
-        prim.get(&Semantic::TexCoords(0)),
-        "TEXCOORD_0",
-        &[DataType::F32, DataType::U8, DataType::U16],
-        Dimensions::Vec2,
-    )?;
+    // The types KHR_mesh_quantization allows besides f32.
+    use DataType::{F32, I8, I16, U8, U16};
+    check_accessor(prim.get(&Semantic::Positions), "POSITION", &[F32, I8, U8, I16, U16], Dimensions::Vec3)?;
+    check_accessor(prim.get(&Semantic::Normals), "NORMAL", &[F32, I8, I16], Dimensions::Vec3)?;
+    check_accessor(prim.get(&Semantic::TexCoords(0)), "TEXCOORD_0", &[F32, I8, U8, I16, U16], Dimensions::Vec2)?;
     check_accessor(prim.indices(), "index", &[DataType::U8, DataType::U16, DataType::U32], Dimensions::Scalar)?;
     let color_types = [DataType::F32, DataType::U8, DataType::U16];
     if let Some(c) = prim.get(&Semantic::Colors(0))
@@ -322,22 +357,32 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
         check_accessor(prim.get(&Semantic::Colors(0)), "COLOR_0", &color_types, Dimensions::Vec4)?;
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(|d| &d.0[..]));
-    let positions: Vec<Vec3> = reader
-        .read_positions()
-        .ok_or("no POSITION data (missing or outside its buffer)")?
-        .map(|p| world.transform_point3(Vec3::from(p)))
-        .collect();
+    // Quantised attributes (KHR_mesh_quantization) are read here; f32 ones (which may be
+    // sparse) through the crate.
+    let quantised = |s: Semantic| prim.get(&s).filter(|a| a.data_type() != DataType::F32);
+    let positions: Vec<Vec3> = match quantised(Semantic::Positions) {
+        Some(acc) => read_quantised(&acc, buffers)?.chunks_exact(3).map(Vec3::from_slice).collect(),
+        None => {
+            reader.read_positions().ok_or("no POSITION data (missing or outside its buffer)")?.map(Vec3::from).collect()
+        }
+    };
+    let positions: Vec<Vec3> = positions.into_iter().map(|p| world.transform_point3(p)).collect();
     if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
         return Err(format!("vertex {i} has a NaN or infinite coordinate"));
     }
     let n = positions.len();
     let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
-    let normals: Option<Vec<Vec3>> = reader
-        .read_normals()
-        .map(|it| it.map(|v| (normal_matrix * Vec3::from(v)).normalize_or_zero()).collect::<Vec<_>>())
-        .filter(|v| v.len() == n && v.iter().all(|x| x.is_finite()));
-    let uvs: Option<Vec<Vec2>> =
-        reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect::<Vec<_>>()).filter(|v| v.len() == n);
+    let normals: Option<Vec<Vec3>> = match quantised(Semantic::Normals) {
+        Some(acc) => Some(read_quantised(&acc, buffers)?.chunks_exact(3).map(Vec3::from_slice).collect()),
+        None => reader.read_normals().map(|it| it.map(Vec3::from).collect()),
+    }
+    .map(|v: Vec<Vec3>| v.into_iter().map(|v| (normal_matrix * v).normalize_or_zero()).collect::<Vec<_>>())
+    .filter(|v| v.len() == n && v.iter().all(|x| x.is_finite()));
+    let uvs: Option<Vec<Vec2>> = match quantised(Semantic::TexCoords(0)) {
+        Some(acc) => Some(read_quantised(&acc, buffers)?.chunks_exact(2).map(Vec2::from_slice).collect()),
+        None => reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect()),
+    }
+    .filter(|v: &Vec<Vec2>| v.len() == n);
     let indices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None if prim.indices().is_some() => return Err("index data outside its buffer".into()),

@@ -356,3 +356,48 @@ fn vertex_colours_multiply_the_base_colour_in_a_render() {
     let (_, checked) = crate::common::agree::assert_regions_match(&acc, 8, |_, _| Some(want), 1e-4, "coloured plane");
     assert_eq!(checked, 32 * 24);
 }
+
+/// `KHR_mesh_quantization`: normalised i16 positions (scaled back by the node, as encoders
+/// write them), i8 normals and u16 uvs, each decoded as the glTF specification defines.
+#[test]
+fn gltf_quantised_attributes() {
+    use base64::Engine;
+    let d = temp_dir("exporters-quantised");
+    let mut bytes = Vec::new();
+    // Positions: (0,0,0), (32767,0,0), (0,-32768,0) as i16 x3, padded to 8 bytes per vertex.
+    for p in [[0i16, 0, 0], [32767, 0, 0], [0, -32768, 0]] {
+        bytes.extend(p.iter().flat_map(|c| c.to_le_bytes()));
+        bytes.extend([0u8, 0]);
+    }
+    // Normals: (0, 0, 127) as i8 x3, padded to 4 bytes.
+    for _ in 0..3 {
+        bytes.extend([0u8, 0, 127, 0]);
+    }
+    // Uvs: (0,0), (65535,0), (0,32768) as u16 x2.
+    for t in [[0u16, 0], [65535, 0], [0, 32768]] {
+        bytes.extend(t.iter().flat_map(|c| c.to_le_bytes()));
+    }
+    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
+    write(
+        &d,
+        "q.gltf",
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_mesh_quantization"],"extensionsRequired":["KHR_mesh_quantization"],
+              "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"NORMAL":1,"TEXCOORD_0":2}}}}]}}],
+              "nodes":[{{"mesh":0,"scale":[4,4,4]}}],"scenes":[{{"nodes":[0]}}],
+              "buffers":[{{"byteLength":48,"uri":"data:application/octet-stream;base64,{uri}"}}],
+              "bufferViews":[{{"buffer":0,"byteLength":24,"byteStride":8}},{{"buffer":0,"byteOffset":24,"byteLength":12,"byteStride":4}},
+                             {{"buffer":0,"byteOffset":36,"byteLength":12}}],
+              "accessors":[{{"bufferView":0,"componentType":5122,"normalized":true,"count":3,"type":"VEC3","min":[0,-32768,0],"max":[32767,0,0]}},
+                           {{"bufferView":1,"componentType":5120,"normalized":true,"count":3,"type":"VEC3"}},
+                           {{"bufferView":2,"componentType":5123,"normalized":true,"count":3,"type":"VEC2"}}]}}"#
+        ),
+    );
+    let s = load_ok(&d.join("q.gltf"));
+    // Normalised i16: 32767 -> 1, -32768 -> max(-32768 / 32767, -1) = -1; then the node's scale 4.
+    assert_eq!(s.mesh.corners(0), [Vec3::ZERO, vec3(4.0, 0.0, 0.0), vec3(0.0, -4.0, 0.0)]);
+    assert_eq!(s.mesh.normals.as_deref(), Some(&[Vec3::Z; 3][..]));
+    let uvs = s.mesh.uvs.clone().expect("uvs");
+    assert_eq!(uvs[1], glam::Vec2::new(1.0, 0.0));
+    assert!((uvs[2].y - 32768.0 / 65535.0).abs() < 1e-7);
+}
