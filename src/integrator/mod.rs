@@ -230,7 +230,7 @@ impl<'a> Transport<'a> {
             ng,
             ns,
             albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]) * sp.color,
-            emission: self.emission[m],
+            emission: self.textures.emission(m, sp.uv).unwrap_or(self.emission[m]),
             material: sp.material,
             front,
         }
@@ -338,7 +338,15 @@ impl<'a> Transport<'a> {
     #[inline]
     pub fn probe_radiance(&self, ray: &Ray, hit: Option<&Hit>) -> Vec3 {
         match hit {
-            Some(h) => self.emission[self.material_of(h.prim)],
+            Some(h) => {
+                let m = self.material_of(h.prim);
+                if self.textures.has_emission(m) {
+                    let uv = self.scene.surface_point_with(ray, h, true).uv;
+                    self.textures.emission(m, uv).unwrap_or(self.emission[m])
+                } else {
+                    self.emission[m]
+                }
+            }
             None => self.lights.infinite.radiance(ray.dir),
         }
     }

@@ -2,15 +2,22 @@ use super::{LightSample, area_to_solid_angle};
 use crate::geometry::error_bound::gamma;
 use crate::sampling::warp;
 use crate::scene::Scene;
-use glam::Vec3;
+use crate::scene::texture::{Texture, Wrap, wrap_index};
+use glam::{Vec2, Vec3};
 
 /// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
-/// area. Emission is two-sided, as the reference's emission BSDF is.
+/// area. Emission is two-sided, as the reference's emission BSDF is. A triangle under an
+/// emission texture emits factor x texel at each point; one whose texels are all black (over
+/// its uv footprint) emits nothing anywhere and is left out, so no sample is spent on it.
 #[derive(Clone, Debug)]
 pub struct EmissiveTriangles {
     /// Corner 0 and the two edges from it.
     corners: Vec<[Vec3; 3]>,
     emission: Vec<Vec3>,
+    /// For a textured triangle: its material's emission texture and its corners' uvs.
+    textured: Vec<Option<(u32, [Vec2; 3])>>,
+    /// Per material, the decoded emission texture (when the mesh has uvs).
+    textures: Vec<Option<Texture>>,
     /// Running sum of areas (the last entry is the total).
     cdf: Vec<f32>,
     /// Largest error bound of a sampled point over all triangles (see
@@ -20,6 +27,12 @@ pub struct EmissiveTriangles {
 
 impl EmissiveTriangles {
     pub fn new(scene: &Scene) -> Option<Self> {
+        let textures: Vec<Option<Texture>> = scene
+            .materials
+            .iter()
+            .map(|m| m.emission_texture.clone().filter(|t| t.image.is_some() && scene.mesh.uvs.is_some()))
+            .collect();
+        let mut textured = Vec::new();
         let mut corners = Vec::new();
         let mut emission = Vec::new();
         let mut cdf = Vec::new();
@@ -32,6 +45,15 @@ impl EmissiveTriangles {
             }
             let [a, b, c] = scene.mesh.corners(i);
             let area = 0.5 * (b - a).cross(c - a).length();
+            let tex = textures[m as usize].as_ref().zip(scene.mesh.uvs.as_ref()).map(|(t, uvs)| {
+                let [ia, ib, ic] = scene.mesh.triangles[i];
+                (t, [uvs[ia as usize], uvs[ib as usize], uvs[ic as usize]])
+            });
+            if let Some((t, uv)) = tex
+                && (t.factor * brightest_texel(t, uv)).max_element() <= 0.0
+            {
+                continue;
+            }
             if area > 0.0 && area.is_finite() {
                 total += area;
                 let (e1, e2) = (b - a, c - a);
@@ -40,10 +62,11 @@ impl EmissiveTriangles {
                 max_error = max_error.max(gamma(4) * (a.abs() + e1.abs() + e2.abs()));
                 corners.push([a, e1, e2]);
                 emission.push(mat.emission);
+                textured.push(tex.map(|(_, uv)| (m, uv)));
                 cdf.push(total);
             }
         }
-        (total > 0.0).then_some(EmissiveTriangles { corners, emission, cdf, max_error })
+        (total > 0.0).then_some(EmissiveTriangles { corners, emission, textured, textures, cdf, max_error })
     }
 
     /// Per-component bound on the distance of any sampled point from its triangle: one
@@ -83,6 +106,57 @@ impl EmissiveTriangles {
         let n = e1.cross(e2).try_normalize()?;
         // Area density 1/total; emission is two-sided.
         let (wi, inv_pdf) = area_to_solid_angle(p, q, n, total, false)?;
-        Some((LightSample { wi, target: Some(q), weight: self.emission[i] * inv_pdf }, 1.0 / inv_pdf))
+        let le = match self.textured[i] {
+            Some((m, [ua, ub, uc])) => {
+                let uv = ua + bu * (ub - ua) + bv * (uc - ua);
+                self.textures[m as usize].as_ref().and_then(|t| t.albedo(uv)).unwrap_or(self.emission[i])
+            }
+            None => self.emission[i],
+        };
+        Some((LightSample { wi, target: Some(q), weight: le * inv_pdf }, 1.0 / inv_pdf))
     }
+}
+
+/// The brightest texel a lookup anywhere in the triangle with these uvs can reach: the texels
+/// of its uv box as the filter reads them (nearest: the texel containing each point;
+/// bilinear: also the next one), wrapped as the sampler wraps; the whole image when the box
+/// is larger.
+fn brightest_texel(t: &Texture, uv: [Vec2; 3]) -> Vec3 {
+    let Some(img) = t.image.as_deref() else { return Vec3::ZERO };
+    let (w, h) = (img.width, img.height);
+    let v = |p: Vec2| if t.flip_v { 1.0 - p.y } else { p.y };
+    let (u0, u1) = (uv.iter().map(|p| p.x).fold(f32::MAX, f32::min), uv.iter().map(|p| p.x).fold(f32::MIN, f32::max));
+    let (v0, v1) =
+        (uv.iter().map(|&p| v(p)).fold(f32::MAX, f32::min), uv.iter().map(|&p| v(p)).fold(f32::MIN, f32::max));
+    let all = || img.texels.iter().fold(Vec3::ZERO, |m, &c| m.max(c));
+    if !(u0.is_finite() && u1.is_finite() && v0.is_finite() && v1.is_finite()) {
+        return all();
+    }
+    let (shift, extra) = match t.filter {
+        crate::scene::texture::Filter::Nearest => (0.0, 0),
+        crate::scene::texture::Filter::Linear => (0.5, 1),
+    };
+    let span = |a: f32, b: f32, n: usize| {
+        ((a * n as f32 - shift).floor() as i64, (b * n as f32 - shift).floor() as i64 + extra)
+    };
+    // The texel indices a span reaches once wrapped: clamped, or every index when a
+    // repeating span is as long as the image.
+    let indices = |(a, b): (i64, i64), n: usize, wrap: Wrap| -> Vec<usize> {
+        match wrap {
+            Wrap::ClampToEdge => (a.clamp(0, n as i64 - 1)..=b.clamp(0, n as i64 - 1)).map(|i| i as usize).collect(),
+            _ if b - a + 1 >= n as i64 => (0..n).collect(),
+            _ => (a..=b).map(|i| wrap_index(i, n, wrap)).collect(),
+        }
+    };
+    let (xs, ys) = (indices(span(u0, u1, w), w, t.wrap[0]), indices(span(v0, v1, h), h, t.wrap[1]));
+    if xs.len() * ys.len() >= w * h {
+        return all();
+    }
+    let mut m = Vec3::ZERO;
+    for &y in &ys {
+        for &x in &xs {
+            m = m.max(img.texels[y * w + x]);
+        }
+    }
+    m
 }

@@ -403,43 +403,53 @@ fn material(m: &gltf::Material, path: &Path, images: &[Option<Arc<TextureImage>>
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let strength = m.emissive_strength().unwrap_or(1.0);
-    let albedo_texture = pbr.base_color_texture().map(|info| {
-        let tex = info.texture();
-        let sampler = tex.sampler();
-        let wrap = |w: WrappingMode| match w {
-            WrappingMode::Repeat => Wrap::Repeat,
-            WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-            WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-        };
-        let source = tex.source();
-        let path = match source.source() {
-            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
-                path.parent().unwrap_or(Path::new(".")).join(uri_path(uri))
-            }
-            _ => PathBuf::from(format!("{}#image{}", path.display(), source.index())),
-        };
-        Texture {
-            path,
-            image: images.get(source.index()).cloned().flatten(),
-            wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
-            // No mipmaps: the magnification filter decides (glTF leaves it open when absent).
-            filter: match sampler.mag_filter() {
-                Some(MagFilter::Nearest) => Filter::Nearest,
-                _ => Filter::Linear,
-            },
-            flip_v: false,
-            factor: Vec3::new(r, g, b),
-        }
-    });
+    let emission = Vec3::from(m.emissive_factor()) * strength;
+    let albedo_texture =
+        pbr.base_color_texture().map(|info| texture(&info.texture(), path, images, Vec3::new(r, g, b)));
+    // Emission is factor x texel: a texture under a black factor emits nothing.
+    let emission_texture = m
+        .emissive_texture()
+        .filter(|_| emission.max_element() > 0.0)
+        .map(|info| texture(&info.texture(), path, images, emission));
     Material {
         name: m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string),
         bsdf: Bsdf::Diffuse { albedo: Vec3::new(r, g, b) },
-        emission: Vec3::from(m.emissive_factor()) * strength,
+        emission,
         albedo_texture,
+        emission_texture,
     }
 }
 
-/// Decodes every image a base-colour texture uses (sRGB), once: from a buffer view (.glb),
+/// A glTF texture (sRGB image, its sampler) scaled by `factor`.
+fn texture(tex: &gltf::Texture, path: &Path, images: &[Option<Arc<TextureImage>>], factor: Vec3) -> Texture {
+    let sampler = tex.sampler();
+    let wrap = |w: WrappingMode| match w {
+        WrappingMode::Repeat => Wrap::Repeat,
+        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
+        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
+    };
+    let source = tex.source();
+    let path = match source.source() {
+        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
+            path.parent().unwrap_or(Path::new(".")).join(uri_path(uri))
+        }
+        _ => PathBuf::from(format!("{}#image{}", path.display(), source.index())),
+    };
+    Texture {
+        path,
+        image: images.get(source.index()).cloned().flatten(),
+        wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
+        // No mipmaps: the magnification filter decides (glTF leaves it open when absent).
+        filter: match sampler.mag_filter() {
+            Some(MagFilter::Nearest) => Filter::Nearest,
+            _ => Filter::Linear,
+        },
+        flip_v: false,
+        factor,
+    }
+}
+
+/// Decodes every image a base-colour or emissive texture uses (sRGB), once: from a buffer view (.glb),
 /// a data URI (glTF-Embedded) or a file beside the scene (percent-escapes decoded). An image
 /// that cannot be read or decoded is a warning: the material keeps its factor.
 fn decode_images(
@@ -451,7 +461,9 @@ fn decode_images(
 ) -> Result<Vec<Option<Arc<TextureImage>>>, String> {
     let used: std::collections::HashSet<usize> = doc
         .materials()
-        .filter_map(|m| m.pbr_metallic_roughness().base_color_texture().map(|i| i.texture().source().index()))
+        .flat_map(|m| [m.pbr_metallic_roughness().base_color_texture(), m.emissive_texture()])
+        .flatten()
+        .map(|i| i.texture().source().index())
         .collect();
     let mut out = Vec::new();
     for img in doc.images() {

@@ -47,6 +47,9 @@ pub struct Material {
     /// Emitted radiance (zero for non-emitters).
     pub emission: Vec3,
     pub albedo_texture: Option<Texture>,
+    /// Emitted radiance as an image (glTF `emissiveTexture`): `emission` is then the largest
+    /// it can be (the factor), and a point emits factor x texel.
+    pub emission_texture: Option<Texture>,
 }
 
 impl Default for Material {
@@ -57,7 +60,13 @@ impl Default for Material {
 
 impl Material {
     pub fn diffuse(name: &str, albedo: Vec3) -> Self {
-        Material { name: name.into(), bsdf: Bsdf::Diffuse { albedo }, emission: Vec3::ZERO, albedo_texture: None }
+        Material {
+            name: name.into(),
+            bsdf: Bsdf::Diffuse { albedo },
+            emission: Vec3::ZERO,
+            albedo_texture: None,
+            emission_texture: None,
+        }
     }
 
     /// A pure emitter that reflects nothing (the CS184 `<emission>` BSDF).
@@ -67,6 +76,7 @@ impl Material {
             bsdf: Bsdf::Diffuse { albedo: Vec3::ZERO },
             emission: radiance,
             albedo_texture: None,
+            emission_texture: None,
         }
     }
 

@@ -105,7 +105,8 @@ impl Texture {
         Texture { path, image: None, wrap: [Wrap::Repeat; 2], filter: Filter::Linear, flip_v: true, factor: Vec3::ONE }
     }
 
-    /// Albedo at `uv`; `None` when the image is missing.
+    /// Factor x texel at `uv` (an albedo, or an emitted radiance); `None` when the image is
+    /// missing.
     #[inline]
     pub fn albedo(&self, uv: Vec2) -> Option<Vec3> {
         let img = self.image.as_deref()?;
@@ -156,6 +157,8 @@ pub fn sample(img: &TextureImage, uv: Vec2, wrap: [Wrap; 2], filter: Filter) -> 
 #[derive(Clone, Debug, Default)]
 pub struct Textures {
     per_material: Vec<Option<Texture>>,
+    /// Per material, the emission texture.
+    emission: Vec<Option<Texture>>,
     /// Any material has a decoded texture and the mesh has uvs: otherwise lookups return
     /// `None` at the cost of one predictable branch.
     any: bool,
@@ -163,10 +166,26 @@ pub struct Textures {
 
 impl Textures {
     pub fn new(scene: &super::Scene) -> Textures {
-        let per_material: Vec<Option<Texture>> =
-            scene.materials.iter().map(|m| m.albedo_texture.clone().filter(|t| t.image.is_some())).collect();
-        let any = scene.mesh.uvs.is_some() && per_material.iter().any(Option::is_some);
-        Textures { per_material, any }
+        let decoded = |t: &Option<Texture>| t.clone().filter(|t| t.image.is_some());
+        let per_material: Vec<Option<Texture>> = scene.materials.iter().map(|m| decoded(&m.albedo_texture)).collect();
+        let emission: Vec<Option<Texture>> = scene.materials.iter().map(|m| decoded(&m.emission_texture)).collect();
+        let any = scene.mesh.uvs.is_some() && per_material.iter().chain(&emission).any(Option::is_some);
+        Textures { per_material, emission, any }
+    }
+
+    /// The textured emission of `material` at `uv`, or `None` (use the material's own).
+    #[inline]
+    pub fn emission(&self, material: usize, uv: Vec2) -> Option<Vec3> {
+        if !self.any {
+            return None;
+        }
+        self.emission.get(material)?.as_ref()?.albedo(uv)
+    }
+
+    /// Whether `material`'s emission varies over its surface.
+    #[inline]
+    pub fn has_emission(&self, material: usize) -> bool {
+        self.any && self.emission.get(material).is_some_and(Option::is_some)
     }
 
     /// The textured albedo of `material` at `uv`, or `None` (use the material's own).

@@ -80,6 +80,20 @@ pub fn files_with_ext(dir: &std::path::Path, exts: &[&str]) -> Vec<PathBuf> {
     out
 }
 
+/// Form factor from a differential area to a parallel rectangle with one corner straight
+/// above it at height h (sides x, y; signed, so rectangles combine by superposition).
+pub fn corner_form_factor(x: f64, y: f64, h: f64) -> f64 {
+    let (a, b) = ((h * h + x * x).sqrt(), (h * h + y * y).sqrt());
+    (x / a * (y / a).atan() + y / b * (x / b).atan()) / (2.0 * std::f64::consts::PI)
+}
+
+/// Form factor from a point at height h below the rectangle [x0, x1] x [z0, z1] (relative
+/// to the point's x and z), parallel to it.
+pub fn rect_form_factor(x0: f64, x1: f64, z0: f64, z1: f64, h: f64) -> f64 {
+    let f = |x, z| corner_form_factor(x, z, h);
+    f(x1, z1) - f(x0, z1) - f(x1, z0) + f(x0, z0)
+}
+
 /// Path of the built `wavepath` binary (integration tests only).
 pub fn wavepath_bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_wavepath"))

@@ -155,13 +155,6 @@ fn plane_under_the_hemisphere_light() {
     assert!(render(&up, &settings(1, 1)).pixels.iter().all(|p| p.mean() == Vec3::ZERO));
 }
 
-/// Form factor of a differential area to a parallel rectangle with one corner straight above
-/// it at height h (sides x, y; signed, so rectangles combine by superposition).
-fn corner_form_factor(x: f64, y: f64, h: f64) -> f64 {
-    let (a, b) = ((h * h + x * x).sqrt(), (h * h + y * y).sqrt());
-    (x / a * (y / a).atan() + y / b * (x / b).atan()) / (2.0 * std::f64::consts::PI)
-}
-
 /// A plane under an emissive rectangle (no area light: the emissive triangles are the
 /// light): radiance = albedo * Le * F, with F the rectangle's form factor; light sampling and
 /// hemisphere sampling both converge to it.
@@ -180,7 +173,8 @@ fn plane_under_an_emissive_rectangle() {
     };
     let expect = |x, y| {
         floor_point(&scene.camera, x, y, 10.0).map(|p| {
-            let f = |cx: f32, cz: f32| corner_form_factor((cx - p.x) as f64, (cz - p.z) as f64, h as f64);
+            let f =
+                |cx: f32, cz: f32| crate::common::corner_form_factor((cx - p.x) as f64, (cz - p.z) as f64, h as f64);
             let ff = f(x1, z1) - f(x0, z1) - f(x1, z0) + f(x0, z0);
             Vec3::splat(albedo * le * ff as f32)
         })

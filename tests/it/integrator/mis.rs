@@ -16,13 +16,6 @@ const H: usize = 24;
 const GAP: f32 = 0.02;
 const HALF: f32 = 0.15;
 
-/// Form factor from a floor point to a parallel rectangle with one corner straight above
-/// it at height h (signed sides x, y, so rectangles combine by superposition).
-fn corner_form_factor(x: f64, y: f64, h: f64) -> f64 {
-    let (a, b) = ((h * h + x * x).sqrt(), (h * h + y * y).sqrt());
-    (x / a * (y / a).atan() + y / b * (x / b).atan()) / (2.0 * std::f64::consts::PI)
-}
-
 fn scene() -> Scene {
     let mut mesh = Mesh::default();
     quad(&mut mesh, [vec3(-5.0, 0.0, -5.0), vec3(-5.0, 0.0, 5.0), vec3(5.0, 0.0, 5.0), vec3(5.0, 0.0, -5.0)], 0);
@@ -66,7 +59,9 @@ fn mis_bounds_the_variance_next_to_an_emitter_and_keeps_the_mean() {
     let expect = |x, y| {
         floor_points(&scene.camera, x, y).map(|points| {
             let radiance = |p: &Vec3| {
-                let f = |cx: f32, cz: f32| corner_form_factor((cx - p.x) as f64, (cz - p.z) as f64, GAP as f64);
+                let f = |cx: f32, cz: f32| {
+                    crate::common::corner_form_factor((cx - p.x) as f64, (cz - p.z) as f64, GAP as f64)
+                };
                 0.8 * 5.0 * (f(HALF, HALF) - f(-HALF, HALF) - f(HALF, -HALF) + f(-HALF, -HALF))
             };
             points.iter().map(radiance).sum::<f64>() / points.len() as f64

@@ -401,3 +401,29 @@ fn gltf_quantised_attributes() {
     assert_eq!(uvs[1], glam::Vec2::new(1.0, 0.0));
     assert!((uvs[2].y - 32768.0 / 65535.0).abs() < 1e-7);
 }
+
+/// `emissiveTexture`: decoded (sRGB) with the factor times the strength; under a black factor
+/// the texture emits nothing and is not kept.
+#[test]
+fn gltf_emissive_textures_load_with_factor_and_strength() {
+    use base64::Engine;
+    let d = temp_dir("exporters-emissive");
+    let png = two_texels(image::ImageFormat::Png);
+    let data = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&png));
+    for (factor, want) in [("[1,0.5,1]", Some(vec3(3.0, 1.5, 3.0))), ("[0,0,0]", None)] {
+        let body = format!(
+            r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+               "extensionsUsed":["KHR_materials_emissive_strength"],
+               "materials":[{{"emissiveFactor":{factor},"emissiveTexture":{{"index":0}},
+                              "extensions":{{"KHR_materials_emissive_strength":{{"emissiveStrength":3}}}}}}],
+               "textures":[{{"source":0}}],"images":[{{"uri":"{data}"}}],"#
+        );
+        write(&d, "e.gltf", gltf_doc("2.0", &body));
+        let s = load_ok(&d.join("e.gltf"));
+        let t = s.materials[0].emission_texture.as_ref();
+        assert_eq!(t.map(|t| t.factor), want, "factor {factor}");
+        if let Some(t) = t {
+            assert_eq!(t.image.as_ref().unwrap().texels, [vec3(1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0)]);
+        }
+    }
+}

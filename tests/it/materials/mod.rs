@@ -2,5 +2,6 @@
 //! in renders, and albedo textures.
 
 mod bsdf;
+mod emissive_textures;
 mod renders;
 mod textures;
