@@ -31,16 +31,23 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
         return Err("not a PLY file (it does not start with 'ply')".into());
     }
     let mut reader = Reader::new(Cursor::new(bytes));
-    let header = Parser::<Skip>::new()
-        .read_header(&mut reader)
-        .map_err(|e| format!("bad header: {}", one_line(&e.to_string())))?;
+    let header = Parser::<Skip>::new().read_header(&mut reader).map_err(|e| match sentence(&e.to_string()) {
+        Some((line, text, _)) => format!("header line {line}: '{text}' is not a valid header line"),
+        None => format!("bad header: {}", one_line(&e.to_string())),
+    })?;
     let payload_len = bytes.len().saturating_sub(header_len(bytes)?);
     check_counts(&header, payload_len)?;
 
     let mut verts: Vec<Vertex> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
     for (name, def) in &header.elements {
-        let what = |e: ply_rs_bw::parser::ParseError| format!("element '{name}': {}", one_line(&e.to_string()));
+        let what = |e: ply_rs_bw::parser::ParseError| match sentence(&e.to_string()) {
+            Some((line, text, Some(reason))) => format!("line {line} ('{text}', element '{name}'): {reason}"),
+            Some((line, text, None)) => {
+                format!("line {line} ('{text}', element '{name}'): not the values the header declares")
+            }
+            None => format!("element '{name}': {}", one_line(&e.to_string())),
+        };
         match name.as_str() {
             "vertex" => {
                 verts = Parser::<Vertex>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?
@@ -96,6 +103,21 @@ fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, 
 }
 
 /// ply-rs-bw's messages span several lines (message, offending text, cause); errors here are one line.
+/// The parser's message ("Line N: Couldn't ...; String: 'TEXT; '; Error: ...") as its line
+/// number, the offending text, and the innermost reason when it is a sentence (not a debug
+/// dump of the grammar's state).
+fn sentence(msg: &str) -> Option<(usize, String, Option<String>)> {
+    let msg = one_line(msg);
+    let rest = msg.split_once("Line ")?.1;
+    let line: usize = rest.split(|c: char| !c.is_ascii_digit()).next()?.parse().ok()?;
+    let text = msg.split_once("String: '")?.1.split_once("; '")?.0.trim().to_string();
+    let reason = msg
+        .rsplit_once("Error: ")
+        .map(|(_, r)| r.trim().trim_end_matches('.').to_string())
+        .filter(|r| !r.is_empty() && !r.contains('{') && !r.starts_with("error at") && !r.starts_with("Couldn't"));
+    Some((line, text, reason.map(|r| r.to_lowercase())))
+}
+
 fn one_line(msg: &str) -> String {
     let joined = msg.lines().map(str::trim).filter(|l| !l.is_empty()).collect::<Vec<_>>().join("; ");
     match joined.char_indices().nth(200) {

@@ -427,3 +427,33 @@ fn gltf_emissive_textures_load_with_factor_and_strength() {
         }
     }
 }
+
+/// PLY errors are sentences with the line and its text, not the parser's debug output.
+#[test]
+fn ply_errors_are_sentences() {
+    let d = temp_dir("exporters-ply-errors");
+    let head = "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\n\
+                element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    for (name, text, want) in [
+        (
+            "word.ply",
+            format!("{head}0 0 0\n1 0 abc\n3 0 1 1\n"),
+            "line 11 ('1 0 abc', element 'vertex'): not the values the header declares",
+        ),
+        (
+            "short.ply",
+            format!("{head}0 0 0\n1 0 0\n3 0 1\n"),
+            "line 12 ('3 0 1', element 'face'): expected 3 list elements, but found only 2",
+        ),
+        (
+            "header.ply",
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty floaty x\nend_header\n".to_string(),
+            "header line 4: 'property floaty x' is not a valid header line",
+        ),
+    ] {
+        write(&d, name, text);
+        let e = format!("{:#}", load(&d.join(name), &LoadOptions::default()).unwrap_err());
+        assert!(e.ends_with(want) && e.contains(name), "{e}");
+        assert!(!e.contains("String:") && !e.contains('{') && !e.contains('\n'), "{e}");
+    }
+}
