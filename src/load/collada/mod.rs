@@ -99,7 +99,7 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
         if depth > MAX_NODE_DEPTH {
             return Err(d.err(node, format!("nodes nest deeper than {MAX_NODE_DEPTH} levels")));
         }
-        let m = parent * transform::local_matrix(d, node)?;
+        let m = parent * transform::local_matrix(d, node, &mut self.scene.notes)?;
         let w = self.g * m;
         for c in node.children().filter(|c| c.is_element()) {
             match c.tag_name().name() {

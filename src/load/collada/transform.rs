@@ -22,8 +22,9 @@ pub fn up_axis_matrix(d: &Doc, root: Node) -> Result<Mat4> {
 }
 
 /// The node's local matrix: its transform elements composed in document order
-/// (each one post-multiplied, as COLLADA specifies).
-pub fn local_matrix(d: &Doc, node: Node) -> Result<Mat4> {
+/// (each one post-multiplied, as COLLADA specifies). A rotation about a zero-length axis
+/// (some exporters write `0 0 0 angle`) turns nothing: it is skipped with a line in `notes`.
+pub fn local_matrix(d: &Doc, node: Node, notes: &mut Vec<String>) -> Result<Mat4> {
     let mut m = Mat4::IDENTITY;
     for c in node.children().filter(|c| c.is_element()) {
         let t = match c.tag_name().name() {
@@ -32,9 +33,13 @@ pub fn local_matrix(d: &Doc, node: Node) -> Result<Mat4> {
             "scale" => Mat4::from_scale(Vec3::from_array(d.floats_n::<3>(c)?)),
             "rotate" => {
                 let [x, y, z, deg] = d.floats_n::<4>(c)?;
-                let axis =
-                    Vec3::new(x, y, z).try_normalize().ok_or_else(|| d.err(c, "rotation axis has zero length"))?;
-                Mat4::from_axis_angle(axis, deg.to_radians())
+                match Vec3::new(x, y, z).try_normalize() {
+                    Some(axis) => Mat4::from_axis_angle(axis, deg.to_radians()),
+                    None => {
+                        notes.push(format!("warning: {}; skipped", d.err(c, "rotation axis has zero length")));
+                        Mat4::IDENTITY
+                    }
+                }
             }
             "lookat" => {
                 let v = d.floats_n::<9>(c)?;
