@@ -1,6 +1,6 @@
 //! The command line end to end: the default render, output formats, and bad flags.
 
-use crate::common::{run_wavepath, temp_dir};
+use crate::common::{self, run_wavepath, temp_dir};
 use std::path::Path;
 use std::process::Output;
 
@@ -54,19 +54,9 @@ fn default_scene_normals_show_the_floor_and_walls() {
         let mut best = (f64::INFINITY, glam::DVec3::ZERO);
         for i in 0..scene.mesh.triangles.len() {
             let [a, b, c] = scene.mesh.corners(i).map(|p| p.as_dvec3());
-            let (e1, e2) = (b - a, c - a);
-            let p = d.cross(e2);
-            let det = e1.dot(p);
-            if det.abs() < 1e-12 {
-                continue;
-            }
-            let tv = o - a;
-            let u = tv.dot(p) / det;
-            let q = tv.cross(e1);
-            let v = d.dot(q) / det;
-            let t = e2.dot(q) / det;
+            let Some((t, u, v)) = common::triangle_f64(o, d, [a, b, c]) else { continue };
             if u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > r.tmin as f64 && t < best.0 {
-                best = (t, e1.cross(e2).normalize());
+                best = (t, (b - a).cross(c - a).normalize());
             }
         }
         for sp in &scene.spheres {

@@ -128,18 +128,9 @@ fn occluded_f64(scene: &Scene, r: &Ray) -> Option<bool> {
     let scale = 1e-5 * t1.clamp(1.0, 1e6);
     let mut hit = false;
     for i in 0..scene.mesh.triangle_count() {
-        let [a, b, c] = scene.mesh.corners(i).map(|p| p.as_dvec3());
-        let (e1, e2) = (b - a, c - a);
-        let p = d.cross(e2);
-        let det = e1.dot(p);
-        if det.abs() < 1e-12 {
+        let Some((t, u, v)) = common::triangle_f64(o, d, scene.mesh.corners(i).map(|p| p.as_dvec3())) else {
             continue;
-        }
-        let s = o - a;
-        let u = s.dot(p) / det;
-        let q = s.cross(e1);
-        let v = d.dot(q) / det;
-        let t = e2.dot(q) / det;
+        };
         let near_edge = [u, v, 1.0 - u - v].iter().any(|w| w.abs() < 1e-6);
         let near_end = (t - t0).abs() < scale || (t - t1).abs() < scale;
         let inside = u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > t0 && t < t1;

@@ -94,6 +94,21 @@ pub fn rect_form_factor(x0: f64, x1: f64, z0: f64, z1: f64, h: f64) -> f64 {
     f(x1, z1) - f(x0, z1) - f(x1, z0) + f(x0, z0)
 }
 
+/// Moeller-Trumbore in f64: (t, u, v) of the ray o + t d on the plane of triangle a b c
+/// (u, v barycentric toward b and c, not checked against the triangle's edges); `None` when
+/// the ray is parallel to it.
+pub fn triangle_f64(o: glam::DVec3, d: glam::DVec3, [a, b, c]: [glam::DVec3; 3]) -> Option<(f64, f64, f64)> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let s = o - a;
+    let q = s.cross(e1);
+    Some((e2.dot(q) / det, s.dot(p) / det, d.dot(q) / det))
+}
+
 /// Path of the built `wavepath` binary (integration tests only).
 pub fn wavepath_bin() -> PathBuf {
     PathBuf::from(env!("CARGO_BIN_EXE_wavepath"))
