@@ -128,25 +128,7 @@ fn instances(
             .and_then(|i| doc.accessors().nth(i as usize))
             .ok_or_else(|| what(&format!("{name} accessor does not exist")))?;
         check_accessor(Some(acc.clone()), name, &[DataType::F32], dims).map_err(|e| what(&e))?;
-        let view = acc.view().ok_or_else(|| what(&format!("{name} has no buffer view")))?;
-        let data = buffers.get(view.buffer().index()).map(|d| &d.0[..]).unwrap_or_default();
-        let n = acc.dimensions().multiplicity();
-        let stride = view.stride().unwrap_or(4 * n);
-        let start = view.offset() + acc.offset();
-        // Checked before anything is allocated: a damaged count must not ask for terabytes.
-        let end = acc.count().checked_mul(stride).and_then(|b| b.checked_add(start));
-        if end.is_none_or(|e| e > data.len() + stride) {
-            return Err(what(&format!("{name} data outside its buffer")));
-        }
-        let mut out = Vec::with_capacity(acc.count() * n);
-        for k in 0..acc.count() {
-            for c in 0..n {
-                let at = start + k * stride + 4 * c;
-                let b = data.get(at..at + 4).ok_or_else(|| what(&format!("{name} data outside its buffer")))?;
-                out.push(f32::from_le_bytes([b[0], b[1], b[2], b[3]]));
-            }
-        }
-        Ok(Some(out))
+        read_quantised(&acc, buffers).map(Some).map_err(|e| what(&format!("{name}: {e}")))
     };
     let t = read("TRANSLATION", Dimensions::Vec3)?;
     let r = read("ROTATION", Dimensions::Vec4)?;
@@ -285,7 +267,9 @@ fn triangles_of(mode: gltf::mesh::Mode, idx: &[u32]) -> Result<Vec<[u32; 3]>, St
     Ok(all.into_iter().filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2]).collect())
 }
 
-/// A non-sparse accessor of 8- or 16-bit integers as floats: normalised ones mapped to
+/// A non-sparse accessor read directly as floats (f32 as stored, for the quantised
+/// attributes and instance transforms the crate does not read); 8- and 16-bit integers
+/// normalised ones mapped to
 /// [0, 1] or [-1, 1] as the glTF specification defines (signed: max(c / (2^(n-1) - 1), -1)),
 /// others as their values.
 fn read_quantised(acc: &gltf::Accessor, buffers: &[gltf::buffer::Data]) -> Result<Vec<f32>, String> {
