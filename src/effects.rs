@@ -88,6 +88,8 @@ struct Facts<'a> {
     mirrors: usize,
     glasses: usize,
     metals: usize,
+    /// glTF metallic-roughness and specular-glossiness materials.
+    pbr: usize,
 }
 
 impl<'a> Facts<'a> {
@@ -121,6 +123,7 @@ impl<'a> Facts<'a> {
             mirrors: material_count(&["mirror"]),
             glasses: material_count(&["glass", "refraction"]),
             metals: material_count(&["microfacet"]),
+            pbr: material_count(&["metallic-roughness", "specular-glossiness"]),
         }
     }
 
@@ -244,9 +247,14 @@ const RULES: &[Rule] = &[
         name: "microfacet",
         flag: |e| &mut e.microfacet,
         rule: |f, _| {
-            (f.lit && f.metals > 0).then(|| {
-                format!("{} rough conductor(s): Beckmann microfacets, MIS of light and BSDF samples", f.metals)
-            })
+            let mut what = Vec::new();
+            if f.metals > 0 {
+                what.push(format!("{} rough conductor(s): Beckmann microfacets", f.metals));
+            }
+            if f.pbr > 0 {
+                what.push(format!("{} glTF PBR material(s): diffuse base under GGX specular", f.pbr));
+            }
+            (f.lit && !what.is_empty()).then(|| format!("{}; MIS of light and BSDF samples", what.join(", ")))
         },
     },
     Rule {
@@ -260,7 +268,7 @@ const RULES: &[Rule] = &[
         rule: |f, _| {
             if f.global_to(2) {
                 Some(format!("-m {} > 1", f.depth))
-            } else if f.lit && f.mirrors + f.glasses + f.metals > 0 {
+            } else if f.lit && f.mirrors + f.glasses + f.metals + f.pbr > 0 {
                 Some("light found by rays from mirror, glass or glossy surfaces".into())
             } else {
                 None

@@ -92,8 +92,9 @@ impl Microfacet {
         }
     }
 
+    /// Height-correlated Smith shadowing-masking.
     #[inline]
-    fn g(&self, wo: Vec3, wi: Vec3) -> f32 {
+    pub fn g(&self, wo: Vec3, wi: Vec3) -> f32 {
         let v = 1.0 / (1.0 + self.lambda(wo) + self.lambda(wi));
         if v.is_finite() { v } else { 0.0 }
     }
@@ -123,6 +124,24 @@ impl Microfacet {
     /// The half vector drawn from D(h) cos(h), then `wo` reflected about it.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: [f32; 2]) -> Option<BsdfSample> {
+        let (wi, h) = self.sample_half(wo, u)?;
+        let oh = wo.dot(h);
+        let pdf = self.d(h) * h.z / (4.0 * oh);
+        let weight = self.fresnel(oh) * (self.g(wo, wi) * oh / (wo.z * h.z));
+        (pdf > 0.0 && pdf.is_finite() && weight.is_finite()).then_some(BsdfSample { wi, weight, pdf, delta: false })
+    }
+
+    /// The direction [`sample`](Self::sample) draws, for models that add their own Fresnel
+    /// term (its density is [`pdf`](Self::pdf)).
+    #[inline]
+    pub fn sample_direction(&self, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {
+        self.sample_half(wo, u).map(|(wi, _)| wi)
+    }
+
+    /// The reflected direction and the half vector it was reflected about (both with
+    /// positive cosines, `wo.h` > 0).
+    #[inline]
+    fn sample_half(&self, wo: Vec3, u: [f32; 2]) -> Option<(Vec3, Vec3)> {
         if wo.z <= 0.0 {
             return None;
         }
@@ -141,12 +160,7 @@ impl Microfacet {
             return None;
         }
         let wi = 2.0 * oh * h - wo;
-        if wi.z <= 0.0 {
-            return None;
-        }
-        let pdf = self.d(h) * cos / (4.0 * oh);
-        let weight = self.fresnel(oh) * (self.g(wo, wi) * oh / (wo.z * cos));
-        (pdf > 0.0 && pdf.is_finite() && weight.is_finite()).then_some(BsdfSample { wi, weight, pdf, delta: false })
+        (wi.z > 0.0).then_some((wi, h))
     }
 
     #[inline]

@@ -12,11 +12,13 @@ mod dielectric;
 mod lambert;
 mod microfacet;
 mod mirror;
+mod pbr;
 
 pub use dielectric::{Dielectric, fresnel_dielectric};
 pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet, fresnel_conductor};
 pub use mirror::Mirror;
+pub use pbr::Pbr;
 
 use crate::sampling::Frame;
 use crate::scene::Bsdf;
@@ -42,6 +44,7 @@ pub enum Model {
     Mirror(Mirror),
     Dielectric(Dielectric),
     Microfacet(Microfacet),
+    Pbr(Pbr),
 }
 
 /// How a model's light is best estimated: which integrator strategy it needs.
@@ -72,6 +75,12 @@ impl Model {
             Bsdf::Microfacet { alpha, eta, k } => {
                 Model::Microfacet(Microfacet { alpha, eta, k, distribution: Distribution::Beckmann })
             }
+            Bsdf::MetallicRoughness { base, metallic, roughness } => {
+                Model::Pbr(Pbr::metallic_roughness(base, metallic, roughness))
+            }
+            Bsdf::SpecularGlossiness { diffuse, specular, glossiness } => {
+                Model::Pbr(Pbr::specular_glossiness(diffuse, specular, glossiness))
+            }
         }
     }
 
@@ -79,7 +88,7 @@ impl Model {
         match self {
             Model::Lambert(_) => Kind::Diffuse,
             Model::Mirror(_) | Model::Dielectric(_) => Kind::Delta,
-            Model::Microfacet(_) => Kind::Glossy,
+            Model::Microfacet(_) | Model::Pbr(_) => Kind::Glossy,
         }
     }
 
@@ -99,6 +108,7 @@ impl Model {
             Model::Lambert(m) => m.eval(wo, wi),
             Model::Mirror(_) | Model::Dielectric(_) => Vec3::ZERO,
             Model::Microfacet(m) => m.eval(wo, wi),
+            Model::Pbr(m) => m.eval(wo, wi),
         }
     }
 
@@ -110,6 +120,7 @@ impl Model {
             Model::Mirror(m) => m.sample(wo),
             Model::Dielectric(m) => m.sample(wo, u[2]),
             Model::Microfacet(m) => m.sample(wo, [u[0], u[1]]),
+            Model::Pbr(m) => m.sample(wo, u),
         }
     }
 
@@ -119,6 +130,7 @@ impl Model {
             Model::Lambert(m) => m.pdf(wo, wi),
             Model::Mirror(_) | Model::Dielectric(_) => 0.0,
             Model::Microfacet(m) => m.pdf(wo, wi),
+            Model::Pbr(m) => m.pdf(wo, wi),
         }
     }
 }

@@ -18,10 +18,11 @@
 //! (which only collects this light).
 
 use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin};
-use crate::bsdf::{Kind, Lambert, Model, power_heuristic, to_local};
+use crate::bsdf::{Kind, Lambert, Model, Pbr, power_heuristic, to_local};
 use crate::geometry::{Hit, Ray};
 use crate::lights::Seen;
 use crate::sampling::{Frame, Sampler, warp};
+use crate::scene::Bsdf;
 use glam::Vec3;
 
 /// What the vertex that sampled a path's ray means for the light that ray finds.
@@ -62,6 +63,14 @@ impl Transport<'_> {
     pub fn shading(&self, v: &Vertex, dir: Vec3) -> ShadingFrame {
         let model = match self.models[v.material as usize].oriented(v.front) {
             Model::Lambert(_) => Model::Lambert(Lambert { albedo: v.albedo }),
+            // The base colour (textures, vertex colours) and metalness vary over the surface.
+            Model::Pbr(p) => Model::Pbr(match self.scene.materials[v.material as usize].bsdf {
+                Bsdf::MetallicRoughness { .. } => Pbr::metallic_roughness(v.albedo, v.metal_rough.x, v.metal_rough.y),
+                Bsdf::SpecularGlossiness { specular, glossiness, .. } => {
+                    Pbr::specular_glossiness(v.albedo, specular, glossiness)
+                }
+                _ => p,
+            }),
             m => m,
         };
         let frame = Frame::new(v.ns);

@@ -25,16 +25,16 @@ use crate::lights::{LightSet, SampledLight};
 use crate::sampling::{Frame, Sampler, warp};
 use crate::scene::{Scene, Textures};
 use crate::settings::{Settings, Shading};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 /// Dimension of a vertex stream that plays Russian roulette.
 pub(crate) const DIM_ROULETTE: u32 = 2;
 /// First dimension of a vertex stream used by light or hemisphere samples.
 pub(crate) const DIM_DIRECT: u32 = 3;
-/// Dimension that chooses between a delta material's lobes (delta vertices take no direct
-/// samples, so it is free).
-const DIM_LOBE: u32 = DIM_DIRECT;
+/// Dimension that chooses between a material's lobes (unused by every other strategy: the
+/// continuation's direction takes dimension 0 and light samples start at [`DIM_DIRECT`]).
+const DIM_LOBE: u32 = 1;
 
 /// Everything shading needs, precomputed once per render.
 pub struct Transport<'a> {
@@ -43,6 +43,8 @@ pub struct Transport<'a> {
     /// Per material: diffuse albedo and emitted radiance.
     pub albedo: Vec<Vec3>,
     pub emission: Vec<Vec3>,
+    /// Per material: metalness and roughness factors (metallic-roughness materials).
+    pub metal_rough: Vec<Vec2>,
     /// Per material: its scattering model (used only when `non_diffuse`).
     pub models: Vec<crate::bsdf::Model>,
     /// Some material is not Lambertian: shading goes through [`ShadingFrame`].
@@ -83,6 +85,8 @@ pub struct Vertex {
     pub ns: Vec3,
     pub albedo: Vec3,
     pub emission: Vec3,
+    /// Metalness and roughness (glTF metallic-roughness materials; texture x factor).
+    pub metal_rough: Vec2,
     pub material: u32,
     /// The ray hit the side the geometric normal points to (outside, for closed meshes).
     pub front: bool,
@@ -163,6 +167,14 @@ impl<'a> Transport<'a> {
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
+            metal_rough: scene
+                .materials
+                .iter()
+                .map(|m| match m.bsdf {
+                    crate::scene::Bsdf::MetallicRoughness { metallic, roughness, .. } => Vec2::new(metallic, roughness),
+                    _ => Vec2::ZERO,
+                })
+                .collect(),
             models,
             non_diffuse,
             mis: crate::effects::Effects::of(scene, settings).mis,
@@ -231,6 +243,7 @@ impl<'a> Transport<'a> {
             ns,
             albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]) * sp.color,
             emission: self.textures.emission(m, sp.uv).unwrap_or(self.emission[m]),
+            metal_rough: self.textures.metal_rough(m, sp.uv).unwrap_or(self.metal_rough[m]),
             material: sp.material,
             front,
         }

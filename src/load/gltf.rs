@@ -8,7 +8,7 @@
 use crate::scene::texture::{Filter, TextureImage, Wrap};
 use crate::scene::{Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
 use anyhow::{Result, anyhow};
-use glam::{Mat3, Mat4, Vec2, Vec3};
+use glam::{Affine2, Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::khr_lights_punctual::Kind;
 use gltf::texture::{MagFilter, WrappingMode};
@@ -34,7 +34,7 @@ fn read(path: &Path) -> Result<Scene, String> {
     let raw = gltf::Gltf::from_slice_without_validation(&bytes).map_err(|e| e.to_string())?;
     let mut json = raw.document.into_json();
     // The crate refuses required extensions it does not know; this loader reads these itself.
-    json.extensions_required.retain(|e| e != "EXT_mesh_gpu_instancing" && e != "KHR_mesh_quantization");
+    json.extensions_required.retain(|e| !read_here(e));
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     let gltf = gltf::Gltf { document, blob: raw.blob };
     let base = path.parent().unwrap_or(Path::new("."));
@@ -53,7 +53,17 @@ fn read(path: &Path) -> Result<Scene, String> {
     let images = decode_images(doc, base, &buffers, path, &mut notes)?;
     // One line per drawing mode, however many primitives use it.
     let mut skipped_modes = std::collections::BTreeMap::new();
-    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images)).collect();
+    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images, &mut notes)).collect();
+    let uv_sets: Vec<u32> = doc.materials().map(|m| uv_set(&m, path, &mut notes)).collect();
+    let ignored: Vec<&str> = doc.extensions_used().filter(|e| !KNOWN_EXTENSIONS.contains(e)).collect();
+    if !ignored.is_empty() {
+        notes.push(format!(
+            "warning: {}: {} not rendered (the file is drawn without {})",
+            path.display(),
+            ignored.join(", "),
+            if ignored.len() == 1 { "it" } else { "them" }
+        ));
+    }
     let default_material = materials.len() as u32;
     materials.push(Material::default());
 
@@ -80,8 +90,9 @@ fn read(path: &Path) -> Result<Scene, String> {
                 continue;
             }
             let mat = prim.material().index().map_or(default_material, |i| i as u32);
+            let set = prim.material().index().map_or(0, |i| uv_sets[i]);
             for w in &worlds {
-                let part = primitive(&prim, &buffers, w, mat)
+                let part = primitive(&prim, &buffers, w, mat, set)
                     .map_err(|e| format!("mesh {} primitive {}: {e}", m.index(), prim.index()))?;
                 all_normals &= part.normals.is_some();
                 mesh.append(part);
@@ -106,9 +117,30 @@ fn read(path: &Path) -> Result<Scene, String> {
     Ok(scene)
 }
 
-/// Extensions a file may require: the ones the loader reads.
-const SUPPORTED_EXTENSIONS: [&str; 4] =
-    ["KHR_lights_punctual", "KHR_materials_emissive_strength", "EXT_mesh_gpu_instancing", "KHR_mesh_quantization"];
+/// Extensions the loader reads.
+const KNOWN_EXTENSIONS: [&str; 7] = [
+    "KHR_lights_punctual",
+    "KHR_materials_emissive_strength",
+    "KHR_materials_unlit",
+    "KHR_materials_pbrSpecularGlossiness",
+    "KHR_texture_transform",
+    "EXT_mesh_gpu_instancing",
+    "KHR_mesh_quantization",
+];
+
+/// Extensions a file may require: the ones the loader reads, and material extensions it
+/// does not (a material it cannot render exactly still has its geometry and base model:
+/// drawn approximately, with a warning, rather than not at all).
+fn may_require(e: &str) -> bool {
+    KNOWN_EXTENSIONS.contains(&e) || e.starts_with("KHR_materials_")
+}
+
+/// Extensions read by this loader rather than the gltf crate (whose validation refuses
+/// required extensions it does not know).
+fn read_here(e: &str) -> bool {
+    matches!(e, "EXT_mesh_gpu_instancing" | "KHR_mesh_quantization")
+        || (e.starts_with("KHR_materials_") && !gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e))
+}
 
 /// The instance transforms of a node's `EXT_mesh_gpu_instancing` (TRANSLATION, ROTATION as
 /// a unit quaternion x y z w, SCALE; f32 accessors of one count), each applied before the
@@ -174,8 +206,7 @@ fn precheck(bytes: &[u8]) -> Result<(), String> {
             return Err(format!("glTF version '{version}' is not supported; convert the file to glTF 2.0"));
         }
         let required = v["extensionsRequired"].as_array().map(Vec::as_slice).unwrap_or_default();
-        let unsupported: Vec<&str> =
-            required.iter().filter_map(|e| e.as_str()).filter(|e| !SUPPORTED_EXTENSIONS.contains(e)).collect();
+        let unsupported: Vec<&str> = required.iter().filter_map(|e| e.as_str()).filter(|e| !may_require(e)).collect();
         if !unsupported.is_empty() {
             return Err(format!("requires {}, which wavepath does not support", unsupported.join(", ")));
         }
@@ -324,13 +355,21 @@ fn check_accessor(acc: Option<gltf::Accessor>, what: &str, types: &[DataType], d
     Ok(())
 }
 
-fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat4, mat: u32) -> Result<Mesh, String> {
+/// One primitive's triangles in world space, with uvs from set `uv_set`.
+fn primitive(
+    prim: &gltf::Primitive,
+    buffers: &[gltf::buffer::Data],
+    world: &Mat4,
+    mat: u32,
+    uv_set: u32,
+) -> Result<Mesh, String> {
     use gltf::Semantic;
     // The types KHR_mesh_quantization allows besides f32.
     use DataType::{F32, I8, I16, U8, U16};
     check_accessor(prim.get(&Semantic::Positions), "POSITION", &[F32, I8, U8, I16, U16], Dimensions::Vec3)?;
     check_accessor(prim.get(&Semantic::Normals), "NORMAL", &[F32, I8, I16], Dimensions::Vec3)?;
-    check_accessor(prim.get(&Semantic::TexCoords(0)), "TEXCOORD_0", &[F32, I8, U8, I16, U16], Dimensions::Vec2)?;
+    let uv_name = format!("TEXCOORD_{uv_set}");
+    check_accessor(prim.get(&Semantic::TexCoords(uv_set)), &uv_name, &[F32, I8, U8, I16, U16], Dimensions::Vec2)?;
     check_accessor(prim.indices(), "index", &[DataType::U8, DataType::U16, DataType::U32], Dimensions::Scalar)?;
     let color_types = [DataType::F32, DataType::U8, DataType::U16];
     if let Some(c) = prim.get(&Semantic::Colors(0))
@@ -362,9 +401,9 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
     }
     .map(|v: Vec<Vec3>| v.into_iter().map(|v| (normal_matrix * v).normalize_or_zero()).collect::<Vec<_>>())
     .filter(|v| v.len() == n && v.iter().all(|x| x.is_finite()));
-    let uvs: Option<Vec<Vec2>> = match quantised(Semantic::TexCoords(0)) {
+    let uvs: Option<Vec<Vec2>> = match quantised(Semantic::TexCoords(uv_set)) {
         Some(acc) => Some(read_quantised(&acc, buffers)?.chunks_exact(2).map(Vec2::from_slice).collect()),
-        None => reader.read_tex_coords(0).map(|t| t.into_f32().map(Vec2::from).collect()),
+        None => reader.read_tex_coords(uv_set).map(|t| t.into_f32().map(Vec2::from).collect()),
     }
     .filter(|v: &Vec<Vec2>| v.len() == n);
     let indices: Vec<u32> = match reader.read_indices() {
@@ -383,29 +422,96 @@ fn primitive(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], world: &Mat
     Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
 }
 
-fn material(m: &gltf::Material, path: &Path, images: &[Option<Arc<TextureImage>>]) -> Material {
-    let pbr = m.pbr_metallic_roughness();
-    let [r, g, b, _] = pbr.base_color_factor();
+/// A glTF material as the closest model wavepath has: metallic-roughness and
+/// specular-glossiness as [`crate::bsdf::Pbr`] (their colour, metalness and roughness
+/// textures included), `KHR_materials_unlit` as an emitter of its base colour that reflects
+/// nothing.
+fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<String>) -> Material {
+    let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
     let strength = m.emissive_strength().unwrap_or(1.0);
     let emission = Vec3::from(m.emissive_factor()) * strength;
-    let albedo_texture =
-        pbr.base_color_texture().map(|info| texture(&info.texture(), path, images, Vec3::new(r, g, b)));
     // Emission is factor x texel: a texture under a black factor emits nothing.
     let emission_texture = m
         .emissive_texture()
         .filter(|_| emission.max_element() > 0.0)
-        .map(|info| texture(&info.texture(), path, images, emission));
+        .map(|info| texture(&info, path, &images.srgb, emission));
+    let pbr = m.pbr_metallic_roughness();
+    let [r, g, b, _] = pbr.base_color_factor();
+    let base = Vec3::new(r, g, b);
+    let base_texture = |factor| pbr.base_color_texture().map(|info| texture(&info, path, &images.srgb, factor));
+    if m.unlit() {
+        // What the eye sees is the base colour itself: emitted, with no light reflected.
+        let emission_texture = base_texture(base).filter(|_| base.max_element() > 0.0);
+        return Material { emission_texture, ..Material::emitter(&name, base) };
+    }
+    if let Some(sg) = m.pbr_specular_glossiness() {
+        let [r, g, b, _] = sg.diffuse_factor();
+        let diffuse = Vec3::new(r, g, b);
+        if sg.specular_glossiness_texture().is_some() {
+            notes.push(format!(
+                "warning: {}: {name}: the specular-glossiness texture is not read; its factors are used",
+                path.display()
+            ));
+        }
+        return Material {
+            name,
+            bsdf: Bsdf::SpecularGlossiness {
+                diffuse,
+                specular: Vec3::from(sg.specular_factor()),
+                glossiness: sg.glossiness_factor(),
+            },
+            emission,
+            albedo_texture: sg.diffuse_texture().map(|info| texture(&info, path, &images.srgb, diffuse)),
+            emission_texture,
+            metallic_roughness_texture: None,
+        };
+    }
+    let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
     Material {
-        name: m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string),
-        bsdf: Bsdf::Diffuse { albedo: Vec3::new(r, g, b) },
+        name,
+        bsdf: Bsdf::MetallicRoughness { base, metallic, roughness },
         emission,
-        albedo_texture,
+        albedo_texture: base_texture(base),
         emission_texture,
+        metallic_roughness_texture: pbr
+            .metallic_roughness_texture()
+            .map(|info| texture(&info, path, &images.linear, Vec3::new(1.0, roughness, metallic))),
     }
 }
 
-/// A glTF texture (sRGB image, its sampler) scaled by `factor`.
-fn texture(tex: &gltf::Texture, path: &Path, images: &[Option<Arc<TextureImage>>], factor: Vec3) -> Texture {
+/// The uv set a texture reads (`KHR_texture_transform` may override it).
+fn tex_coord(info: &gltf::texture::Info) -> u32 {
+    info.texture_transform().and_then(|t| t.tex_coord()).unwrap_or_else(|| info.tex_coord())
+}
+
+/// Every texture a material reads, in the order its uv set is chosen by.
+fn textures_of<'a>(m: &gltf::Material<'a>) -> Vec<gltf::texture::Info<'a>> {
+    let pbr = m.pbr_metallic_roughness();
+    let sg = m.pbr_specular_glossiness().and_then(|sg| sg.diffuse_texture());
+    [pbr.base_color_texture(), sg, m.emissive_texture(), pbr.metallic_roughness_texture()]
+        .into_iter()
+        .flatten()
+        .collect()
+}
+
+/// The uv set a material's primitives are read with: the one its textures use (the base
+/// colour's when they differ, with a warning; one set is kept per vertex).
+fn uv_set(m: &gltf::Material, path: &Path, notes: &mut Vec<String>) -> u32 {
+    let sets: Vec<u32> = textures_of(m).iter().map(tex_coord).collect();
+    let first = sets.first().copied().unwrap_or(0);
+    if sets.iter().any(|&s| s != first) {
+        notes.push(format!(
+            "warning: {}: material {}: its textures read different uv sets; all use TEXCOORD_{first}",
+            path.display(),
+            m.index().unwrap_or(0)
+        ));
+    }
+    first
+}
+
+/// A glTF texture (its image, sampler and uv transform) scaled by `factor`.
+fn texture(info: &gltf::texture::Info, path: &Path, images: &[Option<Arc<TextureImage>>], factor: Vec3) -> Texture {
+    let tex = info.texture();
     let sampler = tex.sampler();
     let wrap = |w: WrappingMode| match w {
         WrappingMode::Repeat => Wrap::Repeat,
@@ -430,37 +536,63 @@ fn texture(tex: &gltf::Texture, path: &Path, images: &[Option<Arc<TextureImage>>
         },
         flip_v: false,
         factor,
+        transform: info
+            .texture_transform()
+            .map_or(Affine2::IDENTITY, |t| uv_transform(t.offset(), t.rotation(), t.scale())),
     }
 }
 
-/// Decodes every image a base-colour or emissive texture uses (sRGB), once: from a buffer view (.glb),
-/// a data URI (glTF-Embedded) or a file beside the scene (percent-escapes decoded). An image
-/// that cannot be read or decoded is a warning: the material keeps its factor.
+/// `KHR_texture_transform`'s matrix: translation x rotation x scale, where the rotation
+/// turns uv by `rotation` radians counter-clockwise in the image as displayed (rows
+/// `[cos sin; -sin cos]`, v pointing down).
+fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
+    let (s, c) = rotation.sin_cos();
+    let m = Affine2::from_cols(Vec2::new(c, -s) * scale[0], Vec2::new(s, c) * scale[1], Vec2::from(offset));
+    if m.is_finite() { m } else { Affine2::IDENTITY }
+}
+
+/// Decoded images by index: as sRGB colour and as linear data, each only where a material
+/// reads it that way.
+struct Images {
+    srgb: Vec<Option<Arc<TextureImage>>>,
+    linear: Vec<Option<Arc<TextureImage>>>,
+}
+
+/// Decodes every image a material's texture uses, once per colour space: from a buffer view
+/// (.glb), a data URI (glTF-Embedded) or a file beside the scene (percent-escapes decoded).
+/// An image that cannot be read or decoded is a warning: the material keeps its factor.
 fn decode_images(
     doc: &gltf::Document,
     base: &Path,
     buffers: &[gltf::buffer::Data],
     path: &Path,
     notes: &mut Vec<String>,
-) -> Result<Vec<Option<Arc<TextureImage>>>, String> {
-    let used: std::collections::HashSet<usize> = doc
-        .materials()
-        .flat_map(|m| [m.pbr_metallic_roughness().base_color_texture(), m.emissive_texture()])
-        .flatten()
-        .map(|i| i.texture().source().index())
-        .collect();
-    let mut out = Vec::new();
+) -> Result<Images, String> {
+    let mut srgb_used = std::collections::HashSet::new();
+    let mut linear_used = std::collections::HashSet::new();
+    for m in doc.materials() {
+        if let Some(t) = m.pbr_metallic_roughness().metallic_roughness_texture() {
+            linear_used.insert(t.texture().source().index());
+        }
+        let pbr = m.pbr_metallic_roughness();
+        let sg = m.pbr_specular_glossiness().and_then(|sg| sg.diffuse_texture());
+        for t in [pbr.base_color_texture(), sg, m.emissive_texture()].into_iter().flatten() {
+            srgb_used.insert(t.texture().source().index());
+        }
+    }
+    let mut images = Images { srgb: Vec::new(), linear: Vec::new() };
     for img in doc.images() {
-        if !used.contains(&img.index()) {
-            out.push(None);
+        let (srgb, linear) = (srgb_used.contains(&img.index()), linear_used.contains(&img.index()));
+        if !srgb && !linear {
+            images.srgb.push(None);
+            images.linear.push(None);
             continue;
         }
         let what = format!("image {}", img.index());
         // A texture that cannot be had leaves the material its colour factor, with a warning:
         // one unsupported image (KTX2, Basis) should not cost the whole model.
-        let mut warn = |why: String| {
-            notes.push(format!("warning: {}: {why}; the material keeps its colour factor", path.display()))
-        };
+        let mut warn =
+            |why: String| notes.push(format!("warning: {}: {why}; the material keeps its factors", path.display()));
         let bytes: Option<Cow<[u8]>> = match img.source() {
             gltf::image::Source::View { view, .. } => Some(Cow::Borrowed(
                 buffers
@@ -486,16 +618,26 @@ fn decode_images(
                 }
             }
         };
-        let decoded = bytes.and_then(|b| match TextureImage::decode_srgb(&b) {
-            Ok(t) => Some(t),
-            Err(e) => {
-                warn(format!("{what} cannot be decoded ({e})"));
-                None
+        let decode = |b: &[u8], linear: bool| {
+            if linear { TextureImage::decode_linear(b) } else { TextureImage::decode_srgb(b) }
+        };
+        let mut one = |want: bool, linear: bool| {
+            let b = bytes.as_deref().filter(|_| want)?;
+            match decode(b, linear) {
+                Ok(t) => Some(Arc::new(t)),
+                Err(e) => {
+                    warn(format!("{what} cannot be decoded ({e})"));
+                    None
+                }
             }
-        });
-        out.push(decoded.map(Arc::new));
+        };
+        let s = one(srgb, false);
+        // An image both kinds of texture read fails (or not) the same way: one warning.
+        let l = if s.is_none() && srgb { None } else { one(linear, true) };
+        images.srgb.push(s);
+        images.linear.push(l);
     }
-    Ok(out)
+    Ok(images)
 }
 
 /// A relative URI as a file path: percent-escapes decoded ("Box%20With%20Spaces.png").

@@ -7,12 +7,46 @@ use glam::Vec3;
 /// variants carry exactly the file's parameters.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Bsdf {
-    Diffuse { albedo: Vec3 },
-    Mirror { reflectance: Vec3 },
-    Glass { reflectance: Vec3, transmittance: Vec3, roughness: f32, ior: f32 },
-    Refraction { transmittance: Vec3, roughness: f32, ior: f32 },
-    Microfacet { alpha: f32, eta: Vec3, k: Vec3 },
-    Phong { diffuse: Vec3, specular: Vec3, shininess: f32 },
+    Diffuse {
+        albedo: Vec3,
+    },
+    Mirror {
+        reflectance: Vec3,
+    },
+    Glass {
+        reflectance: Vec3,
+        transmittance: Vec3,
+        roughness: f32,
+        ior: f32,
+    },
+    Refraction {
+        transmittance: Vec3,
+        roughness: f32,
+        ior: f32,
+    },
+    Microfacet {
+        alpha: f32,
+        eta: Vec3,
+        k: Vec3,
+    },
+    Phong {
+        diffuse: Vec3,
+        specular: Vec3,
+        shininess: f32,
+    },
+    /// glTF's core model: a diffuse base under a GGX specular layer, mixed by metalness
+    /// (shaded by [`crate::bsdf::Pbr`]).
+    MetallicRoughness {
+        base: Vec3,
+        metallic: f32,
+        roughness: f32,
+    },
+    /// glTF `KHR_materials_pbrSpecularGlossiness`, shaded by the same model.
+    SpecularGlossiness {
+        diffuse: Vec3,
+        specular: Vec3,
+        glossiness: f32,
+    },
 }
 
 impl Bsdf {
@@ -24,6 +58,8 @@ impl Bsdf {
             Bsdf::Refraction { .. } => "refraction",
             Bsdf::Microfacet { .. } => "microfacet",
             Bsdf::Phong { .. } => "phong",
+            Bsdf::MetallicRoughness { .. } => "metallic-roughness",
+            Bsdf::SpecularGlossiness { .. } => "specular-glossiness",
         }
     }
 
@@ -34,7 +70,8 @@ impl Bsdf {
             Bsdf::Mirror { reflectance } => reflectance,
             Bsdf::Glass { transmittance, .. } | Bsdf::Refraction { transmittance, .. } => transmittance,
             Bsdf::Microfacet { .. } => Vec3::splat(0.5),
-            Bsdf::Phong { diffuse, .. } => diffuse,
+            Bsdf::Phong { diffuse, .. } | Bsdf::SpecularGlossiness { diffuse, .. } => diffuse,
+            Bsdf::MetallicRoughness { base, .. } => base,
         }
     }
 }
@@ -50,6 +87,9 @@ pub struct Material {
     /// Emitted radiance as an image (glTF `emissiveTexture`): `emission` is then the largest
     /// it can be (the factor), and a point emits factor x texel.
     pub emission_texture: Option<Texture>,
+    /// glTF `metallicRoughnessTexture` (linear): green scales roughness, blue metalness;
+    /// `factor` holds (1, roughness, metallic), so a lookup gives the values at a point.
+    pub metallic_roughness_texture: Option<Texture>,
 }
 
 impl Default for Material {
@@ -66,6 +106,7 @@ impl Material {
             emission: Vec3::ZERO,
             albedo_texture: None,
             emission_texture: None,
+            metallic_roughness_texture: None,
         }
     }
 
@@ -77,6 +118,7 @@ impl Material {
             emission: radiance,
             albedo_texture: None,
             emission_texture: None,
+            metallic_roughness_texture: None,
         }
     }
 
@@ -97,6 +139,12 @@ impl Material {
             Bsdf::Microfacet { alpha, eta, k } => alpha.is_finite() && eta.is_finite() && k.is_finite(),
             Bsdf::Phong { diffuse, specular, shininess } => {
                 diffuse.is_finite() && specular.is_finite() && shininess.is_finite()
+            }
+            Bsdf::MetallicRoughness { base, metallic, roughness } => {
+                base.is_finite() && metallic.is_finite() && roughness.is_finite()
+            }
+            Bsdf::SpecularGlossiness { diffuse, specular, glossiness } => {
+                diffuse.is_finite() && specular.is_finite() && glossiness.is_finite()
             }
         };
         if !finite || !self.emission.is_finite() {

@@ -6,7 +6,7 @@
 //! (texel i covers [i, i+1) / size), as OpenGL does for GL_LINEAR without mipmaps.
 
 use anyhow::{Result, anyhow, bail};
-use glam::{Vec2, Vec3};
+use glam::{Affine2, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -53,14 +53,24 @@ impl TextureImage {
         Self::from_srgb(image::load_from_memory(bytes).map_err(|e| anyhow!("{e}"))?)
     }
 
+    /// Decodes an encoded image whose values are linear data (glTF metallic-roughness maps).
+    pub fn decode_linear(bytes: &[u8]) -> Result<TextureImage> {
+        Self::convert(image::load_from_memory(bytes).map_err(|e| anyhow!("{e}"))?, |c| c)
+    }
+
     fn from_srgb(img: image::DynamicImage) -> Result<TextureImage> {
+        Self::convert(img, srgb_to_linear)
+    }
+
+    /// 8-bit channels through `transfer` (0..1 in, linear out).
+    fn convert(img: image::DynamicImage, transfer: fn(f32) -> f32) -> Result<TextureImage> {
         let img = img.into_rgb8();
         let (w, h) = (img.width() as usize, img.height() as usize);
         if w == 0 || h == 0 {
             bail!("image has no pixels");
         }
         // 256-entry table: the same conversion for every texel, without powf per texel.
-        let lut: Vec<f32> = (0..256).map(|i| srgb_to_linear(i as f32 / 255.0)).collect();
+        let lut: Vec<f32> = (0..256).map(|i| transfer(i as f32 / 255.0)).collect();
         let texels =
             img.pixels().map(|p| Vec3::new(lut[p.0[0] as usize], lut[p.0[1] as usize], lut[p.0[2] as usize])).collect();
         Ok(TextureImage { width: w, height: h, texels })
@@ -97,12 +107,23 @@ pub struct Texture {
     pub flip_v: bool,
     /// Multiplies the texel (glTF `baseColorFactor`; 1 for OBJ, where the map replaces Kd).
     pub factor: Vec3,
+    /// Applied to the mesh's uv before the lookup (glTF `KHR_texture_transform`: offset x
+    /// rotation x scale).
+    pub transform: Affine2,
 }
 
 impl Texture {
     /// An OBJ `map_Kd`: repeat, bilinear, v up, not yet decoded.
     pub fn obj(path: PathBuf) -> Texture {
-        Texture { path, image: None, wrap: [Wrap::Repeat; 2], filter: Filter::Linear, flip_v: true, factor: Vec3::ONE }
+        Texture {
+            path,
+            image: None,
+            wrap: [Wrap::Repeat; 2],
+            filter: Filter::Linear,
+            flip_v: true,
+            factor: Vec3::ONE,
+            transform: Affine2::IDENTITY,
+        }
     }
 
     /// Factor x texel at `uv` (an albedo, or an emitted radiance); `None` when the image is
@@ -110,6 +131,7 @@ impl Texture {
     #[inline]
     pub fn albedo(&self, uv: Vec2) -> Option<Vec3> {
         let img = self.image.as_deref()?;
+        let uv = self.transform.transform_point2(uv);
         let v = if self.flip_v { 1.0 - uv.y } else { uv.y };
         Some(self.factor * sample(img, Vec2::new(uv.x, v), self.wrap, self.filter))
     }
@@ -159,6 +181,8 @@ pub struct Textures {
     per_material: Vec<Option<Texture>>,
     /// Per material, the emission texture.
     emission: Vec<Option<Texture>>,
+    /// Per material, the metallic-roughness texture.
+    metal_rough: Vec<Option<Texture>>,
     /// Any material has a decoded texture and the mesh has uvs: otherwise lookups return
     /// `None` at the cost of one predictable branch.
     any: bool,
@@ -169,8 +193,11 @@ impl Textures {
         let decoded = |t: &Option<Texture>| t.clone().filter(|t| t.image.is_some());
         let per_material: Vec<Option<Texture>> = scene.materials.iter().map(|m| decoded(&m.albedo_texture)).collect();
         let emission: Vec<Option<Texture>> = scene.materials.iter().map(|m| decoded(&m.emission_texture)).collect();
-        let any = scene.mesh.uvs.is_some() && per_material.iter().chain(&emission).any(Option::is_some);
-        Textures { per_material, emission, any }
+        let metal_rough: Vec<Option<Texture>> =
+            scene.materials.iter().map(|m| decoded(&m.metallic_roughness_texture)).collect();
+        let any =
+            scene.mesh.uvs.is_some() && per_material.iter().chain(&emission).chain(&metal_rough).any(Option::is_some);
+        Textures { per_material, emission, metal_rough, any }
     }
 
     /// The textured emission of `material` at `uv`, or `None` (use the material's own).
@@ -180,6 +207,17 @@ impl Textures {
             return None;
         }
         self.emission.get(material)?.as_ref()?.albedo(uv)
+    }
+
+    /// Metalness and roughness of `material` at `uv` from its metallic-roughness texture, or
+    /// `None` (use the material's factors).
+    #[inline]
+    pub fn metal_rough(&self, material: usize, uv: Vec2) -> Option<Vec2> {
+        if !self.any {
+            return None;
+        }
+        let t = self.metal_rough.get(material)?.as_ref()?.albedo(uv)?;
+        Some(Vec2::new(t.z, t.y))
     }
 
     /// Whether `material`'s emission varies over its surface.

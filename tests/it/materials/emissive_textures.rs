@@ -41,6 +41,7 @@ fn scene() -> Scene {
         filter: Filter::Nearest,
         flip_v: false,
         factor: Vec3::splat(FACTOR),
+        transform: glam::Affine2::IDENTITY,
     };
     let light = Material { emission_texture: Some(texture), ..Material::emitter("light", Vec3::splat(FACTOR)) };
     let mut camera = Camera::look_at(vec3(0.0, 0.9, 0.5), Vec3::ZERO, Vec3::Y, 20.0, W as f32 / H as f32);

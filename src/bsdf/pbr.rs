@@ -1,0 +1,111 @@
+use super::{BsdfSample, Distribution, Microfacet};
+use crate::sampling::warp;
+use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
+
+/// glTF's material model (the core specification's appendix B): a diffuse base under a
+/// GGX specular layer whose Schlick Fresnel reflectance at normal incidence is `f0`.
+///
+/// f = diffuse (1 - F_d(wo.h)) / pi + F(wo.h) D(h) G(wo, wi) / (4 cos_o cos_i), with Schlick's
+/// F(c) = f0 + (1 - f0)(1 - c)^5 and F_d the same with `diffuse_f0`. Metallic-roughness
+/// materials give diffuse = (1 - metallic) base, f0 = lerp(0.04, base, metallic) and
+/// diffuse_f0 = 0.04: Schlick is linear in f0, so this is exactly the specification's mix of
+/// its dielectric (ior 1.5) and metal BRDFs. Specular-glossiness materials give
+/// f0 = diffuse_f0 = specular and diffuse = diffuse (1 - max(specular)), as that extension's
+/// reference does. The GGX lobe is the rough conductor's code (height-correlated Smith G).
+///
+/// Sampling picks the specular lobe with the probability of its share of the reflectance
+/// seen from `wo` and the cosine lobe otherwise; `pdf` is the mixture's, so light sampling
+/// and BSDF sampling combine by MIS like any glossy model.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pbr {
+    pub diffuse: Vec3,
+    pub f0: Vec3,
+    /// Normal-incidence reflectance of the layer the diffuse light passes through.
+    pub diffuse_f0: Vec3,
+    pub alpha: f32,
+}
+
+impl Pbr {
+    /// glTF `pbrMetallicRoughness` (alpha = roughness^2, the specification's mapping).
+    pub fn metallic_roughness(base: Vec3, metallic: f32, roughness: f32) -> Pbr {
+        let m = metallic.clamp(0.0, 1.0);
+        let r = roughness.clamp(0.0, 1.0);
+        let base = base.clamp(Vec3::ZERO, Vec3::ONE);
+        let dielectric = Vec3::splat(0.04);
+        Pbr { diffuse: base * (1.0 - m), f0: dielectric.lerp(base, m), diffuse_f0: dielectric, alpha: r * r }
+    }
+
+    /// `KHR_materials_pbrSpecularGlossiness` (roughness = 1 - glossiness).
+    pub fn specular_glossiness(diffuse: Vec3, specular: Vec3, glossiness: f32) -> Pbr {
+        let specular = specular.clamp(Vec3::ZERO, Vec3::ONE);
+        let r = 1.0 - glossiness.clamp(0.0, 1.0);
+        Pbr {
+            diffuse: diffuse.clamp(Vec3::ZERO, Vec3::ONE) * (1.0 - specular.max_element()),
+            f0: specular,
+            alpha: r * r,
+        }
+    }
+
+    #[inline]
+    fn lobe(&self) -> Microfacet {
+        Microfacet { alpha: self.alpha, eta: Vec3::ZERO, k: Vec3::ZERO, distribution: Distribution::Ggx }
+    }
+
+    /// Schlick's Fresnel for reflectance `f0` at normal incidence.
+    #[inline]
+    fn schlick(f0: Vec3, cos: f32) -> Vec3 {
+        let m = 1.0 - cos.clamp(0.0, 1.0);
+        let m2 = m * m;
+        f0 + (Vec3::ONE - f0) * (m2 * m2 * m)
+    }
+
+    /// Probability of sampling the specular lobe from `wo`.
+    #[inline]
+    fn specular_probability(&self, wo: Vec3) -> f32 {
+        let s = Self::schlick(self.f0, wo.z).element_sum();
+        let d = (self.diffuse * (Vec3::ONE - Self::schlick(self.diffuse_f0, wo.z))).element_sum();
+        if s + d > 0.0 { (s / (s + d)).clamp(0.0, 1.0) } else { 1.0 }
+    }
+
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return Vec3::ZERO;
+        }
+        let Some(h) = (wo + wi).try_normalize() else { return Vec3::ZERO };
+        let oh = wo.dot(h);
+        let lobe = self.lobe();
+        let spec = lobe.d(h) * lobe.g(wo, wi) / (4.0 * wo.z * wi.z);
+        let spec = if spec.is_finite() { spec } else { 0.0 };
+        self.diffuse * (Vec3::ONE - Self::schlick(self.diffuse_f0, oh)) * FRAC_1_PI + Self::schlick(self.f0, oh) * spec
+    }
+
+    /// `u[2]` chooses the lobe, `u[0]` and `u[1]` the direction within it.
+    #[inline]
+    pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BsdfSample> {
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let wi = if u[2] < self.specular_probability(wo) {
+            self.lobe().sample_direction(wo, [u[0], u[1]])?
+        } else {
+            warp::cosine_hemisphere(u[0], u[1])
+        };
+        let pdf = self.pdf(wo, wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let weight = self.eval(wo, wi) * (wi.z / pdf);
+        weight.is_finite().then_some(BsdfSample { wi, weight, pdf, delta: false })
+    }
+
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return 0.0;
+        }
+        let p = self.specular_probability(wo);
+        p * self.lobe().pdf(wo, wi) + (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z)
+    }
+}
