@@ -40,11 +40,8 @@ impl Pbr {
     pub fn specular_glossiness(diffuse: Vec3, specular: Vec3, glossiness: f32) -> Pbr {
         let specular = specular.clamp(Vec3::ZERO, Vec3::ONE);
         let r = 1.0 - glossiness.clamp(0.0, 1.0);
-        Pbr {
-            diffuse: diffuse.clamp(Vec3::ZERO, Vec3::ONE) * (1.0 - specular.max_element()),
-            f0: specular,
-            alpha: r * r,
-        }
+        let diffuse = diffuse.clamp(Vec3::ZERO, Vec3::ONE) * (1.0 - specular.max_element());
+        Pbr { diffuse, f0: specular, diffuse_f0: specular, alpha: r * r }
     }
 
     #[inline]
