@@ -308,68 +308,96 @@ fn albedo(cos_o: f64, alpha: f64) -> f64 {
     sum
 }
 
+/// Renders a unit sphere of `bsdf` in a uniform environment of 0.5 and checks every pixel
+/// against 0.5 A(cos_o) (averaged over the pixel; background 0.5; rim pixels skipped), with
+/// the directional albedo A tabulated from `albedo` and interpolated linearly.
+fn assert_furnace_sphere(what: &str, bsdf: Bsdf, albedo: impl Fn(f64) -> DVec3) {
+    let mut camera = Camera::look_at(vec3(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 36.0, W as f32 / H as f32);
+    camera.nclip = 1e-3;
+    let scene = Scene {
+        name: format!("furnace {what}"),
+        spheres: vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }],
+        materials: vec![Material { bsdf, ..Material::diffuse("sphere", Vec3::ONE) }],
+        camera,
+        env: Environment::Constant(Vec3::splat(0.5)),
+        ..Scene::default()
+    };
+    let nodes = 64;
+    let table: Vec<DVec3> = (0..=nodes).map(|i| albedo((i as f64 / nodes as f64).max(1e-3))).collect();
+    let a_of = |c: f64| {
+        let f = c.clamp(0.0, 1.0) * nodes as f64;
+        let i = (f as usize).min(nodes - 1);
+        table[i] + (table[i + 1] - table[i]) * (f - i as f64)
+    };
+    let expect = |x: usize, y: usize| {
+        let mut vals = Vec::new();
+        for k in 0..SUB * SUB {
+            let (fx, fy) = (((k % SUB) as f32 + 0.5) / SUB as f32, ((k / SUB) as f32 + 0.5) / SUB as f32);
+            let r = scene.camera.generate_ray((x as f32 + fx) / W as f32, (y as f32 + fy) / H as f32);
+            let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
+            let b = o.dot(d);
+            let disc = b * b - (o.length_squared() - 1.0);
+            vals.push(if disc > 0.0 {
+                let p = o + (-b - disc.sqrt()) * d;
+                Some(0.5 * a_of(-d.dot(p.normalize())))
+            } else {
+                None
+            });
+        }
+        // Pixels across the rim mix two values: skipped.
+        if vals.iter().all(Option::is_some) {
+            Some(vals.iter().flatten().sum::<DVec3>() / vals.len() as f64)
+        } else if vals.iter().all(Option::is_none) {
+            Some(DVec3::splat(0.5))
+        } else {
+            None
+        }
+    };
+    let acc = render(&scene, &Settings { rr_continue: 1.0, ..render::settings(W, H, 4, 64) });
+    let (z, checked) = assert_regions_match(&acc, 4, expect, 2e-3, what);
+    assert!(checked > W * H / 2);
+    eprintln!("furnace {what}: worst |z| {z:.2}");
+}
+
 /// Spheres of a perfect conductor (eta 0, k 1: F = 1 at every angle) at three roughnesses
 /// and a perfect mirror, in a uniform environment of 0.5: the mirror disappears, the rough
 /// spheres show 0.5 A(wo), darker toward their rims where shadowing loses energy.
 #[test]
 fn furnace_spheres_reflect_the_environment_times_their_albedo() {
-    let mut camera = Camera::look_at(vec3(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 36.0, W as f32 / H as f32);
-    camera.nclip = 1e-3;
-    for (what, bsdf, alpha) in [
-        ("mirror", Bsdf::Mirror { reflectance: Vec3::ONE }, 0.0),
-        ("alpha 0.1", Bsdf::Microfacet { alpha: 0.1, eta: Vec3::ZERO, k: Vec3::ONE }, 0.1),
-        ("alpha 0.3", Bsdf::Microfacet { alpha: 0.3, eta: Vec3::ZERO, k: Vec3::ONE }, 0.3),
-        ("alpha 0.6", Bsdf::Microfacet { alpha: 0.6, eta: Vec3::ZERO, k: Vec3::ONE }, 0.6),
-    ] {
-        let scene = Scene {
-            name: format!("furnace {what}"),
-            spheres: vec![Sphere { center: Vec3::ZERO, radius: 1.0, material: 0 }],
-            materials: vec![Material { bsdf, ..Material::diffuse("conductor", Vec3::ONE) }],
-            camera,
-            env: Environment::Constant(Vec3::splat(0.5)),
-            ..Scene::default()
-        };
-        // A(cos_o) tabulated and interpolated linearly (smooth in cos_o).
-        let nodes = 64;
-        let table: Vec<f64> = (0..=nodes)
-            .map(|i| if alpha == 0.0 { 1.0 } else { albedo((i as f64 / nodes as f64).max(1e-3), alpha) })
-            .collect();
-        let a_of = |c: f64| {
-            let f = c.clamp(0.0, 1.0) * nodes as f64;
-            let i = (f as usize).min(nodes - 1);
-            table[i] + (table[i + 1] - table[i]) * (f - i as f64)
-        };
-        let expect = |x: usize, y: usize| {
-            let mut vals = Vec::new();
-            for k in 0..SUB * SUB {
-                let (fx, fy) = (((k % SUB) as f32 + 0.5) / SUB as f32, ((k / SUB) as f32 + 0.5) / SUB as f32);
-                let r = scene.camera.generate_ray((x as f32 + fx) / W as f32, (y as f32 + fy) / H as f32);
-                let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
-                let b = o.dot(d);
-                let disc = b * b - (o.length_squared() - 1.0);
-                vals.push(if disc > 0.0 {
-                    let p = o + (-b - disc.sqrt()) * d;
-                    Some(0.5 * a_of(-d.dot(p.normalize())))
-                } else {
-                    None
-                });
-            }
-            // Pixels across the rim mix two values: skipped.
-            if vals.iter().all(Option::is_some) {
-                Some(DVec3::splat(vals.iter().flatten().sum::<f64>() / vals.len() as f64))
-            } else if vals.iter().all(Option::is_none) {
-                Some(DVec3::splat(0.5))
-            } else {
-                None
-            }
-        };
-        let acc = render(&scene, &Settings { rr_continue: 1.0, ..render::settings(W, H, 4, 64) });
-        let (z, checked) = assert_regions_match(&acc, 4, expect, 2e-3, what);
-        assert!(checked > W * H / 2);
-        eprintln!("furnace {what}: worst |z| {z:.2}");
+    assert_furnace_sphere("mirror", Bsdf::Mirror { reflectance: Vec3::ONE }, |_| DVec3::ONE);
+    for alpha in [0.1, 0.3, 0.6] {
+        let bsdf = Bsdf::Microfacet { alpha, eta: Vec3::ZERO, k: Vec3::ONE };
+        assert_furnace_sphere(&format!("alpha {alpha}"), bsdf, |c| DVec3::splat(albedo(c, alpha as f64)));
     }
     // The albedo itself: 1 at normal incidence for a nearly smooth surface; shadowing takes
     // energy from a rough one, more at grazing angles.
     assert!((albedo(1.0, 0.1) - 1.0).abs() < 2e-3, "{}", albedo(1.0, 0.1));
     assert!(albedo(1.0, 0.6) < 0.9 && albedo(0.2, 0.3) < albedo(1.0, 0.3) - 0.05);
+}
+
+/// glTF materials (plastic, metal, half-metal, specular-glossiness) in the furnace: each
+/// pixel is 0.5 times the directional albedo of glTF's BRDF as the specification writes it,
+/// integrated here in f64.
+#[test]
+fn gltf_material_spheres_reflect_the_environment_times_their_albedo() {
+    use crate::common::gltf_brdf::{self, Surface};
+    let base = DVec3::new(0.95, 0.64, 0.54);
+    for (metallic, roughness) in [(0.0, 0.5), (1.0, 0.5), (0.5, 0.8)] {
+        let bsdf =
+            Bsdf::MetallicRoughness { base: base.as_vec3(), metallic: metallic as f32, roughness: roughness as f32 };
+        let s = Surface::MetalRough { base, metallic, roughness };
+        assert_furnace_sphere(&format!("glTF metallic {metallic} roughness {roughness}"), bsdf, |c| {
+            gltf_brdf::albedo(s, DVec3::new((1.0 - c * c).sqrt(), 0.0, c), 300)
+        });
+    }
+    let (specular, glossiness) = (DVec3::new(0.5, 0.4, 0.3), 0.4);
+    let bsdf = Bsdf::SpecularGlossiness {
+        diffuse: base.as_vec3(),
+        specular: specular.as_vec3(),
+        glossiness: glossiness as f32,
+    };
+    let s = Surface::SpecGloss { diffuse: base, specular, glossiness };
+    assert_furnace_sphere("glTF specular-glossiness", bsdf, |c| {
+        gltf_brdf::albedo(s, DVec3::new((1.0 - c * c).sqrt(), 0.0, c), 300)
+    });
 }

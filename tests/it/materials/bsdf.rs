@@ -4,8 +4,9 @@
 //! input.
 
 use crate::common::chi2::chi_square_with_missing;
+use crate::common::gltf_brdf::{self, Surface};
 use glam::{DVec3, Vec3};
-use wavepath::bsdf::{Dielectric, Distribution, Lambert, Microfacet, Mirror, Model, fresnel_dielectric};
+use wavepath::bsdf::{Dielectric, Distribution, Lambert, Microfacet, Mirror, Model, Pbr, fresnel_dielectric};
 use wavepath::sampling::Sampler;
 
 fn wo_at(cos: f32, phi: f32) -> Vec3 {
@@ -28,7 +29,58 @@ fn glossy_models() -> Vec<(String, Model)> {
             v.push((format!("{d:?} alpha {a}"), metal(a, d)));
         }
     }
+    for (name, s) in pbr_surfaces() {
+        v.push((name, pbr_model(s)));
+    }
     v
+}
+
+/// glTF surfaces: plastic, metal and half-metal at several roughnesses, and a
+/// specular-glossiness one. (Sharp lobes, too narrow for the albedo test's quadrature, are
+/// named so: it skips them, as it skips alpha 0.1.)
+fn pbr_surfaces() -> Vec<(String, Surface)> {
+    let base = DVec3::new(0.9, 0.5, 0.2);
+    let mut v = Vec::new();
+    for (metallic, roughness) in [(0.0, 0.5), (1.0, 0.45), (0.5, 0.8), (0.0, 1.0), (1.0, 0.25)] {
+        let sharp = if roughness < 0.3 { " (sharp)" } else { "" };
+        v.push((
+            format!("glTF metallic {metallic} roughness {roughness}{sharp}"),
+            Surface::MetalRough { base, metallic, roughness },
+        ));
+    }
+    let spec = Surface::SpecGloss { diffuse: base, specular: DVec3::new(0.3, 0.25, 0.2), glossiness: 0.4 };
+    v.push(("glTF specular-glossiness".into(), spec));
+    v
+}
+
+fn pbr_model(s: Surface) -> Model {
+    Model::Pbr(match s {
+        Surface::MetalRough { base, metallic, roughness } => {
+            Pbr::metallic_roughness(base.as_vec3(), metallic as f32, roughness as f32)
+        }
+        Surface::SpecGloss { diffuse, specular, glossiness } => {
+            Pbr::specular_glossiness(diffuse.as_vec3(), specular.as_vec3(), glossiness as f32)
+        }
+    })
+}
+
+/// The model equals glTF's BRDF as the specification writes it, direction by direction.
+#[test]
+fn pbr_is_the_gltf_specification_brdf() {
+    let mut r = Sampler::for_sample(9, 0, 0);
+    for (name, s) in pbr_surfaces() {
+        let m = pbr_model(s);
+        let mut worst = 0.0f64;
+        for _ in 0..5000 {
+            let v = wo_at(r.next_f32().max(0.02), r.next_f32() * std::f32::consts::TAU);
+            let l = wo_at(r.next_f32().max(0.02), r.next_f32() * std::f32::consts::TAU);
+            let want = gltf_brdf::brdf(s, v.as_dvec3(), l.as_dvec3());
+            let got = m.eval(v, l).as_dvec3();
+            let rel = ((got - want).abs() / want.max(DVec3::splat(1e-3))).max_element();
+            worst = worst.max(rel);
+        }
+        assert!(worst < 2e-3, "{name}: worst relative difference {worst}");
+    }
 }
 
 #[test]
@@ -104,10 +156,13 @@ fn albedo_is_at_most_one_in_every_direction() {
                 }
             }
             let est = (est / n as f64).as_vec3();
-            assert!(est.max_element() <= 1.0 + 1e-3, "{name} cos {cos}: albedo {est}");
-            if !name.contains("0.1") {
+            // glTF's layering (diffuse weighted by 1 - F(v.h)) reflects slightly more than it
+            // receives at grazing incidence: the specification's model, kept as written.
+            let bound = if name.starts_with("glTF") && cos < 0.1 { 1.05 } else { 1.0 + 1e-3 };
+            assert!(est.max_element() <= bound, "{name} cos {cos}: albedo {est}");
+            if !name.contains("0.1") && !name.contains("sharp") {
                 let q = albedo_quadrature(&m, wo, 400);
-                assert!(q.max_element() <= 1.0 + 2e-3, "{name} cos {cos}: albedo {q}");
+                assert!(q.max_element() <= bound + 1e-3, "{name} cos {cos}: albedo {q}");
                 assert!((q - est).abs().max_element() < 0.02, "{name} cos {cos}: {q} vs sampled {est}");
             }
         }
