@@ -5,4 +5,5 @@ mod collada;
 mod damaged;
 mod exporters;
 mod formats_agree;
+mod gltf_materials;
 mod mesh_loaders;

@@ -1,0 +1,141 @@
+//! glTF materials as glTF means them: metallic-roughness (factors, defaults and its linear
+//! texture), specular-glossiness, unlit, material extensions wavepath does not render
+//! (accepted with one warning), `KHR_texture_transform` and the uv set a texture names.
+
+use crate::common::temp_dir;
+use base64::Engine;
+use glam::{Affine2, DMat3, DVec3, Vec2, Vec3, vec2, vec3};
+use std::path::Path;
+use wavepath::load::{LoadOptions, load};
+use wavepath::scene::texture::Textures;
+use wavepath::scene::{Bsdf, Scene};
+
+fn b64(bytes: &[u8]) -> String {
+    base64::engine::general_purpose::STANDARD.encode(bytes)
+}
+
+/// A PNG of `texels` (one row), as a data URI.
+fn png_uri(texels: &[[u8; 3]]) -> String {
+    let img = image::RgbImage::from_fn(texels.len() as u32, 1, |x, _| image::Rgb(texels[x as usize]));
+    let mut out = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut out, image::ImageFormat::Png).unwrap();
+    format!("data:image/png;base64,{}", b64(&out.into_inner()))
+}
+
+/// One triangle with uv sets 0 and 1 (set 0 all zero, set 1 the corners' own), using
+/// material 0; `extra` adds top-level members (materials, textures, images, extensions).
+fn triangle_doc(extra: &str) -> String {
+    let pos = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    let uv1 = [[0.1f32, 0.2], [0.9, 0.2], [0.1, 0.8]];
+    let mut bytes: Vec<u8> = pos.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+    bytes.extend([0u8; 24]);
+    bytes.extend(uv1.iter().flatten().flat_map(|c| c.to_le_bytes()));
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},
+          "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}],
+          "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+          "buffers":[{{"byteLength":{len},"uri":"data:application/octet-stream;base64,{uri}"}}],
+          "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},{{"buffer":0,"byteOffset":60,"byteLength":24}}],
+          "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                       {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}},
+                       {{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}}],
+          {extra}}}"#,
+        len = bytes.len(),
+        uri = b64(&bytes)
+    )
+}
+
+fn load_doc(dir: &Path, name: &str, doc: &str) -> Scene {
+    std::fs::write(dir.join(name), doc).unwrap();
+    load(&dir.join(name), &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"))
+}
+
+#[test]
+fn gltf_materials_map_onto_their_models() {
+    let d = temp_dir("gltf-materials");
+    // Factors as written; an empty material takes the specification's defaults (metallic 1,
+    // roughness 1, white); unlit emits its base colour; specular-glossiness keeps its own
+    // parameters. Two extensions wavepath does not render (one required) cost one warning.
+    let doc = triangle_doc(
+        r#""extensionsUsed":["KHR_materials_unlit","KHR_materials_pbrSpecularGlossiness","KHR_materials_clearcoat","KHR_materials_iridescence"],
+           "extensionsRequired":["KHR_materials_unlit","KHR_materials_pbrSpecularGlossiness","KHR_materials_iridescence"],
+           "materials":[
+             {"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.4,0.2,1],"metallicFactor":0.25,"roughnessFactor":0.6}},
+             {},
+             {"pbrMetallicRoughness":{"baseColorFactor":[0.3,0.6,0.9,1]},"extensions":{"KHR_materials_unlit":{}}},
+             {"extensions":{"KHR_materials_pbrSpecularGlossiness":{"diffuseFactor":[0.5,0.5,0.25,1],"specularFactor":[0.2,0.3,0.4],"glossinessFactor":0.7}}},
+             {"pbrMetallicRoughness":{"metallicFactor":0},"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":1},"KHR_materials_iridescence":{"iridescenceFactor":1}}}
+           ]"#,
+    );
+    let s = load_doc(&d, "m.gltf", &doc);
+    let m = &s.materials;
+    assert_eq!(m[0].bsdf, Bsdf::MetallicRoughness { base: vec3(0.8, 0.4, 0.2), metallic: 0.25, roughness: 0.6 });
+    assert_eq!(m[1].bsdf, Bsdf::MetallicRoughness { base: Vec3::ONE, metallic: 1.0, roughness: 1.0 });
+    assert_eq!((m[2].bsdf.diffuse_albedo(), m[2].emission), (Vec3::ZERO, vec3(0.3, 0.6, 0.9)));
+    assert_eq!(
+        m[3].bsdf,
+        Bsdf::SpecularGlossiness { diffuse: vec3(0.5, 0.5, 0.25), specular: vec3(0.2, 0.3, 0.4), glossiness: 0.7 }
+    );
+    assert_eq!(m[4].bsdf, Bsdf::MetallicRoughness { base: Vec3::ONE, metallic: 0.0, roughness: 1.0 });
+    assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
+    let note = &s.notes[0];
+    assert!(note.contains("KHR_materials_clearcoat, KHR_materials_iridescence") && note.contains("m.gltf"), "{note}");
+}
+
+/// The metallic-roughness texture is linear data: blue scales metalness, green roughness,
+/// and what a shaded point sees is texel x factor.
+#[test]
+fn metallic_roughness_texture_is_linear_and_scales_the_factors() {
+    let d = temp_dir("gltf-mr-texture");
+    let uri = png_uri(&[[0, 128, 255], [0, 255, 0]]);
+    let doc = triangle_doc(&format!(
+        r#""materials":[{{"pbrMetallicRoughness":{{"metallicFactor":0.5,"roughnessFactor":0.8,
+               "metallicRoughnessTexture":{{"index":0,"texCoord":1}}}}}}],
+           "samplers":[{{"magFilter":9728}}],"textures":[{{"source":0,"sampler":0}}],"images":[{{"uri":"{uri}"}}]"#
+    ));
+    let s = load_doc(&d, "mr.gltf", &doc);
+    let t = Textures::new(&s);
+    // Nearest texel: u < 0.5 reads the first, u > 0.5 the second; no sRGB curve applied.
+    let first = t.metal_rough(0, vec2(0.25, 0.5)).expect("a metallic-roughness texture");
+    let second = t.metal_rough(0, vec2(0.75, 0.5)).unwrap();
+    assert!((first - vec2(0.5, 0.8 * 128.0 / 255.0)).abs().max_element() < 1e-6, "{first}");
+    assert!((second - vec2(0.0, 0.8)).abs().max_element() < 1e-6, "{second}");
+    // The texture names uv set 1: the mesh carries it.
+    assert_eq!(s.mesh.uvs.as_deref(), Some(&[vec2(0.1, 0.2), vec2(0.9, 0.2), vec2(0.1, 0.8)][..]));
+}
+
+/// KHR_texture_transform's matrix, built here as the extension writes it (3x3, offset x
+/// rotation x scale, rotation rows [cos sin; -sin cos]), against the loaded texture's, and a
+/// lookup that the offset moves onto the other texel; its texCoord override picks the set.
+#[test]
+fn texture_transform_and_its_uv_set() {
+    let d = temp_dir("gltf-texture-transform");
+    let uri = png_uri(&[[255, 0, 0], [0, 0, 255]]);
+    let (offset, rotation, scale) = ([0.5f64, 0.25], 0.3f64, [2.0f64, 0.5]);
+    let doc = triangle_doc(&format!(
+        r#""extensionsUsed":["KHR_texture_transform"],"extensionsRequired":["KHR_texture_transform"],
+           "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0,
+               "extensions":{{"KHR_texture_transform":{{"offset":[{},{}],"rotation":{rotation},"scale":[{},{}],"texCoord":1}}}}}}}}}}],
+           "samplers":[{{"magFilter":9728}}],"textures":[{{"source":0,"sampler":0}}],"images":[{{"uri":"{uri}"}}]"#,
+        offset[0], offset[1], scale[0], scale[1]
+    ));
+    let s = load_doc(&d, "tt.gltf", &doc);
+    assert!(s.notes.is_empty(), "{:?}", s.notes);
+    let tex = s.materials[0].albedo_texture.clone().expect("a base colour texture");
+    let (c, sn) = (rotation.cos(), rotation.sin());
+    let t = DMat3::from_cols(DVec3::X, DVec3::Y, DVec3::new(offset[0], offset[1], 1.0));
+    let r = DMat3::from_cols(DVec3::new(c, -sn, 0.0), DVec3::new(sn, c, 0.0), DVec3::Z);
+    let sc = DMat3::from_diagonal(DVec3::new(scale[0], scale[1], 1.0));
+    let m = t * r * sc;
+    for uv in [vec2(0.0, 0.0), vec2(1.0, 0.0), vec2(0.3, 0.7), vec2(-2.0, 5.0)] {
+        let want = m * DVec3::new(uv.x as f64, uv.y as f64, 1.0);
+        let got = tex.transform.transform_point2(uv);
+        assert!((got.as_dvec2() - want.truncate()).abs().max_element() < 1e-5, "{uv}: {got} vs {want}");
+    }
+    // The override names set 1.
+    assert_eq!(s.mesh.uvs.as_ref().unwrap()[1], vec2(0.9, 0.2));
+    // Offset only: u 0.25 + 0.5 reads the blue texel, u 0.75 + 0.5 wraps onto the red one.
+    let shifted = wavepath::scene::Texture { transform: Affine2::from_translation(Vec2::new(0.5, 0.0)), ..tex };
+    assert_eq!(shifted.albedo(vec2(0.25, 0.5)), Some(vec3(0.0, 0.0, 1.0)));
+    assert_eq!(shifted.albedo(vec2(0.75, 0.5)), Some(vec3(1.0, 0.0, 0.0)));
+}
