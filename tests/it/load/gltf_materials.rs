@@ -6,9 +6,14 @@ use crate::common::temp_dir;
 use base64::Engine;
 use glam::{Affine2, DMat3, DVec3, Vec2, Vec3, vec2, vec3};
 use std::path::Path;
+use wavepath::accel::{BruteForce, Intersector, TraceCounters};
+use wavepath::bsdf::Model;
+use wavepath::geometry::Ray;
+use wavepath::integrator::Transport;
 use wavepath::load::{LoadOptions, load};
 use wavepath::scene::texture::Textures;
 use wavepath::scene::{Bsdf, Scene};
+use wavepath::settings::Settings;
 
 fn b64(bytes: &[u8]) -> String {
     base64::engine::general_purpose::STANDARD.encode(bytes)
@@ -102,6 +107,20 @@ fn metallic_roughness_texture_is_linear_and_scales_the_factors() {
     assert!((second - vec2(0.0, 0.8)).abs().max_element() < 1e-6, "{second}");
     // The texture names uv set 1: the mesh carries it.
     assert_eq!(s.mesh.uvs.as_deref(), Some(&[vec2(0.1, 0.2), vec2(0.9, 0.2), vec2(0.1, 0.8)][..]));
+    // A shaded point takes its texel's values: at (x, y) the uv is (0.1 + 0.8 x, 0.2 + 0.6 y),
+    // so (0.2, 0.2) reads the first texel and (0.7, 0.1) the second. White base:
+    // f0 = lerp(0.04, 1, metallic), alpha = roughness^2.
+    let t = Transport::new(&s, &Settings::default());
+    let accel = BruteForce::new(&s);
+    for (x, y, metallic, roughness) in [(0.2, 0.2, 0.5, 0.8 * 128.0 / 255.0), (0.7, 0.1, 0.0, 0.8)] {
+        let ray = Ray { origin: vec3(x, y, 1.0), dir: -Vec3::Z, tmin: 0.0, tmax: f32::INFINITY };
+        let hit = accel.closest_hit(&ray, &mut TraceCounters::default()).expect("the triangle");
+        let v = t.vertex(&ray, &hit);
+        let Model::Pbr(p) = t.shading(&v, ray.dir).model else { panic!("not the glTF model") };
+        let f0 = 0.04 + 0.96 * metallic;
+        assert!((p.f0 - Vec3::splat(f0)).abs().max_element() < 1e-5, "({x}, {y}): f0 {}", p.f0);
+        assert!((p.alpha - roughness * roughness).abs() < 1e-5, "({x}, {y}): alpha {}", p.alpha);
+    }
 }
 
 /// KHR_texture_transform's matrix, built here as the extension writes it (3x3, offset x
