@@ -92,6 +92,13 @@ impl Microfacet {
         }
     }
 
+    /// Smith's masking of direction `w` alone, G1 = 1 / (1 + Lambda(w)).
+    #[inline]
+    pub fn g1(&self, w: Vec3) -> f32 {
+        let v = 1.0 / (1.0 + self.lambda(w));
+        if v.is_finite() { v } else { 0.0 }
+    }
+
     /// Height-correlated Smith shadowing-masking.
     #[inline]
     pub fn g(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -129,13 +136,6 @@ impl Microfacet {
         let pdf = self.d(h) * h.z / (4.0 * oh);
         let weight = self.fresnel(oh) * (self.g(wo, wi) * oh / (wo.z * h.z));
         (pdf > 0.0 && pdf.is_finite() && weight.is_finite()).then_some(BsdfSample { wi, weight, pdf, delta: false })
-    }
-
-    /// The direction [`sample`](Self::sample) draws, for models that add their own Fresnel
-    /// term (its density is [`pdf`](Self::pdf)).
-    #[inline]
-    pub fn sample_direction(&self, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {
-        self.sample_half(wo, u).map(|(wi, _)| wi)
     }
 
     /// The reflected direction and the half vector it was reflected about (both with

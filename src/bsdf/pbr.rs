@@ -1,6 +1,9 @@
 use super::{BsdfSample, Distribution, Microfacet};
 use crate::sampling::warp;
 use glam::Vec3;
+
+/// Smallest roughness sampled: the GGX lobe's own floor.
+const MIN_ALPHA: f32 = 1e-4;
 use std::f32::consts::FRAC_1_PI;
 
 /// glTF's material model (the core specification's appendix B): a diffuse base under a
@@ -16,7 +19,9 @@ use std::f32::consts::FRAC_1_PI;
 ///
 /// Sampling picks the specular lobe with the probability of its share of the reflectance
 /// seen from `wo` and the cosine lobe otherwise; `pdf` is the mixture's, so light sampling
-/// and BSDF sampling combine by MIS like any glossy model.
+/// and BSDF sampling combine by MIS like any glossy model. The specular lobe draws visible
+/// normals (Heitz 2018): its sample weight F G / G1(wo) stays below 1 at grazing angles,
+/// where drawing from D alone gives weights of order 1 / alpha.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pbr {
     pub diffuse: Vec3,
@@ -44,6 +49,7 @@ impl Pbr {
         Pbr { diffuse, f0: specular, diffuse_f0: specular, alpha: r * r }
     }
 
+    /// The GGX lobe (D, G and the conductor's numerical guards; its Fresnel is not used).
     #[inline]
     fn lobe(&self) -> Microfacet {
         Microfacet { alpha: self.alpha, eta: Vec3::ZERO, k: Vec3::ZERO, distribution: Distribution::Ggx }
@@ -57,11 +63,14 @@ impl Pbr {
         f0 + (Vec3::ONE - f0) * (m2 * m2 * m)
     }
 
-    /// Probability of sampling the specular lobe from `wo`.
+    /// Probability of sampling the specular lobe from `wo`: its Fresnel reflectance against
+    /// the diffuse colour. The diffuse share is not reduced by the Fresnel term at `wo`: the
+    /// diffuse term weighs (1 - F) at the half vector, which stays large for most directions
+    /// even when `wo` grazes, and a diffuse lobe chosen rarely there would give fireflies.
     #[inline]
     fn specular_probability(&self, wo: Vec3) -> f32 {
         let s = Self::schlick(self.f0, wo.z).element_sum();
-        let d = (self.diffuse * (Vec3::ONE - Self::schlick(self.diffuse_f0, wo.z))).element_sum();
+        let d = self.diffuse.element_sum();
         if s + d > 0.0 { (s / (s + d)).clamp(0.0, 1.0) } else { 1.0 }
     }
 
@@ -85,7 +94,7 @@ impl Pbr {
             return None;
         }
         let wi = if u[2] < self.specular_probability(wo) {
-            self.lobe().sample_direction(wo, [u[0], u[1]])?
+            self.sample_visible(wo, [u[0], u[1]])?
         } else {
             warp::cosine_hemisphere(u[0], u[1])
         };
@@ -103,6 +112,39 @@ impl Pbr {
             return 0.0;
         }
         let p = self.specular_probability(wo);
-        p * self.lobe().pdf(wo, wi) + (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z)
+        p * self.visible_pdf(wo, wi) + (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z)
+    }
+
+    /// `wo` reflected about a GGX normal drawn from those visible from `wo` (the stretched
+    /// hemisphere construction).
+    #[inline]
+    fn sample_visible(&self, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {
+        let a = self.alpha.max(MIN_ALPHA);
+        let vh = Vec3::new(a * wo.x, a * wo.y, wo.z).try_normalize()?;
+        let len2 = vh.x * vh.x + vh.y * vh.y;
+        let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
+        let t2 = vh.cross(t1);
+        let r = u[0].sqrt();
+        let (sin, cos) = (std::f32::consts::TAU * u[1]).sin_cos();
+        let (p1, p2) = (r * cos, r * sin);
+        let s = 0.5 * (1.0 + vh.z);
+        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
+        let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
+        let h = Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).try_normalize()?;
+        let oh = wo.dot(h);
+        let wi = 2.0 * oh * h - wo;
+        (oh > 0.0 && wi.z > 0.0).then_some(wi)
+    }
+
+    /// Density of [`sample_visible`](Self::sample_visible): G1(wo) D(h) / (4 cos_o).
+    #[inline]
+    fn visible_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let Some(h) = (wo + wi).try_normalize() else { return 0.0 };
+        if wo.dot(h) <= 0.0 {
+            return 0.0;
+        }
+        let lobe = self.lobe();
+        let p = lobe.g1(wo) * lobe.d(h) / (4.0 * wo.z);
+        if p.is_finite() { p } else { 0.0 }
     }
 }

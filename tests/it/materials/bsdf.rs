@@ -64,6 +64,27 @@ fn pbr_model(s: Surface) -> Model {
     })
 }
 
+/// Rough glTF surfaces seen at grazing angles: every sample's weight stays near the albedo
+/// (the lobe choice must not leave the diffuse lobe a tiny probability where the diffuse
+/// term is large: those samples would be fireflies).
+#[test]
+fn rough_pbr_sample_weights_stay_bounded_at_grazing_angles() {
+    let mut r = Sampler::for_sample(10, 0, 0);
+    for (name, s) in pbr_surfaces().into_iter().filter(|(n, _)| !n.contains("sharp")) {
+        let m = pbr_model(s);
+        for cos in [0.3f32, 0.1, 0.05, 0.02] {
+            let wo = wo_at(cos, 0.4);
+            let mut worst = 0.0f32;
+            for _ in 0..20_000 {
+                if let Some(s) = m.sample(wo, u3(&mut r)) {
+                    worst = worst.max(s.weight.max_element());
+                }
+            }
+            assert!(worst < 2.5, "{name} cos {cos}: a sample of weight {worst}");
+        }
+    }
+}
+
 /// The model equals glTF's BRDF as the specification writes it, direction by direction.
 #[test]
 fn pbr_is_the_gltf_specification_brdf() {
