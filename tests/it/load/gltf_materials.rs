@@ -158,3 +158,89 @@ fn texture_transform_and_its_uv_set() {
     assert_eq!(shifted.albedo(vec2(0.25, 0.5)), Some(vec3(0.0, 0.0, 1.0)));
     assert_eq!(shifted.albedo(vec2(0.75, 0.5)), Some(vec3(1.0, 0.0, 0.0)));
 }
+
+/// An icosphere written as a Draco-compressed glTF primitive (by draco-core's encoder,
+/// positions quantised to 14 bits, uvs to 12): it loads with the same triangles, each
+/// matching an original one within the quantisation step, facing outward, and uvs that
+/// follow their positions; a truncated stream is a one-line error naming the extension.
+#[test]
+fn draco_compressed_primitives_decode_to_their_mesh() {
+    use draco_core::{
+        DataType, EncoderBuffer, EncoderOptions, FaceIndex, GeometryAttributeType, Mesh, MeshEncoder, PointAttribute,
+    };
+    let sphere = crate::common::meshgen::icosphere(4);
+    let n = sphere.positions.len();
+    let uv_of = |p: Vec3| vec2(0.5 + 0.5 * p.x, 0.5 + 0.5 * p.y);
+    let mut mesh = Mesh::new();
+    let mut pos = PointAttribute::new();
+    pos.init(GeometryAttributeType::Position, 3, DataType::Float32, false, n);
+    let mut uv = PointAttribute::new();
+    uv.init(GeometryAttributeType::TexCoord, 2, DataType::Float32, false, n);
+    for (i, p) in sphere.positions.iter().enumerate() {
+        for (c, v) in p.to_array().iter().enumerate() {
+            pos.buffer_mut().write((3 * i + c) * 4, &v.to_le_bytes());
+        }
+        for (c, v) in uv_of(*p).to_array().iter().enumerate() {
+            uv.buffer_mut().write((2 * i + c) * 4, &v.to_le_bytes());
+        }
+    }
+    let (pos_id, uv_id) = (mesh.add_attribute(pos), mesh.add_attribute(uv));
+    mesh.set_num_faces(sphere.triangles.len());
+    for (f, t) in sphere.triangles.iter().enumerate() {
+        mesh.set_face(FaceIndex(f as u32), t.map(|i| i.into()));
+    }
+    let mut options = EncoderOptions::new();
+    options.set_attribute_quantization(pos_id, 14);
+    options.set_attribute_quantization(uv_id, 12);
+    let mut encoder = MeshEncoder::new();
+    encoder.set_mesh(mesh);
+    let mut out = EncoderBuffer::new();
+    encoder.encode(&options, &mut out).expect("draco encode");
+    let bytes = out.data().to_vec();
+    let doc = |bytes: &[u8]| {
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],
+              "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1}},"indices":2,
+                 "extensions":{{"KHR_draco_mesh_compression":{{"bufferView":0,"attributes":{{"POSITION":{pos_id},"TEXCOORD_0":{uv_id}}}}}}}}}]}}],
+              "nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+              "buffers":[{{"byteLength":{len},"uri":"data:application/octet-stream;base64,{uri}"}}],
+              "bufferViews":[{{"buffer":0,"byteLength":{len}}}],
+              "accessors":[{{"componentType":5126,"count":{n},"type":"VEC3","min":[-1,-1,-1],"max":[1,1,1]}},
+                           {{"componentType":5126,"count":{n},"type":"VEC2"}},
+                           {{"componentType":5125,"count":{idx},"type":"SCALAR"}}]}}"#,
+            len = bytes.len(),
+            uri = b64(bytes),
+            idx = 3 * sphere.triangles.len()
+        )
+    };
+    let d = temp_dir("gltf-draco");
+    let s = load_doc(&d, "draco.gltf", &doc(&bytes));
+    assert_eq!(s.mesh.triangles.len(), sphere.triangles.len());
+    let step = 2.0 / (1 << 14) as f32;
+    let original: Vec<[Vec3; 3]> = (0..sphere.triangles.len()).map(|i| sphere.corners(i)).collect();
+    for i in 0..s.mesh.triangles.len() {
+        let c = s.mesh.corners(i);
+        let centroid = (c[0] + c[1] + c[2]) / 3.0;
+        let near = original
+            .iter()
+            .min_by(|a, b| {
+                let d = |t: &&[Vec3; 3]| ((t[0] + t[1] + t[2]) / 3.0).distance(centroid);
+                d(a).total_cmp(&d(b))
+            })
+            .unwrap();
+        for p in c {
+            let closest = near.iter().map(|q| q.distance(p)).fold(f32::INFINITY, f32::min);
+            assert!(closest <= step, "triangle {i}: corner {p} is {closest} from the original's");
+        }
+        assert!((c[1] - c[0]).cross(c[2] - c[0]).dot(centroid) > 0.0, "triangle {i} turned inward");
+    }
+    let uvs = s.mesh.uvs.as_ref().expect("uvs decoded");
+    for (p, t) in s.mesh.positions.iter().zip(uvs) {
+        assert!((uv_of(*p) - *t).abs().max_element() < 1e-3, "uv {t} at {p}");
+    }
+    // Damaged: the stream cut in half.
+    let path = d.join("cut.gltf");
+    std::fs::write(&path, doc(&bytes[..bytes.len() / 2])).unwrap();
+    let e = format!("{:#}", load(&path, &LoadOptions::default()).unwrap_err());
+    assert!(e.contains("cut.gltf") && e.contains("KHR_draco_mesh_compression") && !e.contains('\n'), "{e}");
+}

@@ -1,9 +1,15 @@
 //! glTF 2.0 (.gltf with .bin or data URIs, .glb) through the gltf crate.
 //!
 //! The default scene's node tree is flattened into world space in depth-first order
-//! (children in the order the file lists them); each mesh primitive in drawing mode
-//! Triangles is appended in that order. Skins and animations are ignored: a skinned mesh
-//! loads in its bind pose. The glTF y-up frame is used as it is.
+//! (children in the order the file lists them); each mesh primitive in a triangle mode
+//! (list, strip, fan; Draco-compressed or quantised) is appended in that order, once per
+//! GPU instance. Skins and animations are ignored: a skinned mesh loads in its bind pose.
+//! The glTF y-up frame is used as it is. Materials keep glTF's own BRDF
+//! ([`crate::bsdf::Pbr`]); extensions that only refine appearance and that wavepath does
+//! not render are accepted with one warning, so a model is drawn approximately rather than
+//! refused.
+
+mod draco;
 
 use crate::scene::texture::{Filter, TextureImage, Wrap};
 use crate::scene::{Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
@@ -35,6 +41,7 @@ fn read(path: &Path) -> Result<Scene, String> {
     let mut json = raw.document.into_json();
     // The crate refuses required extensions it does not know; this loader reads these itself.
     json.extensions_required.retain(|e| !read_here(e));
+    draco::attach_views(&mut json);
     let document = gltf::Document::from_json(json).map_err(|e| e.to_string())?;
     let gltf = gltf::Gltf { document, blob: raw.blob };
     let base = path.parent().unwrap_or(Path::new("."));
@@ -92,7 +99,7 @@ fn read(path: &Path) -> Result<Scene, String> {
             let mat = prim.material().index().map_or(default_material, |i| i as u32);
             let set = prim.material().index().map_or(0, |i| uv_sets[i]);
             for w in &worlds {
-                let part = primitive(&prim, &buffers, w, mat, set)
+                let part = primitive(&prim, doc, &buffers, w, mat, set)
                     .map_err(|e| format!("mesh {} primitive {}: {e}", m.index(), prim.index()))?;
                 all_normals &= part.normals.is_some();
                 mesh.append(part);
@@ -118,7 +125,7 @@ fn read(path: &Path) -> Result<Scene, String> {
 }
 
 /// Extensions the loader reads.
-const KNOWN_EXTENSIONS: [&str; 7] = [
+const KNOWN_EXTENSIONS: [&str; 8] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
@@ -126,6 +133,7 @@ const KNOWN_EXTENSIONS: [&str; 7] = [
     "KHR_texture_transform",
     "EXT_mesh_gpu_instancing",
     "KHR_mesh_quantization",
+    "KHR_draco_mesh_compression",
 ];
 
 /// Extensions a file may require: the ones the loader reads, and material extensions it
@@ -138,7 +146,7 @@ fn may_require(e: &str) -> bool {
 /// Extensions read by this loader rather than the gltf crate (whose validation refuses
 /// required extensions it does not know).
 fn read_here(e: &str) -> bool {
-    matches!(e, "EXT_mesh_gpu_instancing" | "KHR_mesh_quantization")
+    matches!(e, "EXT_mesh_gpu_instancing" | "KHR_mesh_quantization" | "KHR_draco_mesh_compression")
         || (e.starts_with("KHR_materials_") && !gltf::json::extensions::ENABLED_EXTENSIONS.contains(&e))
 }
 
@@ -355,14 +363,43 @@ fn check_accessor(acc: Option<gltf::Accessor>, what: &str, types: &[DataType], d
     Ok(())
 }
 
-/// One primitive's triangles in world space, with uvs from set `uv_set`.
+/// One primitive's triangles in world space, with uvs from set `uv_set`: from its Draco
+/// stream when it has one, else from its accessors.
 fn primitive(
     prim: &gltf::Primitive,
+    doc: &gltf::Document,
     buffers: &[gltf::buffer::Data],
     world: &Mat4,
     mat: u32,
     uv_set: u32,
 ) -> Result<Mesh, String> {
+    let (raw, mode) = match draco::decode(prim, doc, buffers, uv_set)? {
+        // Draco streams hold triangle lists, whatever the primitive's mode says.
+        Some(d) => (d, gltf::mesh::Mode::Triangles),
+        None => (accessors(prim, buffers, uv_set)?, prim.mode()),
+    };
+    let positions: Vec<Vec3> = raw.positions.into_iter().map(|p| world.transform_point3(p)).collect();
+    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+        return Err(format!("vertex {i} has a NaN or infinite coordinate"));
+    }
+    let n = positions.len();
+    let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
+    let normals = raw
+        .normals
+        .map(|v| v.into_iter().map(|v| (normal_matrix * v).normalize_or_zero()).collect::<Vec<_>>())
+        .filter(|v| v.len() == n && v.iter().all(|x| x.is_finite()));
+    let uvs = raw.uvs.filter(|v| v.len() == n);
+    let colors = raw.colors.filter(|v| v.len() == n);
+    if let Some(&bad) = raw.indices.iter().find(|&&i| i as usize >= n) {
+        return Err(format!("index {bad} is out of range for {n} vertices"));
+    }
+    let triangles = triangles_of(mode, &raw.indices)?;
+    let material_ids = vec![mat; triangles.len()];
+    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
+}
+
+/// A primitive's attributes and indices as its accessors hold them (object space).
+fn accessors(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], uv_set: u32) -> Result<draco::Decoded, String> {
     use gltf::Semantic;
     // The types KHR_mesh_quantization allows besides f32.
     use DataType::{F32, I8, I16, U8, U16};
@@ -389,37 +426,22 @@ fn primitive(
             reader.read_positions().ok_or("no POSITION data (missing or outside its buffer)")?.map(Vec3::from).collect()
         }
     };
-    let positions: Vec<Vec3> = positions.into_iter().map(|p| world.transform_point3(p)).collect();
-    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(format!("vertex {i} has a NaN or infinite coordinate"));
-    }
-    let n = positions.len();
-    let normal_matrix = Mat3::from_mat4(*world).inverse().transpose();
     let normals: Option<Vec<Vec3>> = match quantised(Semantic::Normals) {
         Some(acc) => Some(read_quantised(&acc, buffers)?.chunks_exact(3).map(Vec3::from_slice).collect()),
         None => reader.read_normals().map(|it| it.map(Vec3::from).collect()),
-    }
-    .map(|v: Vec<Vec3>| v.into_iter().map(|v| (normal_matrix * v).normalize_or_zero()).collect::<Vec<_>>())
-    .filter(|v| v.len() == n && v.iter().all(|x| x.is_finite()));
+    };
     let uvs: Option<Vec<Vec2>> = match quantised(Semantic::TexCoords(uv_set)) {
         Some(acc) => Some(read_quantised(&acc, buffers)?.chunks_exact(2).map(Vec2::from_slice).collect()),
         None => reader.read_tex_coords(uv_set).map(|t| t.into_f32().map(Vec2::from).collect()),
-    }
-    .filter(|v: &Vec<Vec2>| v.len() == n);
+    };
     let indices: Vec<u32> = match reader.read_indices() {
         Some(i) => i.into_u32().collect(),
         None if prim.indices().is_some() => return Err("index data outside its buffer".into()),
-        None => (0..n as u32).collect(),
+        None => (0..positions.len() as u32).collect(),
     };
-    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= n) {
-        return Err(format!("index {bad} is out of range for {n} vertices"));
-    }
-    let triangles = triangles_of(prim.mode(), &indices)?;
-    let material_ids = vec![mat; triangles.len()];
     // COLOR_0 is linear RGB(A) (f32, or normalised u8/u16); alpha is not used.
-    let colors: Option<Vec<Vec3>> =
-        reader.read_colors(0).map(|c| c.into_rgb_f32().map(Vec3::from).collect::<Vec<_>>()).filter(|v| v.len() == n);
-    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
+    let colors = reader.read_colors(0).map(|c| c.into_rgb_f32().map(Vec3::from).collect());
+    Ok(draco::Decoded { positions, normals, uvs, colors, indices })
 }
 
 /// A glTF material as the closest model wavepath has: metallic-roughness and
