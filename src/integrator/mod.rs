@@ -452,7 +452,7 @@ impl<'a> Transport<'a> {
         let mut rng = Sampler::for_vertex(key, 0);
         let (jx, jy) = if spp <= 1 { (0.5, 0.5) } else { rng.next_2d() };
         let cam = &self.scene.camera;
-        if cam.lens_radius > 0.0 {
+        if cam.lens_radius > 0.0 || cam.orthographic {
             let (px, py) = ((x as f32 + jx) / width as f32, (y as f32 + jy) / height as f32);
             let mut lr = rng.at(2);
             let (a, b) = lr.next_2d();
@@ -462,10 +462,11 @@ impl<'a> Transport<'a> {
         }
     }
 
-    /// Whether camera rays are [`pinhole_ray`](Self::pinhole_ray)s (no aperture).
+    /// Whether camera rays are [`pinhole_ray`](Self::pinhole_ray)s (no aperture, not
+    /// orthographic).
     #[inline]
     pub fn pinhole(&self) -> bool {
-        self.scene.camera.lens_radius <= 0.0
+        self.scene.camera.lens_radius <= 0.0 && !self.scene.camera.orthographic
     }
 
     /// The jitter of the camera ray of the path with key `key` inside its pixel.

@@ -18,6 +18,10 @@ pub struct Camera {
     pub focal_distance: f32,
     /// How the fields of view follow the image size ([`fit_to`](Self::fit_to)).
     pub fit: FovFit,
+    /// Parallel projection (a COLLADA `<orthographic>` camera): rays leave the image plane
+    /// along the view direction, and the plane's half extents are tan(hfov / 2) and
+    /// tan(vfov / 2) world units, so that fitting to an image works as for angles.
+    pub orthographic: bool,
 }
 
 /// The rule that turns a camera's field of view into the one of a `W x H` image. Formats
@@ -72,6 +76,7 @@ impl Camera {
             lens_radius: 0.0,
             focal_distance: CS184_FOCAL_DISTANCE,
             fit: FovFit::Vertical,
+            orthographic: false,
         };
         cam.fit_to(aspect, 1.0);
         cam
@@ -187,18 +192,24 @@ impl Camera {
         Vec3::new((x - 0.5) * 2.0 * w, (y - 0.5) * 2.0 * h, -1.0)
     }
 
-    /// The pinhole ray through `(x, y)` in [0,1]^2: unit direction, clipped to [nclip, fclip].
+    /// The pinhole ray through `(x, y)` in [0,1]^2: unit direction, clipped to [nclip, fclip]
+    /// (for an orthographic camera, the parallel ray from that point of the image plane).
     #[inline]
     pub fn generate_ray(&self, x: f32, y: f32) -> Ray {
-        let d = (self.c2w * self.direction_camera_space(x, y)).normalize();
-        Ray { origin: self.position, dir: d, tmin: self.nclip, tmax: self.fclip }
+        let d = self.direction_camera_space(x, y);
+        if self.orthographic {
+            let origin = self.position + self.c2w * Vec3::new(d.x, d.y, 0.0);
+            return Ray { origin, dir: self.c2w * -Vec3::Z, tmin: self.nclip, tmax: self.fclip };
+        }
+        Ray { origin: self.position, dir: (self.c2w * d).normalize(), tmin: self.nclip, tmax: self.fclip }
     }
 
     /// Thin-lens ray: `lens` is a point on the unit disk (already mapped), scaled by the
     /// lens radius; the ray passes through the point where the pinhole ray meets the plane
     /// of focus.
     pub fn generate_lens_ray(&self, x: f32, y: f32, lens: glam::Vec2) -> Ray {
-        if self.lens_radius <= 0.0 {
+        // A parallel projection has no lens to defocus through.
+        if self.lens_radius <= 0.0 || self.orthographic {
             return self.generate_ray(x, y);
         }
         let d_cam = self.direction_camera_space(x, y);

@@ -50,6 +50,7 @@ pub fn parse_camera_settings(text: &str) -> Result<Camera> {
         lens_radius: 0.0,
         focal_distance: CS184_FOCAL_DISTANCE,
         fit: FovFit::AsWritten,
+        orthographic: false,
     };
     cam.validate().map_err(|e| anyhow::anyhow!(e))?;
     Ok(cam)

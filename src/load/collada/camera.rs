@@ -18,50 +18,70 @@ pub struct Optics {
     has_xfov: bool,
     znear: f32,
     zfar: f32,
+    /// `<orthographic>`: the two angles encode the half extents xmag and ymag as their
+    /// half-angle tangents ([`Camera::orthographic`]).
+    orthographic: bool,
 }
 
 pub fn optics(d: &Doc, cam: Node) -> Result<Optics> {
-    let persp = path(cam, &["optics", "technique_common", "perspective"]).ok_or_else(|| {
-        if path(cam, &["optics", "technique_common", "orthographic"]).is_some() {
-            d.err(cam, "orthographic cameras are not supported")
-        } else {
-            d.err(cam, "missing <optics><technique_common><perspective>")
-        }
-    })?;
-    let get = |tag: &str| -> Result<Option<f32>> { child(persp, tag).map(|c| d.float(c)).transpose() };
-    let (xfov, yfov, aspect) = (get("xfov")?, get("yfov")?, get("aspect_ratio")?);
+    let technique = path(cam, &["optics", "technique_common"]);
+    let (proj, orthographic) = match technique.and_then(|t| child(t, "perspective")) {
+        Some(p) => (p, false),
+        None => match technique.and_then(|t| child(t, "orthographic")) {
+            Some(o) => (o, true),
+            None => return Err(d.err(cam, "missing <optics><technique_common><perspective> or <orthographic>")),
+        },
+    };
+    let get = |tag: &str| -> Result<Option<f32>> { child(proj, tag).map(|c| d.float(c)).transpose() };
+    let (x_tag, y_tag) = if orthographic { ("xmag", "ymag") } else { ("xfov", "yfov") };
+    let (x, y, aspect) = (get(x_tag)?, get(y_tag)?, get("aspect_ratio")?);
     if let Some(a) = aspect
         && a <= 0.0
     {
-        return Err(d.err(persp, format!("aspect_ratio {a} is not positive")));
+        return Err(d.err(proj, format!("aspect_ratio {a} is not positive")));
     }
-    let half_tan = |deg: f32| (deg.to_radians() * 0.5).tan();
-    let from_tan = |t: f32| 2.0 * t.atan().to_degrees();
     let aspect = aspect.unwrap_or(DEFAULT_ASPECT);
-    let (hfov_deg, vfov_deg) = match (xfov, yfov) {
+    // Both kinds as half-angle tangents: a field of view's, or a half extent itself.
+    let to_tan = |v: f32| if orthographic { v } else { (v.to_radians() * 0.5).tan() };
+    let (tx, ty) = match (x.map(to_tan), y.map(to_tan)) {
         (Some(x), Some(y)) => (x, y),
-        (Some(x), None) => (x, from_tan(half_tan(x) / aspect)),
-        (None, Some(y)) => (from_tan(half_tan(y) * aspect), y),
-        (None, None) => return Err(d.err(persp, "has neither <xfov> nor <yfov>")),
+        (Some(x), None) => (x, x / aspect),
+        (None, Some(y)) => (y * aspect, y),
+        (None, None) => return Err(d.err(proj, format!("has neither <{x_tag}> nor <{y_tag}>"))),
     };
+    let from_tan = |t: f32| 2.0 * t.atan().to_degrees();
+    let (hfov_deg, vfov_deg) = (from_tan(tx), from_tan(ty));
     if !(hfov_deg > 0.0 && hfov_deg < 180.0 && vfov_deg > 0.0 && vfov_deg < 180.0) {
-        return Err(d.err(persp, format!("field of view {hfov_deg} x {vfov_deg} degrees is outside (0, 180)")));
+        let what = if orthographic {
+            format!("view size {tx} x {ty} is not positive and finite")
+        } else {
+            format!("field of view {hfov_deg} x {vfov_deg} degrees is outside (0, 180)")
+        };
+        return Err(d.err(proj, what));
     }
     let znear = get("znear")?.unwrap_or(0.01);
     let zfar = get("zfar")?.unwrap_or(1e30);
     if znear < 0.0 || zfar <= znear {
-        return Err(d.err(persp, format!("clip range znear={znear} zfar={zfar} is empty")));
+        return Err(d.err(proj, format!("clip range znear={znear} zfar={zfar} is empty")));
     }
-    Ok(Optics { hfov_deg, vfov_deg, has_xfov: xfov.is_some(), znear, zfar })
+    Ok(Optics { hfov_deg, vfov_deg, has_xfov: x.is_some(), znear, zfar, orthographic })
 }
 
 /// Places the camera. `w` is the camera node's world matrix with the axis conversion,
 /// `bounds` the scene's (for the CS184 placement). Returns a line for the log when the
-/// CS184 placement had to widen the file's clip range to see the scene.
+/// CS184 placement had to widen the file's clip range to see the scene. An orthographic
+/// camera is always placed as the file says: the reference renderer has none to imitate.
 pub fn place(o: &Optics, w: Mat4, mode: CameraMode, (lo, hi): (Vec3, Vec3)) -> (Camera, Option<String>) {
-    let mut cam =
-        Camera { hfov_deg: o.hfov_deg, vfov_deg: o.vfov_deg, nclip: o.znear, fclip: o.zfar, ..Camera::default() };
+    let mut cam = Camera {
+        hfov_deg: o.hfov_deg,
+        vfov_deg: o.vfov_deg,
+        nclip: o.znear,
+        fclip: o.zfar,
+        orthographic: o.orthographic,
+        ..Camera::default()
+    };
     let mut note = None;
+    let mode = if o.orthographic { CameraMode::File } else { mode };
     match mode {
         CameraMode::Cs184 => {
             // The reference's quirk: the point one unit in front of the camera, as a point.

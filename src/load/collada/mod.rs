@@ -3,7 +3,9 @@
 //!
 //! The visual scene is walked in document order, so triangles keep the file's order
 //! (instances in node order, primitives in order, polygons fan-triangulated): ray files
-//! and the peers number triangles that way.
+//! and the peers number triangles that way. Skinned and morphed geometry
+//! (`<instance_controller>`) is placed in its bind pose; orthographic cameras render as
+//! parallel projections.
 
 mod camera;
 mod geometry;
@@ -108,7 +110,14 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
                     let target = d.resolve(c, "url", &["node"])?;
                     self.walk(target, m, depth + 1)?;
                 }
-                "instance_geometry" => self.geometry(c, w)?,
+                "instance_geometry" => {
+                    let geom = d.resolve(c, "url", &["geometry"])?;
+                    self.geometry(c, geom, w)?
+                }
+                "instance_controller" => {
+                    let (geom, bind_shape) = controlled_geometry(d, c)?;
+                    self.geometry(c, geom, w * bind_shape)?
+                }
                 "instance_light" => {
                     let l = d.resolve(c, "url", &["light"])?;
                     self.scene.lights.push(lights::light(d, l, w)?);
@@ -124,9 +133,10 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
         Ok(())
     }
 
-    fn geometry(&mut self, inst: Node<'a, 'input>, w: Mat4) -> Result<()> {
+    /// Places `geom`, instantiated by `inst` (whose `bind_material` binds its symbols), with
+    /// world matrix `w`.
+    fn geometry(&mut self, inst: Node<'a, 'input>, geom: Node<'a, 'input>, w: Mat4) -> Result<()> {
         let d = self.d;
-        let geom = d.resolve(inst, "url", &["geometry"])?;
         let binding = self.mats.binding(d, inst)?;
         let geometry = match self.geometries.entry(geom.id()) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
@@ -175,4 +185,35 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
         self.scene.validate().map_err(|e| anyhow!("{name}: {e}"))?;
         Ok(self.scene)
     }
+}
+
+/// The geometry an `<instance_controller>` deforms and the matrix that puts it in its bind
+/// pose: a `<skin>`'s source under its bind-shape matrix (every joint at its bind
+/// transform, the pose the inverse bind matrices are taken in, moves no vertex further), a
+/// `<morph>`'s base geometry as it is. Animations are not read: a skinned mesh renders as
+/// modelled.
+fn controlled_geometry<'a, 'input>(d: &Doc<'a, 'input>, inst: Node<'a, 'input>) -> Result<(Node<'a, 'input>, Mat4)> {
+    let mut ctrl = d.resolve(inst, "url", &["controller"])?;
+    let mut bind = Mat4::IDENTITY;
+    // A skin may deform a morph (and, in principle, another controller): follow the chain
+    // to the geometry, at most as deep as there are controllers.
+    for _ in 0..64 {
+        let (source, shape) = if let Some(skin) = xml::child(ctrl, "skin") {
+            let shape = match xml::child(skin, "bind_shape_matrix") {
+                Some(m) => transform::matrix(d, m)?,
+                None => Mat4::IDENTITY,
+            };
+            (d.resolve(skin, "source", &["geometry", "controller"])?, shape)
+        } else if let Some(morph) = xml::child(ctrl, "morph") {
+            (d.resolve(morph, "source", &["geometry", "controller"])?, Mat4::IDENTITY)
+        } else {
+            return Err(d.err(ctrl, "a controller without <skin> or <morph>"));
+        };
+        bind *= shape;
+        if source.tag_name().name() == "geometry" {
+            return Ok((source, bind));
+        }
+        ctrl = source;
+    }
+    Err(d.err(inst, "controllers refer to each other in a loop"))
 }

@@ -62,10 +62,11 @@ pub fn local_matrix(d: &Doc, node: Node, notes: &mut Vec<String>) -> Result<Mat4
     Ok(m)
 }
 
-/// A row-major `<matrix>`. The affine part (the first 12 numbers) is required; a short
-/// last row is completed from (0 0 0 1), which nothing here reads anyway. CS184's
-/// CBgems.dae has a camera matrix of 15 numbers, which the reference renderer accepts.
-fn matrix(d: &Doc, c: Node) -> Result<Mat4> {
+/// A row-major `<matrix>` (or `<bind_shape_matrix>`). The affine part (the first 12
+/// numbers) is required; a short last row is completed from (0 0 0 1), which nothing here
+/// reads anyway. CS184's CBgems.dae has a camera matrix of 15 numbers, which the reference
+/// renderer accepts.
+pub fn matrix(d: &Doc, c: Node) -> Result<Mat4> {
     let v = d.floats(c, Some(17))?;
     if !(12..=16).contains(&v.len()) {
         return Err(

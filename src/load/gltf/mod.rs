@@ -690,23 +690,35 @@ fn orientation(world: &Mat4) -> Option<Mat3> {
     Some(Mat3::from_cols(right, up, back))
 }
 
+/// A perspective camera, or an orthographic one whose half extents xmag and ymag become
+/// its half-angle tangents ([`Camera::orthographic`]).
 fn make_camera(cam: &gltf::Camera, world: &Mat4) -> Result<Camera, String> {
-    let gltf::camera::Projection::Perspective(p) = cam.projection() else {
-        return Err(format!("camera {} is orthographic; only perspective cameras are supported", cam.index()));
+    let (vfov_deg, aspect, znear, zfar, orthographic) = match cam.projection() {
+        gltf::camera::Projection::Perspective(p) => {
+            (p.yfov().to_degrees(), p.aspect_ratio(), p.znear(), p.zfar(), false)
+        }
+        gltf::camera::Projection::Orthographic(o) => {
+            let (x, y) = (o.xmag().abs(), o.ymag().abs());
+            if !(x > 0.0 && y > 0.0 && x.is_finite() && y.is_finite()) {
+                return Err(format!("camera {}: orthographic view size {x} x {y} is not positive", cam.index()));
+            }
+            (2.0 * y.atan().to_degrees(), Some(x / y), o.znear(), Some(o.zfar()), true)
+        }
     };
     let c2w = orientation(world).ok_or(format!("camera {} has a degenerate transform", cam.index()))?;
     let mut camera = Camera {
         position: world.w_axis.truncate(),
         c2w,
         hfov_deg: 0.0,
-        vfov_deg: p.yfov().to_degrees(),
-        nclip: p.znear(),
-        fclip: p.zfar().unwrap_or(1e30),
+        vfov_deg,
+        nclip: znear,
+        fclip: zfar.unwrap_or(1e30),
         lens_radius: 0.0,
         focal_distance: crate::scene::CS184_FOCAL_DISTANCE,
         fit: crate::scene::FovFit::Vertical,
+        orthographic,
     };
-    camera.fit_to(p.aspect_ratio().unwrap_or(4.0 / 3.0), 1.0);
+    camera.fit_to(aspect.unwrap_or(4.0 / 3.0), 1.0);
     Ok(camera)
 }
 

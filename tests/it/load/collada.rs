@@ -236,7 +236,7 @@ fn file_normals_keep_order_and_counts() {
 // ---------------------------------------------------------------------------------------
 
 /// A COLLADA document with the given up axis, library contents and visual-scene nodes.
-fn doc(up: &str, geometries: &str, nodes: &str) -> String {
+pub(super) fn doc(up: &str, geometries: &str, nodes: &str) -> String {
     format!(
         r##"<?xml version="1.0" encoding="utf-8"?>
 <COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
@@ -254,7 +254,7 @@ fn doc(up: &str, geometries: &str, nodes: &str) -> String {
 }
 
 /// A mesh geometry `id` with positions and one primitive element (verbatim).
-fn mesh(id: &str, positions: &[f32], extra_sources: &str, vertices_extra: &str, prim: &str) -> String {
+pub(super) fn mesh(id: &str, positions: &[f32], extra_sources: &str, vertices_extra: &str, prim: &str) -> String {
     let n = positions.len();
     let text: Vec<String> = positions.iter().map(|v| v.to_string()).collect();
     format!(
@@ -271,17 +271,17 @@ fn mesh(id: &str, positions: &[f32], extra_sources: &str, vertices_extra: &str, 
     )
 }
 
-fn node(id: &str, transforms: &str, geometry: &str, children: &str) -> String {
+pub(super) fn node(id: &str, transforms: &str, geometry: &str, children: &str) -> String {
     format!(
         r##"<node id="{id}">{transforms}<instance_geometry url="#{geometry}"><bind_material><technique_common>
           <instance_material symbol="mat" target="#red"/></technique_common></bind_material></instance_geometry>{children}</node>"##
     )
 }
 
-const TRI: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
-const ONE_TRI: &str = r##"<triangles material="mat" count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/><p>0 1 2</p></triangles>"##;
+pub(super) const TRI: [f32; 9] = [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0];
+pub(super) const ONE_TRI: &str = r##"<triangles material="mat" count="1"><input semantic="VERTEX" source="#g-vtx" offset="0"/><p>0 1 2</p></triangles>"##;
 
-fn parse(text: &str) -> Scene {
+pub(super) fn parse(text: &str) -> Scene {
     parse_str(text, "test.dae", &LoadOptions::default()).unwrap_or_else(|e| panic!("{e}"))
 }
 
@@ -414,7 +414,7 @@ fn unbound_symbol_gets_a_default_material_and_no_camera_gets_a_framing() {
 // ---------------------------------------------------------------------------------------
 
 #[track_caller]
-fn rejects(text: &str, needle: &str) {
+pub(super) fn rejects(text: &str, needle: &str) {
     match parse_str(text, "bad.dae", &LoadOptions::default()) {
         Ok(_) => panic!("accepted bad input (expected '{needle}')"),
         Err(e) => {
@@ -561,7 +561,8 @@ fn bad_lights_cameras_and_materials() {
     };
     rejects(&cam("<perspective><xfov>200</xfov></perspective>"), "outside (0, 180)");
     rejects(&cam("<perspective><xfov>40</xfov><znear>10</znear><zfar>1</zfar></perspective>"), "clip range");
-    rejects(&cam("<orthographic><xmag>1</xmag></orthographic>"), "orthographic");
+    rejects(&cam("<orthographic><xmag>-1</xmag></orthographic>"), "view size -1 x -0.75 is not positive");
+    rejects(&cam("<frustum/>"), "<perspective> or <orthographic>");
     let light = |l: &str| {
         with(
             &format!(r##"<library_lights><light id="l">{l}</light></library_lights>"##),

@@ -7,3 +7,4 @@ mod exporters;
 mod formats_agree;
 mod gltf_materials;
 mod mesh_loaders;
+mod other_tools;
