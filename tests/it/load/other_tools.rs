@@ -7,7 +7,7 @@ use glam::{Vec3, vec3};
 use wavepath::accel::BruteForce;
 use wavepath::load::collada::parse_str;
 use wavepath::load::{CameraMode, LoadOptions, load};
-use wavepath::scene::Scene;
+use wavepath::scene::{Environment, Scene};
 use wavepath::settings::{Settings, Shading};
 
 const W: usize = 40;
@@ -18,12 +18,22 @@ const SQUARE: [f32; 18] =
     [-0.5, -0.5, 0.0, 0.5, -0.5, 0.0, 0.5, 0.5, 0.0, -0.5, -0.5, 0.0, 0.5, 0.5, 0.0, -0.5, 0.5, 0.0];
 const TWO_TRIS: &str = r##"<triangles material="mat" count="2"><input semantic="VERTEX" source="#g-vtx" offset="0"/><p>0 1 2 3 4 5</p></triangles>"##;
 
-/// Pixels of a W x H normal-shaded render (one sample at each centre) that see geometry.
+/// Pixels that see geometry in a W x H render (one sample at each pixel centre), counted
+/// in the normal view and in a direct-light render under a white sky (the ground is
+/// darker than the sky); both must agree.
 fn covered(scene: &mut Scene) -> usize {
     scene.camera.fit_to(W as f32, H as f32);
-    let s = Settings { width: W, height: H, shading: Shading::Normals, ..Settings::default() };
-    let (film, _) = wavepath::render::render(scene, &BruteForce::new(scene), &s).unwrap();
-    (0..H).flat_map(|y| (0..W).map(move |x| (x, y))).filter(|&(x, y)| film.get(x, y) != Vec3::ZERO).count()
+    scene.lights.clear();
+    scene.env = Environment::Constant(Vec3::ONE);
+    let count = |shading: Shading, seen: fn(Vec3) -> bool| {
+        let s = Settings { width: W, height: H, shading, max_depth: 1, ..Settings::default() };
+        let (film, _) = wavepath::render::render(scene, &BruteForce::new(scene), &s).unwrap();
+        (0..H).flat_map(|y| (0..W).map(move |x| (x, y))).filter(|&(x, y)| seen(film.get(x, y))).count()
+    };
+    let normals = count(Shading::Normals, |c| c != Vec3::ZERO);
+    let direct = count(Shading::Direct, |c| c.max_element() < 0.99);
+    assert_eq!(normals, direct, "normal view and light transport see different pixels");
+    direct
 }
 
 /// A COLLADA orthographic camera 4 x 3 units wide (xmag 2, ymag 1.5) looking at the unit
