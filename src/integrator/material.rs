@@ -211,13 +211,13 @@ impl Transport<'_> {
         l
     }
 
-    /// An emissive triangle's emission and geometric normal.
+    /// An emissive triangle's emission, geometric normal and index.
     #[inline]
-    fn emitter(&self, h: &Hit, emission: Vec3) -> Option<(Vec3, Vec3)> {
+    fn emitter(&self, h: &Hit, emission: Vec3) -> Option<(Vec3, Vec3, u32)> {
         if emission == Vec3::ZERO || h.prim as usize >= self.scene.mesh.triangles.len() {
             return None;
         }
         let [a, b, c] = self.scene.mesh.corners(h.prim as usize);
-        Some((emission, (b - a).cross(c - a).try_normalize()?))
+        Some((emission, (b - a).cross(c - a).try_normalize()?, h.prim))
     }
 }

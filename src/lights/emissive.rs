@@ -1,14 +1,19 @@
 use super::{LightSample, area_to_solid_angle};
 use crate::geometry::error_bound::gamma;
+use crate::geometry::illuminance;
 use crate::sampling::warp;
 use crate::scene::Scene;
 use crate::scene::texture::{Texture, Wrap, wrap_index};
 use glam::{Vec2, Vec3};
 
 /// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
-/// area. Emission is two-sided, as the reference's emission BSDF is. A triangle under an
-/// emission texture emits factor x texel at each point; one whose texels are all black (over
-/// its uv footprint) emits nothing anywhere and is left out, so no sample is spent on it.
+/// power (area x mean emitted illuminance) and a point uniformly on it, so a dim emitter
+/// takes few samples and a bright one many. Emission is two-sided, as the reference's
+/// emission BSDF is. A triangle under an emission texture emits factor x texel at each
+/// point: its mean is estimated from a grid of lookups, floored at a tenth of its brightest
+/// texel so that no point that emits has zero density (the estimator stays unbiased
+/// whatever the estimate); one whose texels are all black over its uv footprint emits
+/// nothing anywhere and is left out.
 #[derive(Clone, Debug)]
 pub struct EmissiveTriangles {
     /// Corner 0 and the two edges from it.
@@ -18,8 +23,12 @@ pub struct EmissiveTriangles {
     textured: Vec<Option<(u32, [Vec2; 3])>>,
     /// Per material, the decoded emission texture (when the mesh has uvs).
     textures: Vec<Option<Texture>>,
-    /// Running sum of areas (the last entry is the total).
+    /// Running sum of powers (the last entry is the total).
     cdf: Vec<f32>,
+    /// Per triangle, the density of sampled points per unit area: power / (area x total).
+    density: Vec<f32>,
+    /// Per triangle, its index in the mesh (ascending).
+    prims: Vec<u32>,
     /// Largest error bound of a sampled point over all triangles (see
     /// [`point_error`](Self::point_error)).
     max_error: Vec3,
@@ -36,6 +45,8 @@ impl EmissiveTriangles {
         let mut corners = Vec::new();
         let mut emission = Vec::new();
         let mut cdf = Vec::new();
+        let mut powers = Vec::new();
+        let mut prims = Vec::new();
         let mut total = 0.0f32;
         let mut max_error = Vec3::ZERO;
         for (i, &m) in scene.mesh.material_ids.iter().enumerate() {
@@ -49,13 +60,19 @@ impl EmissiveTriangles {
                 let [ia, ib, ic] = scene.mesh.triangles[i];
                 (t, [uvs[ia as usize], uvs[ib as usize], uvs[ic as usize]])
             });
-            if let Some((t, uv)) = tex
-                && (t.factor * brightest_texel(t, uv)).max_element() <= 0.0
-            {
-                continue;
-            }
-            if area > 0.0 && area.is_finite() {
-                total += area;
+            let brightness = match tex {
+                Some((t, uv)) => {
+                    let brightest = illuminance(t.factor * brightest_texel(t, uv));
+                    if brightest <= 0.0 {
+                        continue;
+                    }
+                    mean_illuminance(t, uv).max(0.1 * brightest)
+                }
+                None => illuminance(mat.emission),
+            };
+            let power = area * brightness;
+            if area > 0.0 && power > 0.0 && power.is_finite() {
+                total += power;
                 let (e1, e2) = (b - a, c - a);
                 // a + bu e1 + bv e2 with bu, bv in [0, 1]: two products and two sums, plus
                 // the rounding of the edges themselves (up to eps |e|, scaled by bu, bv <= 1).
@@ -64,9 +81,21 @@ impl EmissiveTriangles {
                 emission.push(mat.emission);
                 textured.push(tex.map(|(_, uv)| (m, uv)));
                 cdf.push(total);
+                powers.push(brightness);
+                prims.push(i as u32);
             }
         }
-        (total > 0.0).then_some(EmissiveTriangles { corners, emission, textured, textures, cdf, max_error })
+        let density = powers.iter().map(|&b| b / total).collect();
+        (total > 0.0).then_some(EmissiveTriangles {
+            corners,
+            emission,
+            textured,
+            textures,
+            cdf,
+            density,
+            prims,
+            max_error,
+        })
     }
 
     /// Per-component bound on the distance of any sampled point from its triangle: one
@@ -77,8 +106,10 @@ impl EmissiveTriangles {
         self.max_error
     }
 
-    pub fn total_area(&self) -> f32 {
-        *self.cdf.last().unwrap_or(&0.0)
+    /// The density per unit area with which [`sample_pdf`](Self::sample_pdf) draws points
+    /// of mesh triangle `prim` (0 for a triangle it never draws).
+    pub fn area_density(&self, prim: u32) -> f32 {
+        self.prims.binary_search(&prim).map_or(0.0, |i| self.density[i])
     }
 
     pub fn len(&self) -> usize {
@@ -97,15 +128,15 @@ impl EmissiveTriangles {
     /// [`sample`](Self::sample) and the solid-angle density of the drawn direction.
     #[inline]
     pub fn sample_pdf(&self, p: Vec3, u: [f32; 3]) -> Option<(LightSample, f32)> {
-        let total = self.total_area();
+        let total = *self.cdf.last()?;
         let x = u[2] * total;
         let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1);
         let [a, e1, e2] = self.corners[i];
         let (bu, bv) = warp::uniform_triangle(u[0], u[1]);
         let q = a + bu * e1 + bv * e2;
         let n = e1.cross(e2).try_normalize()?;
-        // Area density 1/total; emission is two-sided.
-        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, total, false)?;
+        // Area density `density[i]`; emission is two-sided.
+        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, 1.0 / self.density[i], false)?;
         let le = match self.textured[i] {
             Some((m, [ua, ub, uc])) => {
                 let uv = ua + bu * (ub - ua) + bv * (uc - ua);
@@ -115,6 +146,21 @@ impl EmissiveTriangles {
         };
         Some((LightSample { wi, target: Some(q), weight: le * inv_pdf }, 1.0 / inv_pdf))
     }
+}
+
+/// Mean illuminance of `t` over the triangle with these uvs, from lookups at the centres of
+/// a grid of 64 equal-area cells of the triangle.
+fn mean_illuminance(t: &Texture, uv: [Vec2; 3]) -> f32 {
+    const N: usize = 8;
+    let mut sum = 0.0;
+    for i in 0..N {
+        for j in 0..N {
+            let (bu, bv) = warp::uniform_triangle((i as f32 + 0.5) / N as f32, (j as f32 + 0.5) / N as f32);
+            let p = uv[0] + bu * (uv[1] - uv[0]) + bv * (uv[2] - uv[0]);
+            sum += t.albedo(p).map_or(0.0, illuminance);
+        }
+    }
+    sum / (N * N) as f32
 }
 
 /// The brightest texel a lookup anywhere in the triangle with these uvs can reach: the texels

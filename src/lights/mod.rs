@@ -7,7 +7,7 @@
 //! - an area light is one-sided, emitting toward `direction`;
 //! - the hemisphere (ambient) light gives constant radiance from directions with y > 0;
 //!   it is sampled cosine-weighted about the shading normal;
-//! - emissive triangles become one light sampled by area, unless the scene has an area light
+//! - emissive triangles become one light sampled by power, unless the scene has an area light
 //!   (the CS184 Cornell boxes pair an area light with an emissive quad that only the camera
 //!   and hemisphere-sampling rays see; sampling both would count that light twice).
 
@@ -141,8 +141,8 @@ pub enum Seen {
     /// The ray left the scene.
     Miss,
     /// The ray's closest hit at distance `t`; `emitter`: the hit is an emissive triangle,
-    /// with its emission and geometric normal.
-    Hit { t: f32, emitter: Option<(Vec3, Vec3)> },
+    /// with its emission, geometric normal and index in the mesh.
+    Hit { t: f32, emitter: Option<(Vec3, Vec3, u32)> },
 }
 
 impl SampledLight {
@@ -204,9 +204,9 @@ impl SampledLight {
                 Seen::Hit { .. } => None,
             },
             SampledLight::Emissive(ref e) => match seen {
-                Seen::Hit { t, emitter: Some((emission, ng)) } => {
+                Seen::Hit { t, emitter: Some((emission, ng, prim)) } => {
                     let cos = wi.dot(ng).abs();
-                    let pdf = t * t / (cos * e.total_area());
+                    let pdf = t * t * e.area_density(prim) / cos;
                     (cos > 0.0 && pdf.is_finite()).then_some((emission, pdf))
                 }
                 _ => None,

@@ -103,13 +103,13 @@ fn gltf_errors_name_the_real_cause() {
     let e = err("old.gltf", r#"{"asset":{"version":"1.0"},"meshes":{"m":{}}}"#);
     assert!(e.contains("glTF version '1.0' is not supported; convert the file to glTF 2.0"), "{e}");
     let e = err(
-        "draco.gltf",
+        "meshopt.gltf",
         &gltf_doc(
             "2.0",
-            r#""extensionsUsed":["KHR_draco_mesh_compression"],"extensionsRequired":["KHR_draco_mesh_compression"],"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}],"#,
+            r#""extensionsUsed":["EXT_meshopt_compression"],"extensionsRequired":["EXT_meshopt_compression"],"meshes":[{"primitives":[{"attributes":{"POSITION":7}}]}],"#,
         ),
     );
-    assert!(e.contains("requires KHR_draco_mesh_compression, which wavepath does not support"), "{e}");
+    assert!(e.contains("requires EXT_meshopt_compression, which wavepath does not support"), "{e}");
     // A triangle and many line primitives: the lines are skipped with one warning, counted.
     let lines = vec![r#"{"attributes":{"POSITION":0},"mode":1}"#; 40].join(",");
     let mesh = format!(

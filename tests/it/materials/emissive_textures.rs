@@ -104,3 +104,67 @@ fn the_camera_sees_factor_times_texel() {
     }
     assert!(red > 20 && black > 20, "{red} red, {black} black pixels");
 }
+
+/// Emitters of equal area seen from one point: plain radiance 1, plain radiance 9, and two
+/// under a texture (white, black; factor 4) whose uvs fall inside its white texel and its
+/// black one. Light samples land on each in proportion to its power, 1 : 9 : 4 : 0
+/// (binomial bounds, false failures below 1e-6), and the density a sample reports equals
+/// the one MIS evaluates for a ray that hits the same point.
+#[test]
+fn emissive_triangles_are_drawn_in_proportion_to_their_power() {
+    use wavepath::lights::{SampledLight, Seen};
+    let mut mesh = Mesh::default();
+    // Four triangles in the plane y = 1, facing down; x offsets 0, 2, 4, 6.
+    for k in 0..4 {
+        let x = 2.0 * k as f32;
+        let base = mesh.positions.len() as u32;
+        mesh.positions.extend([vec3(x, 1.0, 0.0), vec3(x, 1.0, 1.0), vec3(x + 1.0, 1.0, 0.0)]);
+        mesh.triangles.push([base, base + 1, base + 2]);
+        mesh.material_ids.push(k.min(2));
+    }
+    let (lo, hi) = (0.1, 0.4);
+    let uv = |u0: f32| [Vec2::new(u0, 0.0), Vec2::new(u0, 1.0), Vec2::new(u0 + hi - lo, 0.0)];
+    mesh.uvs = Some([uv(lo), uv(lo), uv(lo), uv(1.0 - hi)].concat());
+    let white = Vec3::ONE;
+    let image = TextureImage { width: 2, height: 1, texels: vec![white, Vec3::ZERO] };
+    let texture = Texture {
+        path: "half.png".into(),
+        image: Some(Arc::new(image)),
+        wrap: [Wrap::ClampToEdge; 2],
+        filter: Filter::Nearest,
+        flip_v: false,
+        factor: Vec3::splat(4.0),
+        transform: glam::Affine2::IDENTITY,
+    };
+    let materials = vec![
+        Material::emitter("one", Vec3::ONE),
+        Material::emitter("nine", Vec3::splat(9.0)),
+        Material { emission_texture: Some(texture), ..Material::emitter("textured", Vec3::splat(4.0)) },
+    ];
+    let scene = Scene { mesh, materials, ..Scene::default() };
+    let e = EmissiveTriangles::new(&scene).expect("emitters");
+    assert_eq!(e.len(), 3, "the triangle on black texels is left out");
+    let light = SampledLight::Emissive(e);
+    let p = vec3(2.5, 0.0, 0.3);
+    let n = Vec3::Y;
+    let mut counts = [0usize; 4];
+    let mut r = wavepath::sampling::Sampler::for_sample(11, 0, 0);
+    let total = 300_000;
+    for _ in 0..total {
+        let u = [r.next_f32(), r.next_f32(), r.next_f32()];
+        let Some((ls, pdf)) = light.sample_pdf(p, n, u) else { continue };
+        let q = ls.target.expect("a point on the emitter");
+        let k = (q.x / 2.0).floor() as usize;
+        counts[k] += 1;
+        let emission = ls.weight * pdf;
+        let seen = Seen::Hit { t: q.distance(p), emitter: Some((emission, -Vec3::Y, k as u32)) };
+        let (_, pdf_hit) = light.radiance_pdf(p, n, ls.wi, seen).expect("the ray reaches the emitter");
+        assert!((pdf_hit - pdf).abs() <= 1e-3 * pdf, "sampled density {pdf}, evaluated {pdf_hit}");
+    }
+    assert_eq!(counts[3], 0);
+    for (k, share) in [1.0 / 14.0, 9.0 / 14.0, 4.0 / 14.0].into_iter().enumerate() {
+        let sd = (total as f64 * share * (1.0 - share)).sqrt();
+        let z = (counts[k] as f64 - total as f64 * share) / sd;
+        assert!(z.abs() < 5.3, "emitter {k}: {} samples, expected {:.0} (z = {z:.2})", counts[k], total as f64 * share);
+    }
+}
