@@ -34,6 +34,22 @@ pub enum Command {
     Merge(MergeArgs),
     /// What accuracy costs in time: sweep a setting, measure time and error vs a reference.
     Study(crate::cli::study_cmd::StudyArgs),
+    /// Subdivide a mesh at its edges' midpoints into a binary PLY (the same surface, 4^N
+    /// times the triangles): large test meshes from any scene file.
+    Subdivide(SubdivideArgs),
+}
+
+#[derive(Args, Debug)]
+pub struct SubdivideArgs {
+    /// Scene file whose mesh is subdivided (materials, lights and spheres are dropped).
+    #[arg(value_name = "MESH")]
+    pub input: PathBuf,
+    /// Output file (.ply, binary little endian).
+    #[arg(value_name = "OUT")]
+    pub output: PathBuf,
+    /// Levels: each multiplies the triangles by 4.
+    #[arg(short = 'n', value_name = "LEVELS", value_parser = clap::value_parser!(u32).range(1..=12))]
+    pub levels: u32,
 }
 
 #[derive(Args, Debug)]

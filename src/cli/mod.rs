@@ -10,8 +10,9 @@ mod rays_cmd;
 mod render_cmd;
 mod settings_from_args;
 pub mod study_cmd;
+mod subdivide_cmd;
 
-pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs};
+pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs, SubdivideArgs};
 
 use clap::Parser;
 
@@ -38,6 +39,7 @@ pub fn main() -> i32 {
         Some(Command::Rays(RaysCommand::Trace(a))) => rays_cmd::run_trace(a),
         Some(Command::Merge(a)) => merge_cmd::run(a),
         Some(Command::Study(a)) => study_cmd::run(a),
+        Some(Command::Subdivide(a)) => subdivide_cmd::run(a),
         None if cli.render.part.is_some() => part_cmd::run(&cli.render),
         None => render_cmd::run(&cli.render),
     };

@@ -56,7 +56,7 @@ impl Mesh {
     /// Checks index ranges, array lengths and finiteness.
     pub fn validate(&self, material_count: usize) -> Result<(), String> {
         let n = self.positions.len();
-        if let Some(i) = self.positions.iter().position(|p| !p.is_finite()) {
+        if let Some(i) = first_bad(&self.positions, |p| !p.is_finite()) {
             return Err(format!("vertex {i} has a non-finite coordinate"));
         }
         if let Some(normals) = &self.normals {
@@ -86,12 +86,12 @@ impl Mesh {
         if self.material_ids.len() != self.triangles.len() {
             return Err(format!("{} material ids for {} triangles", self.material_ids.len(), self.triangles.len()));
         }
-        for (i, t) in self.triangles.iter().enumerate() {
-            if let Some(&bad) = t.iter().find(|&&v| v as usize >= n) {
-                return Err(format!("triangle {i} uses vertex {bad}, but there are only {n}"));
-            }
+        if let Some(i) = first_bad(&self.triangles, |t| t.iter().any(|&v| v as usize >= n)) {
+            let bad = self.triangles[i].iter().find(|&&v| v as usize >= n).copied().unwrap_or_default();
+            return Err(format!("triangle {i} uses vertex {bad}, but there are only {n}"));
         }
-        if let Some(&m) = self.material_ids.iter().find(|&&m| m as usize >= material_count) {
+        if let Some(m) = first_bad(&self.material_ids, |&m| m as usize >= material_count).map(|i| self.material_ids[i])
+        {
             return Err(format!("a triangle uses material {m}, but there are only {material_count}"));
         }
         Ok(())
@@ -109,4 +109,13 @@ fn merge_attr<T: Copy>(mine: &mut Option<Vec<T>>, theirs: Option<Vec<T>>, had: u
         }
         (None, None) => {}
     }
+}
+
+/// Index of the first element of `v` for which `bad` holds, scanned in parallel chunks (a
+/// scanned mesh has tens of millions of vertices and triangles; per-element parallel
+/// searches cost more than the test).
+pub fn first_bad<T: Sync>(v: &[T], bad: impl Fn(&T) -> bool + Sync) -> Option<usize> {
+    use rayon::prelude::*;
+    const CHUNK: usize = 1 << 16;
+    v.par_chunks(CHUNK).enumerate().find_map_first(|(k, c)| c.iter().position(&bad).map(|j| k * CHUNK + j))
 }

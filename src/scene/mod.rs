@@ -10,6 +10,7 @@ pub mod envmap;
 mod material;
 mod mesh;
 mod normals;
+pub mod subdivide;
 pub mod surface;
 pub mod texture;
 
@@ -17,7 +18,7 @@ pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit};
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
 pub use envmap::EnvMap;
 pub use material::{Bsdf, Material, Texture};
-pub use mesh::{Mesh, Sphere};
+pub use mesh::{Mesh, Sphere, first_bad};
 pub use normals::{area_weighted_vertex_normals, cs184_vertex_normals};
 pub use surface::SurfacePoint;
 pub use texture::Textures;
@@ -93,17 +94,21 @@ pub struct Scene {
 impl Scene {
     /// Axis-aligned bounds of all geometry (triangles and spheres); `None` when there is none.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
-        let mut lo = Vec3::splat(f32::INFINITY);
-        let mut hi = Vec3::splat(f32::NEG_INFINITY);
-        let mut any = false;
-        for tri in &self.mesh.triangles {
-            for &i in tri {
-                let p = self.mesh.positions[i as usize];
-                lo = lo.min(p);
-                hi = hi.max(p);
-                any = true;
-            }
-        }
+        use rayon::prelude::*;
+        let empty = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        // Parallel over chunks of triangles: only vertices that triangles use count.
+        let (mut lo, mut hi) = self
+            .mesh
+            .triangles
+            .par_chunks(1 << 16)
+            .map(|c| {
+                c.iter().flatten().fold(empty, |(lo, hi), &i| {
+                    let p = self.mesh.positions[i as usize];
+                    (lo.min(p), hi.max(p))
+                })
+            })
+            .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1)));
+        let mut any = !self.mesh.triangles.is_empty();
         for s in &self.spheres {
             lo = lo.min(s.center - Vec3::splat(s.radius));
             hi = hi.max(s.center + Vec3::splat(s.radius));

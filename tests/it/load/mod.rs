@@ -8,3 +8,4 @@ mod formats_agree;
 mod gltf_materials;
 mod mesh_loaders;
 mod other_tools;
+mod ply_bulk;

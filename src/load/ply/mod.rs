@@ -6,6 +6,11 @@
 //! so a header that promises more data than the file holds is an error, not a long loop or
 //! a large allocation.
 
+mod bulk;
+mod write;
+
+pub use write::write_binary;
+
 use crate::scene::{Material, Mesh, Scene};
 use anyhow::{Context, Result, anyhow};
 use glam::{Vec2, Vec3};
@@ -18,11 +23,30 @@ use std::path::Path;
 
 pub fn load(path: &Path) -> Result<Scene> {
     let shown = path.display();
-    let bytes = std::fs::read(path).with_context(|| format!("{shown}: cannot read"))?;
+    let bytes = read_parallel(path).with_context(|| format!("{shown}: cannot read"))?;
     let mesh = parse(&bytes).map_err(|e| anyhow!("{shown}: {e}"))?;
     let mut scene = Scene { mesh, materials: vec![Material::default()], ..Scene::default() };
     super::finish_mesh_only(&mut scene, false);
     Ok(scene)
+}
+
+/// The whole file, read by all threads at once: each chunk's page faults and copy from the
+/// page cache run in parallel, about twice as fast as one `read` on two cores for the
+/// half-gigabyte scans this format carries.
+fn read_parallel(path: &Path) -> std::io::Result<Vec<u8>> {
+    #[cfg(unix)]
+    {
+        use rayon::prelude::*;
+        use std::os::unix::fs::FileExt;
+        let file = std::fs::File::open(path)?;
+        let len = usize::try_from(file.metadata()?.len()).map_err(std::io::Error::other)?;
+        let mut bytes = vec![0u8; len];
+        const CHUNK: usize = 8 << 20;
+        bytes.par_chunks_mut(CHUNK).enumerate().try_for_each(|(k, c)| file.read_exact_at(c, (k * CHUNK) as u64))?;
+        Ok(bytes)
+    }
+    #[cfg(not(unix))]
+    std::fs::read(path)
 }
 
 /// Parses a whole PLY file held in memory.
@@ -35,9 +59,17 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
         Some((line, text, _)) => format!("header line {line}: '{text}' is not a valid header line"),
         None => format!("bad header: {}", one_line(&e.to_string())),
     })?;
-    let payload_len = bytes.len().saturating_sub(header_len(bytes)?);
-    check_counts(&header, payload_len)?;
+    let payload = &bytes[header_len(bytes)?..];
+    check_counts(&header, payload.len())?;
+    if let Some(mesh) = bulk::parse(&header, payload) {
+        return mesh;
+    }
+    parse_general(&header, &mut reader)
+}
 
+/// The general parser (ply-rs-bw, element by element): ascii files, polygons, and layouts
+/// the bulk reader declines. `reader` stands at the payload.
+fn parse_general(header: &Header, reader: &mut Reader<Cursor<&[u8]>>) -> Result<Mesh, String> {
     let mut verts: Vec<Vertex> = Vec::new();
     let mut faces: Vec<Face> = Vec::new();
     for (name, def) in &header.elements {
@@ -49,14 +81,10 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
             None => format!("element '{name}': {}", one_line(&e.to_string())),
         };
         match name.as_str() {
-            "vertex" => {
-                verts = Parser::<Vertex>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?
-            }
-            "face" => {
-                faces = Parser::<Face>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?
-            }
+            "vertex" => verts = Parser::<Vertex>::new().read_payload_for_element(reader, def, header).map_err(what)?,
+            "face" => faces = Parser::<Face>::new().read_payload_for_element(reader, def, header).map_err(what)?,
             _ => {
-                Parser::<Skip>::new().read_payload_for_element(&mut reader, def, &header).map_err(what)?;
+                Parser::<Skip>::new().read_payload_for_element(reader, def, header).map_err(what)?;
             }
         }
     }
@@ -66,7 +94,7 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
             return Err(format!("vertex has no property '{axis}'"));
         }
     }
-    build(&header, verts, faces)
+    build(header, verts, faces)
 }
 
 fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, String> {

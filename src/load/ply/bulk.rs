@@ -1,0 +1,287 @@
+//! Binary PLY read in bulk: the layout the header declares turned into fixed strides and
+//! offsets, and every vertex and face converted in parallel straight from the file's bytes,
+//! with no per-element allocation. It takes the files scanners and converters write (vertex
+//! properties all scalars; triangle faces whose only list is the vertex indices; other
+//! elements of scalars); for any other layout it declines and the general parser reads the
+//! file.
+
+use crate::scene::Mesh;
+use glam::{Vec2, Vec3};
+use ply_rs_bw::ply::{ElementDef, Encoding, Header, PropertyType, ScalarType};
+use rayon::prelude::*;
+
+/// Elements converted per parallel task.
+const CHUNK: usize = 1 << 16;
+
+/// A scalar type, copyable (ply-rs-bw's is not).
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Ty {
+    I8,
+    U8,
+    I16,
+    U16,
+    I32,
+    U32,
+    F32,
+    F64,
+}
+
+impl Ty {
+    fn of(t: &ScalarType) -> Ty {
+        match t {
+            ScalarType::Char => Ty::I8,
+            ScalarType::UChar => Ty::U8,
+            ScalarType::Short => Ty::I16,
+            ScalarType::UShort => Ty::U16,
+            ScalarType::Int => Ty::I32,
+            ScalarType::UInt => Ty::U32,
+            ScalarType::Float => Ty::F32,
+            ScalarType::Double => Ty::F64,
+        }
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Ty::I8 | Ty::U8 => 1,
+            Ty::I16 | Ty::U16 => 2,
+            Ty::I32 | Ty::U32 | Ty::F32 => 4,
+            Ty::F64 => 8,
+        }
+    }
+}
+
+/// A scalar property's place in its element and how to read it.
+#[derive(Clone, Copy)]
+struct Field {
+    offset: usize,
+    ty: Ty,
+}
+
+/// Reads one scalar as f32 (`big`: big-endian).
+#[inline(always)]
+fn read(b: &[u8], f: Field, big: bool) -> f32 {
+    let at = &b[f.offset..];
+    macro_rules! num {
+        ($t:ty, $n:expr) => {{
+            let mut a = [0u8; $n];
+            a.copy_from_slice(&at[..$n]);
+            (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f32
+        }};
+    }
+    match f.ty {
+        Ty::I8 => at[0] as i8 as f32,
+        Ty::U8 => at[0] as f32,
+        Ty::I16 => num!(i16, 2),
+        Ty::U16 => num!(u16, 2),
+        Ty::I32 => num!(i32, 4),
+        Ty::U32 => num!(u32, 4),
+        Ty::F32 => num!(f32, 4),
+        Ty::F64 => num!(f64, 8),
+    }
+}
+
+/// One vertex index as i64 (negative values are errors later).
+#[inline(always)]
+fn read_index(b: &[u8], ty: Ty, big: bool) -> i64 {
+    macro_rules! num {
+        ($t:ty, $n:expr) => {{
+            let mut a = [0u8; $n];
+            a.copy_from_slice(&b[..$n]);
+            (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as i64
+        }};
+    }
+    match ty {
+        Ty::I8 => b[0] as i8 as i64,
+        Ty::U8 => b[0] as i64,
+        Ty::I16 => num!(i16, 2),
+        Ty::U16 => num!(u16, 2),
+        Ty::I32 => num!(i32, 4),
+        Ty::U32 => num!(u32, 4),
+        // Float indices: the general parser refuses them.
+        Ty::F32 | Ty::F64 => -1,
+    }
+}
+
+/// Bytes of an element made of scalars only, and each property's field; `None` when it has a
+/// list.
+fn scalar_layout(def: &ElementDef) -> Option<(usize, Vec<(&str, Field)>)> {
+    let mut offset = 0;
+    let mut fields = Vec::new();
+    for (name, p) in &def.properties {
+        let PropertyType::Scalar(ty) = &p.data_type else { return None };
+        let ty = Ty::of(ty);
+        fields.push((name.as_str(), Field { offset, ty }));
+        offset += ty.size();
+    }
+    Some((offset, fields))
+}
+
+/// The triangle faces' layout: bytes per face, the count field, the first index's offset
+/// and the index type; `None` unless the element's one list is `vertex_indices` (or
+/// `vertex_index`) and the rest are scalars.
+fn face_layout(def: &ElementDef) -> Option<(usize, Field, usize, Ty)> {
+    let mut offset = 0;
+    let mut list = None;
+    for (name, p) in &def.properties {
+        match &p.data_type {
+            PropertyType::Scalar(ty) => offset += Ty::of(ty).size(),
+            PropertyType::List(count, index) => {
+                let (count, index) = (Ty::of(count), Ty::of(index));
+                if list.is_some() || (name != "vertex_indices" && name != "vertex_index") {
+                    return None;
+                }
+                if matches!(count, Ty::F32 | Ty::F64) || matches!(index, Ty::F32 | Ty::F64) {
+                    return None;
+                }
+                list = Some((Field { offset, ty: count }, index));
+                offset += count.size() + 3 * index.size();
+            }
+        }
+    }
+    let (count, index) = list?;
+    let first = count.offset + count.ty.size();
+    Some((offset, count, first, index))
+}
+
+/// The mesh of a binary PLY whose payload (the bytes after `end_header`) is `payload`, or
+/// `None` when the layout is not one this reader takes (including faces that are not all
+/// triangles): then the general parser reads the file.
+pub fn parse(header: &Header, payload: &[u8]) -> Option<Result<Mesh, String>> {
+    let big = match header.encoding {
+        Encoding::BinaryLittleEndian => false,
+        Encoding::BinaryBigEndian => true,
+        Encoding::Ascii => return None,
+    };
+    let mut offset = 0usize;
+    let mut vertices = None;
+    let mut faces = None;
+    for (name, def) in &header.elements {
+        let size = match name.as_str() {
+            "face" => {
+                let (stride, count, first, index) = face_layout(def)?;
+                faces = Some((offset, def.count, stride, count, first, index));
+                stride
+            }
+            _ => {
+                let (stride, fields) = scalar_layout(def)?;
+                if name == "vertex" {
+                    vertices = Some((offset, def.count, stride, fields));
+                }
+                stride
+            }
+        };
+        offset = offset.checked_add(size.checked_mul(def.count)?)?;
+        if offset > payload.len() {
+            return None;
+        }
+    }
+    let (v_at, n, v_stride, fields) = vertices?;
+    let (f_at, nf, f_stride, count, first, index) = faces?;
+    let field = |names: &[&str]| fields.iter().find(|(n, _)| names.contains(n)).map(|&(_, f)| f);
+    let (x, y, z) = (field(&["x"])?, field(&["y"])?, field(&["z"])?);
+    let vbytes = &payload[v_at..v_at + n * v_stride];
+    let fbytes = &payload[f_at..f_at + nf * f_stride];
+    // Every face a triangle, or the general parser triangulates.
+    let triangles_only =
+        fbytes.par_chunks(f_stride * CHUNK).all(|c| c.chunks_exact(f_stride).all(|f| read(f, count, big) == 3.0));
+    if !triangles_only {
+        return None;
+    }
+    Some(convert(vbytes, v_stride, [x, y, z], &field, fbytes, f_stride, first, index, big))
+}
+
+#[allow(clippy::too_many_arguments)]
+fn convert(
+    vbytes: &[u8],
+    v_stride: usize,
+    [x, y, z]: [Field; 3],
+    field: &dyn Fn(&[&str]) -> Option<Field>,
+    fbytes: &[u8],
+    f_stride: usize,
+    first: usize,
+    index: Ty,
+    big: bool,
+) -> Result<Mesh, String> {
+    let n = vbytes.len() / v_stride.max(1);
+    let vec3s = |[a, b, c]: [Field; 3]| -> Vec<Vec3> {
+        let mut out = vec![Vec3::ZERO; n];
+        out.par_chunks_mut(CHUNK).zip(vbytes.par_chunks(v_stride * CHUNK)).for_each(|(o, src)| {
+            for (p, v) in o.iter_mut().zip(src.chunks_exact(v_stride)) {
+                *p = Vec3::new(read(v, a, big), read(v, b, big), read(v, c, big));
+            }
+        });
+        out
+    };
+    let positions = vec3s([x, y, z]);
+    if let Some(i) = crate::scene::first_bad(&positions, |p| !p.is_finite()) {
+        return Err(format!("vertex {i} has a NaN or infinite coordinate"));
+    }
+    let normals = match (field(&["nx"]), field(&["ny"]), field(&["nz"])) {
+        (Some(a), Some(b), Some(c)) => Some(vec3s([a, b, c])),
+        _ => None,
+    };
+    let uv =
+        [["u", "v"], ["s", "t"], ["texture_u", "texture_v"]].iter().find_map(|[a, b]| field(&[a]).zip(field(&[b])));
+    let uvs = uv.map(|(a, b)| {
+        let mut out = vec![Vec2::ZERO; n];
+        out.par_chunks_mut(CHUNK).zip(vbytes.par_chunks(v_stride * CHUNK)).for_each(|(o, src)| {
+            for (t, v) in o.iter_mut().zip(src.chunks_exact(v_stride)) {
+                *t = Vec2::new(read(v, a, big), read(v, b, big));
+            }
+        });
+        out
+    });
+    let colors = match (field(&["red"]), field(&["green"]), field(&["blue"])) {
+        (Some(r), Some(g), Some(b)) => {
+            // Bytes are sRGB (as scanners write them), floats linear as written; other types
+            // are not colours the general parser reads either.
+            let lut: Vec<f32> = (0..256).map(|i| crate::scene::texture::srgb_to_linear(i as f32 / 255.0)).collect();
+            let channel = |f: Field, v: &[u8]| match f.ty {
+                Ty::U8 => lut[v[f.offset] as usize],
+                Ty::F32 | Ty::F64 => read(v, f, big),
+                _ => 0.0,
+            };
+            let mut out = vec![Vec3::ZERO; n];
+            out.par_chunks_mut(CHUNK).zip(vbytes.par_chunks(v_stride * CHUNK)).for_each(|(o, src)| {
+                for (c, v) in o.iter_mut().zip(src.chunks_exact(v_stride)) {
+                    *c = Vec3::new(channel(r, v), channel(g, v), channel(b, v));
+                }
+            });
+            Some(out)
+        }
+        _ => None,
+    };
+    let nf = fbytes.len() / f_stride.max(1);
+    let isize = index.size();
+    let mut triangles = vec![[0u32; 3]; nf];
+    // Per chunk: the first bad face, if any (negative or out-of-range index).
+    let bad = triangles
+        .par_chunks_mut(CHUNK)
+        .zip(fbytes.par_chunks(f_stride * CHUNK))
+        .enumerate()
+        .filter_map(|(k, (o, src))| {
+            for (j, (t, f)) in o.iter_mut().zip(src.chunks_exact(f_stride)).enumerate() {
+                for (c, slot) in t.iter_mut().enumerate() {
+                    let i = read_index(&f[first + c * isize..], index, big);
+                    if i < 0 || i as u64 >= n as u64 {
+                        return Some((k * CHUNK + j, i));
+                    }
+                    *slot = i as u32;
+                }
+            }
+            None
+        })
+        .min_by_key(|&(face, _)| face);
+    if let Some((face, i)) = bad {
+        return Err(if i < 0 {
+            format!("face {face}: negative vertex index")
+        } else {
+            format!("face {face} uses vertex {i}, but there are only {n}")
+        });
+    }
+    if triangles.is_empty() {
+        return Err("no faces".into());
+    }
+    let material_ids = vec![0; triangles.len()];
+    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
+}
