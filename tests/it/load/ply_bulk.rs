@@ -7,7 +7,7 @@
 use crate::common::{Xorshift, run_wavepath, temp_dir};
 use glam::Vec3;
 use std::collections::HashSet;
-use wavepath::load::ply::{parse, write_binary};
+use wavepath::load::ply::parse;
 use wavepath::scene::Mesh;
 
 /// One property: name, PLY type, and how to get its value for vertex `i`.
@@ -24,16 +24,6 @@ struct Layout {
     count_ty: &'static str,
     index_ty: &'static str,
     face_flag: bool,
-}
-
-fn size(ty: &str) -> usize {
-    match ty {
-        "char" | "uchar" => 1,
-        "short" | "ushort" => 2,
-        "int" | "uint" | "float" => 4,
-        "double" => 8,
-        _ => unreachable!("{ty}"),
-    }
 }
 
 /// `v` as PLY type `ty`, in the byte order asked.
@@ -73,7 +63,7 @@ fn write(l: &Layout, values: &[Vec<f64>], faces: &[Vec<i64>], format: &str) -> V
     let mut out = h.into_bytes();
     let ascii = format == "ascii";
     let big = format == "binary_big_endian";
-    let mut put = |out: &mut Vec<u8>, v: f64, ty: &str| {
+    let put = |out: &mut Vec<u8>, v: f64, ty: &str| {
         if ascii {
             let text = if matches!(ty, "float") {
                 format!("{} ", v as f32)
@@ -311,5 +301,4 @@ fn subdivide_command_writes_meshes_that_read_back_exactly() {
         let err = String::from_utf8_lossy(&o.stderr);
         assert!(!o.status.success() && err.contains(needle) && err.trim().lines().count() == 1, "{err}");
     }
-    let _ = write_binary;
 }
