@@ -3,7 +3,7 @@
 //! The top levels split in parallel (`rayon::join`); each parallel subtree builds into its
 //! own array, which the parent appends to its own with the child indices shifted, so the
 //! result is still one flat array with the root at 0 and no pointer per node.
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// Most primitives in one leaf (the wide leaves keep this bound).
 pub const MAX_LEAF: usize = 4;
@@ -56,7 +56,10 @@ pub fn area(lo: Vec3, hi: Vec3) -> f32 {
     2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
 }
 
-fn bounds(refs: &[PrimRef]) -> (Vec3, Vec3, Vec3, Vec3) {
+/// A node's box and the box of its primitives' centroids.
+type Bounds = (Vec3, Vec3, Vec3, Vec3);
+
+fn bounds(refs: &[PrimRef]) -> Bounds {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     let (mut clo, mut chi) = (lo, hi);
     for r in refs {
@@ -71,23 +74,25 @@ fn bounds(refs: &[PrimRef]) -> (Vec3, Vec3, Vec3, Vec3) {
 
 /// Builds the tree over `refs`, reordering them into leaf order.
 pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
-    build_par(refs, 0, 0)
+    let b = bounds(refs);
+    build_par(refs, b, 0, 0)
 }
 
-fn build_par(refs: &mut [PrimRef], base: usize, depth: usize) -> Vec<Node2> {
+/// `b`: the bounds of `refs` (known from the parent's bins, so no pass computes them).
+fn build_par(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize) -> Vec<Node2> {
     if refs.len() < PARALLEL_MIN {
         let mut out = Vec::with_capacity(2 * refs.len() / MAX_LEAF + 1);
-        build_seq(refs, base, depth, &mut out);
+        build_seq(refs, b, base, depth, &mut out);
         return out;
     }
-    let (lo, hi, clo, chi) = bounds(refs);
-    let Some(mid) = split(refs, lo, hi, clo, chi, depth) else {
+    let (lo, hi, _, _) = b;
+    let Some((mid, lb, rb)) = split(refs, b, depth) else {
         let mut out = Vec::new();
-        build_seq(refs, base, depth, &mut out);
+        build_seq(refs, b, base, depth, &mut out);
         return out;
     };
     let (l, r) = refs.split_at_mut(mid);
-    let (left, right) = rayon::join(|| build_par(l, base, depth + 1), || build_par(r, base + mid, depth + 1));
+    let (left, right) = rayon::join(|| build_par(l, lb, base, depth + 1), || build_par(r, rb, base + mid, depth + 1));
     let mut out = Vec::with_capacity(1 + left.len() + right.len());
     let lofs = 1u32;
     let rofs = 1 + left.len() as u32;
@@ -104,21 +109,72 @@ fn build_par(refs: &mut [PrimRef], base: usize, depth: usize) -> Vec<Node2> {
     out
 }
 
-fn build_seq(refs: &mut [PrimRef], base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
-    let (lo, hi, clo, chi) = bounds(refs);
+fn build_seq(refs: &mut [PrimRef], bnd: Bounds, base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
+    let (lo, hi, _, _) = bnd;
     let me = out.len() as u32;
     out.push(Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 });
-    if let Some(mid) = split(refs, lo, hi, clo, chi, depth) {
+    if let Some((mid, lb, rb)) = split(refs, bnd, depth) {
         let (l, r) = refs.split_at_mut(mid);
-        let a = build_seq(l, base, depth + 1, out);
-        let b = build_seq(r, base + mid, depth + 1, out);
+        let a = build_seq(l, lb, base, depth + 1, out);
+        let b = build_seq(r, rb, base + mid, depth + 1, out);
         out[me as usize] = Node2 { lo, hi, a, b, count: 0 };
     }
     me
 }
 
-/// Chooses a split and partitions `refs` around it; None makes a leaf.
-fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: usize) -> Option<usize> {
+/// Per axis and bin: primitive count, box and centroid box, gathered in one pass over the
+/// primitives (SIMD boxes: one min and one max per box per primitive).
+struct Bins {
+    cnt: [[u32; BINS]; 3],
+    lo: [[Vec3A; BINS]; 3],
+    hi: [[Vec3A; BINS]; 3],
+    clo: [[Vec3A; BINS]; 3],
+    chi: [[Vec3A; BINS]; 3],
+}
+
+impl Bins {
+    fn gather(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> Bins {
+        let (inf, ninf) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        let mut b = Bins {
+            cnt: [[0; BINS]; 3],
+            lo: [[inf; BINS]; 3],
+            hi: [[ninf; BINS]; 3],
+            clo: [[inf; BINS]; 3],
+            chi: [[ninf; BINS]; 3],
+        };
+        for r in refs {
+            let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
+            let c = 0.5 * (lo + hi);
+            for ax in 0..3 {
+                let k = bin_of(c[ax], clo[ax], scale[ax]);
+                b.cnt[ax][k] += 1;
+                b.lo[ax][k] = b.lo[ax][k].min(lo);
+                b.hi[ax][k] = b.hi[ax][k].max(hi);
+                b.clo[ax][k] = b.clo[ax][k].min(c);
+                b.chi[ax][k] = b.chi[ax][k].max(c);
+            }
+        }
+        b
+    }
+
+    /// Bounds of the primitives in bins `range` of axis `ax`.
+    fn union(&self, ax: usize, range: std::ops::Range<usize>) -> Bounds {
+        let (inf, ninf) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        let (mut lo, mut hi, mut clo, mut chi) = (inf, ninf, inf, ninf);
+        for k in range {
+            lo = lo.min(self.lo[ax][k]);
+            hi = hi.max(self.hi[ax][k]);
+            clo = clo.min(self.clo[ax][k]);
+            chi = chi.max(self.chi[ax][k]);
+        }
+        (lo.into(), hi.into(), clo.into(), chi.into())
+    }
+}
+
+/// Chooses a split and partitions `refs` around it: the split point and the two sides'
+/// bounds; None makes a leaf.
+fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds, Bounds)> {
+    let (lo, hi, clo, chi) = b;
     let n = refs.len();
     // A leaf of up to MAX_LEAF triangles is one SIMD block: testing it costs about what a
     // single triangle does, and splitting it only adds nodes (and cache lines) to visit.
@@ -130,41 +186,38 @@ fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: 
     let one_block = n <= MAX_LEAF && !refs.iter().any(|r| r.sphere);
     let ext = chi - clo;
     let axis = ext.max_position();
+    let median = |refs: &mut [PrimRef]| {
+        let mid = n / 2;
+        refs.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
+        let (l, r) = refs.split_at(mid);
+        Some((mid, bounds(l), bounds(r)))
+    };
     if ext[axis] <= 0.0 || depth >= SAH_MAX_DEPTH {
         // All centroids coincide (or the tree is already deep): a leaf if allowed, else an
         // object-median split, which halves the count and so bounds the depth.
         if n <= MAX_LEAF {
             return None;
         }
-        let mid = n / 2;
-        refs.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
-        return Some(mid);
+        return median(refs);
     }
+    let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
+    let bins = Bins::gather(refs, clo, scale);
     let mut best = (f32::INFINITY, 0usize, 0usize); // cost, axis, bin
     for ax in 0..3 {
         if ext[ax] <= 0.0 {
             continue;
         }
-        let scale = BINS as f32 / ext[ax];
-        let mut cnt = [0u32; BINS];
-        let mut blo = [Vec3::splat(f32::INFINITY); BINS];
-        let mut bhi = [Vec3::splat(f32::NEG_INFINITY); BINS];
-        for r in refs.iter() {
-            let b = bin_of(r.centroid()[ax], clo[ax], scale);
-            cnt[b] += 1;
-            blo[b] = blo[b].min(r.lo);
-            bhi[b] = bhi[b].max(r.hi);
-        }
+        let (cnt, blo, bhi) = (&bins.cnt[ax], &bins.lo[ax], &bins.hi[ax]);
         // Right-to-left sweep: cost of the right side for each split position.
         let mut right_cost = [0f32; BINS];
-        let (mut l, mut h, mut c) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY), 0u32);
+        let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
         for i in (1..BINS).rev() {
             l = l.min(blo[i]);
             h = h.max(bhi[i]);
             c += cnt[i];
-            right_cost[i] = if c == 0 { 0.0 } else { area(l, h) * blocks(c) };
+            right_cost[i] = if c == 0 { 0.0 } else { area(l.into(), h.into()) * blocks(c) };
         }
-        let (mut l, mut h, mut c) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY), 0u32);
+        let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
         for i in 0..BINS - 1 {
             l = l.min(blo[i]);
             h = h.max(bhi[i]);
@@ -172,7 +225,7 @@ fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: 
             if c == 0 || c as usize == n {
                 continue;
             }
-            let cost = area(l, h) * blocks(c) + right_cost[i + 1];
+            let cost = area(l.into(), h.into()) * blocks(c) + right_cost[i + 1];
             if cost < best.0 {
                 best = (cost, ax, i + 1);
             }
@@ -193,23 +246,20 @@ fn split(refs: &mut [PrimRef], lo: Vec3, hi: Vec3, clo: Vec3, chi: Vec3, depth: 
     }
     if !best.0.is_finite() {
         // Every bin split left one side empty (tiny extent): fall back to the median.
-        let mid = n / 2;
-        refs.select_nth_unstable_by(mid, |a, b| a.centroid()[axis].total_cmp(&b.centroid()[axis]));
-        return Some(mid);
+        return median(refs);
     }
     let (ax, bin) = (best.1, best.2);
-    let scale = BINS as f32 / ext[ax];
     let mut i = 0;
     let mut j = n;
     while i < j {
-        if bin_of(refs[i].centroid()[ax], clo[ax], scale) < bin {
+        if bin_of(refs[i].centroid()[ax], clo[ax], scale[ax]) < bin {
             i += 1;
         } else {
             j -= 1;
             refs.swap(i, j);
         }
     }
-    Some(i)
+    Some((i, bins.union(ax, 0..bin), bins.union(ax, bin..BINS)))
 }
 
 /// SAH weight of `c` primitives: the leaf blocks of [`MAX_LEAF`] they fill (the SIMD filter

@@ -1,6 +1,7 @@
 //! Collapse of the binary tree into 8-wide nodes whose child boxes are stored lane by lane,
 //! so one 8-lane compare (or eight scalar ones) tests every child of a node.
 use super::build::{C_TRAV, MAX_LEAF, Node2, area};
+use rayon::prelude::*;
 
 pub const WIDTH: usize = 8;
 
@@ -62,7 +63,8 @@ impl Node8 {
     pub fn set_order(&mut self) {
         self.perm = [0; WIDTH];
         for q in 0..8u32 {
-            let key = |slot: usize| -> f32 {
+            // Keys once per slot, not per comparison.
+            let key: [f32; WIDTH] = std::array::from_fn(|slot| {
                 (0..3)
                     .map(|axis| {
                         let neg = q >> axis & 1 == 1;
@@ -70,9 +72,9 @@ impl Node8 {
                         if neg { -near } else { near }
                     })
                     .sum()
-            };
+            });
             let mut slots: [usize; WIDTH] = std::array::from_fn(|i| i);
-            slots.sort_by(|&a, &b| key(b).total_cmp(&key(a)).then(b.cmp(&a)));
+            slots.sort_unstable_by(|&a, &b| key[b].total_cmp(&key[a]).then(b.cmp(&a)));
             for (k, &slot) in slots.iter().enumerate() {
                 self.perm[k] |= (slot as u32) << (3 * q);
             }
@@ -102,7 +104,7 @@ pub fn collapse(bin: &[Node2]) -> Wide {
     } else {
         emit(bin, &Plan::new(bin, root_area), 0, &mut nodes, root_area, &mut cost)
     };
-    nodes.iter_mut().for_each(Node8::set_order);
+    nodes.par_iter_mut().for_each(Node8::set_order);
     Wide { nodes, depth, sah_cost: cost }
 }
 
