@@ -9,6 +9,10 @@ Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
   peers    ray throughput beside Embree, tinybvh and obvhs in ../shared/peers/run.sh, with
            wavepath as an EXTRA_PEER (`wavepath rays trace`); several passes, ratios per pass
   e2e      whole renders against Mitsuba 3 at equal error (../shared/peers/e2e/run.sh)
+  large    meshes at the size users have: Lucy subdivided (`wavepath subdivide`) to 1.6M and
+           6.4M triangles (25.6M with --large-levels 2,3,4): load, BVH build and peak memory
+           beside Embree's build (medium and high quality) on the same triangles, alternating
+           fresh processes
 
 The peers folder is copied to a scratch folder (--work) first: its scripts write build
 products beside themselves, and the shared copy must stay untouched.
@@ -46,6 +50,7 @@ RENDERS = [
 PEER_MESHES = ["meshes/lucy_100k.obj", "meshes/dragon_100k.obj"]
 PEERS = ["embree:robust", "embree:single", "tinybvh:bvh8", "obvhs:cwbvh"]
 STAGES = ["generate", "traverse", "shade", "shadow", "compact"]
+LARGE_SOURCE = "meshes/lucy_100k.obj"
 E2E_QUICK = "--scenes cornell-flush -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
 # Effects every global-illumination render of a lit scene has; the table lists the others.
 COMMON_EFFECTS = {"emission", "area-lights", "direct-light", "indirect", "russian-roulette"}
@@ -118,6 +123,121 @@ def stamp(part):
             f"{part['load_after']:.2f} after; {part['date']}; other processes used "
             f"{100 * part['busy_mean']:.0f}% of the CPUs on average during the runs "
             f"(max {100 * part['busy_max']:.0f}%).")
+
+
+# -------------------------------------------------------------------- large ----
+def peak_rss(cmd):
+    """Runs cmd under wait4: (stdout, peak resident bytes)."""
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    out = p.stdout.read()
+    _, status, ru = os.wait4(p.pid, 0)
+    p.returncode = os.waitstatus_to_exitcode(status)
+    if p.returncode != 0:
+        raise SystemExit(f"failed: {shlex.join(cmd)}")
+    return out.decode(), ru.ru_maxrss * 1024
+
+
+def ply_to_obj(src, dst):
+    """The subdivided binary PLY (float x y z; uchar int indices) as OBJ for the Embree peer,
+    floats printed exactly (%.9g)."""
+    import struct
+    with open(src, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:end].decode().split("\n")
+    nv = int(next(l for l in head if l.startswith("element vertex")).split()[2])
+    nf = int(next(l for l in head if l.startswith("element face")).split()[2])
+    with open(dst, "w", buffering=1 << 22) as o:
+        o.writelines("v %.9g %.9g %.9g\n" % p for p in struct.iter_unpack("<3f", data[end:end + 12 * nv]))
+        fb = data[end + 12 * nv:end + 12 * nv + 13 * nf]
+        o.writelines("f %d %d %d\n" % (a + 1, b + 1, c + 1) for _, a, b, c in struct.iter_unpack("<B3i", fb))
+
+
+def embree_peer(args, peers_dir, work):
+    """The peers harness's Embree program, compiled here (Debian's libembree-dev), or None."""
+    exe = os.path.join(work, "peer_embree")
+    src = os.path.join(peers_dir, "cpp", "peer_embree.cpp")
+    if os.access(exe, os.X_OK):
+        return exe
+    if not (os.path.exists(src) and os.path.exists("/usr/include/embree3/rtcore.h") and shutil.which("g++")):
+        log("large: no Embree peer (needs ../shared/peers, g++ and libembree-dev); wavepath alone")
+        return None
+    subprocess.run(["g++", "-O3", "-march=native", "-std=c++17", "-I", os.path.dirname(src), src, "-o", exe,
+                    "-lembree3", "-lpthread"], check=True)
+    return exe
+
+
+def part_large(args, scenes_dir, peers_dir):
+    work = os.path.join(args.work, "large")
+    os.makedirs(work, exist_ok=True)
+    source = os.path.join(scenes_dir, LARGE_SOURCE)
+    embree = embree_peer(args, peers_dir, work)
+    part = {"load_before": loadavg(), "date": now_utc(), "rows": [], "source": LARGE_SOURCE,
+            "embree": bool(embree)}
+    for level in args.large_levels:
+        ply = os.path.join(work, f"lucy_x{4 ** level}.ply")
+        if not os.path.exists(ply):
+            subprocess.run([args.bin, "subdivide", source, ply, "-n", str(level)], check=True,
+                           stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        rays = os.path.join(work, f"rays_x{4 ** level}.bin")
+        if not os.path.exists(rays):
+            subprocess.run([args.bin, "rays", "dump", "--kind", "primary", "--out", rays, "-r", "64", "48", ply],
+                           check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        obj = os.path.splitext(ply)[0] + ".obj"
+        if embree and not os.path.exists(obj):
+            ply_to_obj(ply, obj)
+        row = {"ply": ply, "bytes": os.path.getsize(ply), "runs": []}
+        for rnd in range(args.rounds):
+            wait_quiet(args.wait_quiet)
+            info = json.loads(peak_rss([args.bin, "info", "--json", ply])[0])
+            out, rss = peak_rss([args.bin, "rays", "trace", ply, rays, str(args.threads), "1"])
+            run = {"round": rnd, "load_s": info["load_s"], "triangles": info["triangles"],
+                   "build_s": json.loads(out)["build_s"], "rss": rss}
+            if embree:
+                for q in ("medium", "high"):
+                    eo, erss = peak_rss([embree, obj, rays, str(args.threads), "1", "--quality", q])
+                    run[f"embree_{q}_s"], run[f"embree_{q}_rss"] = json.loads(eo)["build_s"], erss
+            log(f"large x{4 ** level} round {rnd}: load {run['load_s']:.3f} s build {run['build_s']:.2f} s "
+                f"peak {rss / 2 ** 30:.2f} GiB" + (f"; embree medium {run['embree_medium_s']:.2f} s high "
+                                                     f"{run['embree_high_s']:.2f} s" if embree else ""))
+            row["runs"].append(run)
+        part["rows"].append(row)
+    part["load_after"] = loadavg()
+    part["busy_mean"] = part["busy_max"] = 0.0
+    return part
+
+
+def md_large(args, part):
+    med = statistics.median
+    out = ["## Large meshes\n"]
+    out.append(f"`{part['source']}` subdivided by `wavepath subdivide` (midpoints, shared edges: the same "
+               f"surface) into binary PLY. Load: `wavepath info --json` `load_s` (read, parse, validate, "
+               f"from the page cache). Build: `wavepath rays trace MESH RAYS {args.threads} 1` `build_s` "
+               f"(8-wide BVH, {args.threads} threads) and the Embree peer's `build_s` on the same triangles "
+               f"(OBJ), `--quality medium` and `high`. Peak: the whole process's resident memory (the Embree "
+               f"peer's includes its own OBJ arrays). Medians of {args.rounds} rounds of fresh processes, run "
+               f"in turn; the ratio is Embree medium's build time over wavepath's per round (> 1: wavepath "
+               f"builds faster).\n")
+    cols = "| triangles | PLY MB | load s | load GB/s | build s | embree medium s | embree high s | ratio vs medium (per round) | peak GiB | B/tri | embree peak GiB |"
+    out += [cols, "|--:|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|"]
+    for row in part["rows"]:
+        r = row["runs"]
+        tris = r[0]["triangles"]
+        load = med([x["load_s"] for x in r])
+        rss = med([x["rss"] for x in r])
+        em = [x.get("embree_medium_s") for x in r]
+        eh = [x.get("embree_high_s") for x in r]
+        ratios = [x["embree_medium_s"] / x["build_s"] for x in r if "embree_medium_s" in x]
+        erss = [x["embree_medium_rss"] for x in r if "embree_medium_rss" in x]
+        out.append(f"| {tris / 1e6:.1f}M | {row['bytes'] / 1e6:.0f} | {load:.3f} | {row['bytes'] / load / 1e9:.2f} | "
+                   f"{med([x['build_s'] for x in r]):.2f} | "
+                   + (f"{med(em):.2f} | {med(eh):.2f} | {', '.join(f'{x:.2f}' for x in ratios)} | " if ratios else "- | - | - | ")
+                   + f"{rss / 2 ** 30:.2f} | {rss / tris:.0f} | " + (f"{med(erss) / 2 ** 30:.2f} |" if erss else "- |"))
+    out.append("")
+    out.append(f"Command: `tools/benchmarks.sh --parts large` (levels {','.join(map(str, args.large_levels))}).  ")
+    out.append(f"Machine: {MACHINE['cpu']}, {NCPU} cores; load average {part['load_before']:.2f} before, "
+               f"{part['load_after']:.2f} after; {part['date']}.\n")
+    return out
 
 
 # ------------------------------------------------------------------ renders ----
@@ -423,7 +543,8 @@ def main(argv):
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
     ap.add_argument("--bin", default=os.environ.get("WAVEPATH", "target/release/wavepath"),
                     help="wavepath binary (default: $WAVEPATH or target/release/wavepath)")
-    ap.add_argument("--parts", default="renders,peers", help="comma list of renders, peers, e2e")
+    ap.add_argument("--parts", default="renders,peers", help="comma list of renders, peers, e2e, large")
+    ap.add_argument("--large-levels", default="2,3", help="large: subdivision levels of Lucy 100k (4: 25.6M)")
     ap.add_argument("--e2e", action="store_true", help="also run the e2e part (same as adding it to --parts)")
     ap.add_argument("--quick", action="store_true",
                     help="a quick look (~3 min): fewer samples, 1 round, 1 peers pass, 3 reps")
@@ -450,11 +571,12 @@ def main(argv):
     args.rounds = args.rounds or (1 if q else 3)
     args.peer_passes = args.peer_passes or (1 if q else 3)
     args.reps = args.reps or (3 if q else 10)
+    args.large_levels = [int(x) for x in args.large_levels.split(",") if x]
     args.e2e_args = args.e2e_args if args.e2e_args is not None else (E2E_QUICK if q else "")
     args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:
-        if p not in ("renders", "peers", "e2e"):
+        if p not in ("renders", "peers", "e2e", "large"):
             ap.error(f"unknown part {p}")
 
     os.chdir(REPO)
@@ -488,6 +610,8 @@ def main(argv):
         results["peers"] = part_peers(args, scenes_dir, peers_dir)
     if "e2e" in parts:
         results["e2e"] = part_e2e(args, scenes_dir, peers_dir)
+    if "large" in parts:
+        results["large"] = part_large(args, scenes_dir, peers_dir)
     took = time.monotonic() - t0
     with open(os.path.join(args.work, "results.json"), "w") as f:
         json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)
@@ -529,6 +653,8 @@ def main(argv):
         md.append("Not run this time: `tools/benchmarks.sh --e2e` adds whole renders against Mitsuba 3 at "
                   "equal error (`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args "
                   f"'{E2E_QUICK}'` under a minute).\n")
+    if "large" in results:
+        md += md_large(args, results["large"])
     with open(args.out, "w") as f:
         f.write("\n".join(md).rstrip() + "\n")
     log(f"wrote {args.out} ({took / 60:.1f} min)")
