@@ -1,10 +1,10 @@
 use super::{BsdfSample, Distribution, Microfacet};
 use crate::sampling::warp;
 use glam::Vec3;
+use std::f32::consts::FRAC_1_PI;
 
 /// Smallest roughness sampled: the GGX lobe's own floor.
 const MIN_ALPHA: f32 = 1e-4;
-use std::f32::consts::FRAC_1_PI;
 
 /// glTF's material model (the core specification's appendix B): a diffuse base under a
 /// GGX specular layer whose Schlick Fresnel reflectance at normal incidence is `f0`.
