@@ -29,25 +29,37 @@ pub struct Leaves {
 }
 
 /// Moves every leaf of `nodes` to a block boundary (rewriting the leaf references) and
-/// builds the SoA blocks. `prims`/`ids` are in the builder's leaf order.
+/// builds the SoA blocks. `prims`/`ids` are in the builder's leaf order. A leaf holds at
+/// most [`LANES`] primitives, so leaf `i` (in node order) takes block `i` and slots
+/// `4i .. 4i + 4`: every block is filled independently, in parallel.
 pub fn pad_leaves(nodes: &mut [Node8], prims: &[[Vec3; 3]], ids: &[u32], tri_count: u32) -> Leaves {
-    let mut out = Leaves {
-        prims: Vec::with_capacity(prims.len() * 2),
-        ids: Vec::with_capacity(prims.len() * 2),
-        blocks: Vec::with_capacity(prims.len() / 2),
-    };
-    for node in nodes.iter_mut() {
-        for child in node.child.iter_mut() {
-            if *child == EMPTY || *child & LEAF_BIT == 0 {
-                continue;
+    use rayon::prelude::*;
+    // (node, slot, first, count) of every leaf child, in node order.
+    let mut leaves: Vec<(u32, u8, u32, u8)> = Vec::new();
+    for (n, node) in nodes.iter().enumerate() {
+        for (slot, &child) in node.child.iter().enumerate() {
+            if child != EMPTY && child & LEAF_BIT != 0 {
+                let (first, count) = leaf_range(child);
+                assert!(count <= LANES, "a leaf of {count} primitives does not fit one block");
+                leaves.push((n as u32, slot as u8, first as u32, count as u8));
             }
-            let (first, count) = leaf_range(*child);
-            let start = out.prims.len();
-            assert!(start + LANES < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} padded primitive slots");
-            let mut block = Tri4::default();
+        }
+    }
+    assert!(leaves.len() * LANES < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} padded primitive slots");
+    let mut out = Leaves {
+        prims: vec![[Vec3::ZERO; 3]; leaves.len() * LANES],
+        ids: vec![u32::MAX; leaves.len() * LANES],
+        blocks: vec![Tri4::default(); leaves.len()],
+    };
+    out.blocks
+        .par_iter_mut()
+        .zip(out.prims.par_chunks_mut(LANES))
+        .zip(out.ids.par_chunks_mut(LANES))
+        .zip(leaves.par_iter())
+        .for_each(|(((block, slot_prims), slot_ids), &(_, _, first, count))| {
             let mut lanes = 0u32;
-            for lane in 0..count {
-                let (p, id) = (prims[first + lane], ids[first + lane]);
+            for lane in 0..count as usize {
+                let (p, id) = (prims[first as usize + lane], ids[first as usize + lane]);
                 if id < tri_count {
                     lanes |= 1 << lane;
                     for (corner, v) in p.iter().enumerate() {
@@ -56,17 +68,13 @@ pub fn pad_leaves(nodes: &mut [Node8], prims: &[[Vec3; 3]], ids: &[u32], tri_cou
                         }
                     }
                 }
-                out.prims.push(p);
-                out.ids.push(id);
-            }
-            for _ in count..LANES {
-                out.prims.push([Vec3::ZERO; 3]);
-                out.ids.push(u32::MAX);
+                slot_prims[lane] = p;
+                slot_ids[lane] = id;
             }
             block.tri_lanes = lanes;
-            out.blocks.push(block);
-            *child = leaf_ref(start as u32, count as u32);
-        }
+        });
+    for (i, &(n, slot, _, count)) in leaves.iter().enumerate() {
+        nodes[n as usize].child[slot as usize] = leaf_ref((i * LANES) as u32, count as u32);
     }
     out
 }
