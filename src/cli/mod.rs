@@ -62,3 +62,34 @@ fn load_scene(path: &std::path::Path, opts: &wavepath::load::LoadOptions) -> any
     }
     Ok(scene)
 }
+
+/// Runs `work`; on a terminal, a spinner with `label` appears if it takes more than a second
+/// (loading and building a scanned mesh of tens of millions of triangles takes several).
+fn with_spinner<T>(label: &str, work: impl FnOnce() -> T) -> T {
+    use std::io::IsTerminal;
+    use std::sync::mpsc::{RecvTimeoutError, channel};
+    if !std::io::stderr().is_terminal() {
+        return work();
+    }
+    let (done, wait) = channel::<()>();
+    let label = label.to_string();
+    std::thread::scope(|s| {
+        s.spawn(move || {
+            if wait.recv_timeout(std::time::Duration::from_secs(1)) != Err(RecvTimeoutError::Timeout) {
+                return;
+            }
+            let bar = indicatif::ProgressBar::new_spinner();
+            bar.set_style(
+                indicatif::ProgressStyle::with_template("[wavepath] {spinner} {msg} {elapsed}")
+                    .unwrap_or_else(|_| indicatif::ProgressStyle::default_spinner()),
+            );
+            bar.set_message(label);
+            bar.enable_steady_tick(std::time::Duration::from_millis(100));
+            let _ = wait.recv();
+            bar.finish_and_clear();
+        });
+        let out = work();
+        drop(done);
+        out
+    })
+}

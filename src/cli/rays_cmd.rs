@@ -32,8 +32,8 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let threads = args.threads.or(args.threads_pos).unwrap_or(1).max(1);
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
-    let scene = super::load_scene(&args.mesh, &LoadOptions::default())?;
-    let bvh = Bvh::build(&scene).with_isa(args.isa);
+    let scene = super::with_spinner("loading", || super::load_scene(&args.mesh, &LoadOptions::default()))?;
+    let bvh = super::with_spinner("building the BVH", || Bvh::build(&scene)).with_isa(args.isa);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];
     for _ in 0..args.warmup {

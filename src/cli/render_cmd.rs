@@ -38,7 +38,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let out: PathBuf = a.output.clone().unwrap_or_else(|| PathBuf::from("wavepath.png"));
     check_output_extension(&out)?;
     let t0 = Instant::now();
-    let scene = prepare_scene(a, &s)?;
+    let scene = super::with_spinner("loading", || prepare_scene(a, &s))?;
     let load_s = t0.elapsed().as_secs_f64();
     eprintln!(
         "[wavepath] Loaded {} in {:.3} s: {} triangles, {} spheres, {} lights",
@@ -60,7 +60,8 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     let (film, build) = wavepath::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
-        let (accel, build) = wavepath::accel::build(&scene, s.use_bvh, s.isa);
+        let (accel, build) =
+            super::with_spinner("building the BVH", || wavepath::accel::build(&scene, s.use_bvh, s.isa));
         eprintln!(
             "[wavepath] Built {} in {:.4} s ({} nodes, depth {})",
             accel.name(),
