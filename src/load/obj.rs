@@ -1,10 +1,12 @@
-//! Wavefront OBJ (+ MTL) through tobj.
+//! Wavefront OBJ (+ MTL) through tobj; files of positions and faces only (scans) through a
+//! parallel reader ([`bulk`]) that gives the same triangles.
 //!
 //! Triangle numbering is the file's: tobj splits the file into models at each `o`, `g` or
 //! material change, in order, and fan-triangulates each polygon as (v0,v1,v2), (v0,v2,v3), ...,
 //! so concatenating the models gives the numbering the peers and ray files use. Positions are
 //! shared inside a model (tobj keeps one vertex per distinct position/uv/normal triple).
 
+mod bulk;
 mod mtl;
 
 use crate::scene::{Material, Mesh, Scene};
@@ -26,6 +28,11 @@ struct MtlState {
 pub fn load(path: &Path) -> Result<Scene> {
     let shown = path.display();
     let bytes = std::fs::read(path).with_context(|| format!("{shown}: cannot open"))?;
+    if let Some(mesh) = bulk::parse(&decode_text(&bytes)) {
+        let mut scene = Scene { mesh, materials: vec![Material::default()], ..Scene::default() };
+        super::finish_mesh_only(&mut scene, false);
+        return Ok(scene);
+    }
     let (text, skipped) = prepare(&bytes);
     let dir = path.parent().unwrap_or(Path::new("."));
     let state = RefCell::new(MtlState::default());

@@ -7,5 +7,6 @@ mod exporters;
 mod formats_agree;
 mod gltf_materials;
 mod mesh_loaders;
+mod obj_bulk;
 mod other_tools;
 mod ply_bulk;
