@@ -125,7 +125,7 @@ fn read(path: &Path) -> Result<Scene, String> {
 }
 
 /// Extensions the loader reads.
-const KNOWN_EXTENSIONS: [&str; 8] = [
+const KNOWN_EXTENSIONS: [&str; 9] = [
     "KHR_lights_punctual",
     "KHR_materials_emissive_strength",
     "KHR_materials_unlit",
@@ -134,13 +134,16 @@ const KNOWN_EXTENSIONS: [&str; 8] = [
     "EXT_mesh_gpu_instancing",
     "KHR_mesh_quantization",
     "KHR_draco_mesh_compression",
+    "EXT_texture_webp",
 ];
 
 /// Extensions a file may require: the ones the loader reads, and material extensions it
 /// does not (a material it cannot render exactly still has its geometry and base model:
 /// drawn approximately, with a warning, rather than not at all).
 fn may_require(e: &str) -> bool {
-    KNOWN_EXTENSIONS.contains(&e) || e.starts_with("KHR_materials_")
+    KNOWN_EXTENSIONS.contains(&e)
+        || e.starts_with("KHR_materials_")
+        || matches!(e, "KHR_texture_basisu" | "MSFT_texture_dds")
 }
 
 /// Extensions read by this loader rather than the gltf crate (whose validation refuses
@@ -456,11 +459,11 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
     let emission_texture = m
         .emissive_texture()
         .filter(|_| emission.max_element() > 0.0)
-        .map(|info| texture(&info, path, &images.srgb, emission));
+        .map(|info| texture(&info, images, false, emission));
     let pbr = m.pbr_metallic_roughness();
     let [r, g, b, _] = pbr.base_color_factor();
     let base = Vec3::new(r, g, b);
-    let base_texture = |factor| pbr.base_color_texture().map(|info| texture(&info, path, &images.srgb, factor));
+    let base_texture = |factor| pbr.base_color_texture().map(|info| texture(&info, images, false, factor));
     if m.unlit() {
         // What the eye sees is the base colour itself: emitted, with no light reflected.
         let emission_texture = base_texture(base).filter(|_| base.max_element() > 0.0);
@@ -483,7 +486,7 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
                 glossiness: sg.glossiness_factor(),
             },
             emission,
-            albedo_texture: sg.diffuse_texture().map(|info| texture(&info, path, &images.srgb, diffuse)),
+            albedo_texture: sg.diffuse_texture().map(|info| texture(&info, images, false, diffuse)),
             emission_texture,
             metallic_roughness_texture: None,
         };
@@ -497,7 +500,7 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
         emission_texture,
         metallic_roughness_texture: pbr
             .metallic_roughness_texture()
-            .map(|info| texture(&info, path, &images.linear, Vec3::new(1.0, roughness, metallic))),
+            .map(|info| texture(&info, images, true, Vec3::new(1.0, roughness, metallic))),
     }
 }
 
@@ -531,8 +534,9 @@ fn uv_set(m: &gltf::Material, path: &Path, notes: &mut Vec<String>) -> u32 {
     first
 }
 
-/// A glTF texture (its image, sampler and uv transform) scaled by `factor`.
-fn texture(info: &gltf::texture::Info, path: &Path, images: &[Option<Arc<TextureImage>>], factor: Vec3) -> Texture {
+/// A glTF texture (its image, sampler and uv transform) scaled by `factor`; `linear`: the
+/// image holds data, not colours.
+fn texture(info: &gltf::texture::Info, images: &Images, linear: bool, factor: Vec3) -> Texture {
     let tex = info.texture();
     let sampler = tex.sampler();
     let wrap = |w: WrappingMode| match w {
@@ -540,16 +544,11 @@ fn texture(info: &gltf::texture::Info, path: &Path, images: &[Option<Arc<Texture
         WrappingMode::ClampToEdge => Wrap::ClampToEdge,
         WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
     };
-    let source = tex.source();
-    let path = match source.source() {
-        gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => {
-            path.parent().unwrap_or(Path::new(".")).join(uri_path(uri))
-        }
-        _ => PathBuf::from(format!("{}#image{}", path.display(), source.index())),
-    };
+    let source = images.by_texture.get(tex.index()).copied().flatten();
+    let decoded = if linear { &images.linear } else { &images.srgb };
     Texture {
-        path,
-        image: images.get(source.index()).cloned().flatten(),
+        path: source.and_then(|i| images.paths.get(i).cloned()).unwrap_or_default(),
+        image: source.and_then(|i| decoded.get(i).cloned().flatten()),
         wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
         // No mipmaps: the magnification filter decides (glTF leaves it open when absent).
         filter: match sampler.mag_filter() {
@@ -578,6 +577,12 @@ fn uv_transform(offset: [f32; 2], rotation: f32, scale: [f32; 2]) -> Affine2 {
 struct Images {
     srgb: Vec<Option<Arc<TextureImage>>>,
     linear: Vec<Option<Arc<TextureImage>>>,
+    /// Per image, the file (or the scene file with `#imageN` for an embedded one).
+    paths: Vec<PathBuf>,
+    /// Per texture, its image: the core `source`, else an `EXT_texture_webp` source; `None`
+    /// for a texture whose only image is one wavepath cannot decode (KTX2 through
+    /// `KHR_texture_basisu`, DDS).
+    by_texture: Vec<Option<usize>>,
 }
 
 /// Decodes every image a material's texture uses, once per colour space: from a buffer view
@@ -590,19 +595,59 @@ fn decode_images(
     path: &Path,
     notes: &mut Vec<String>,
 ) -> Result<Images, String> {
+    let image_count = doc.images().len();
+    let by_texture: Vec<Option<usize>> = doc
+        .textures()
+        .map(|t| {
+            t.source().map(|i| i.index()).or_else(|| {
+                let i = t.extension_value("EXT_texture_webp")?["source"].as_u64()? as usize;
+                (i < image_count).then_some(i)
+            })
+        })
+        .collect();
     let mut srgb_used = std::collections::HashSet::new();
     let mut linear_used = std::collections::HashSet::new();
+    let mut undecodable = std::collections::BTreeSet::new();
+    let mut image_of = |t: gltf::texture::Texture| {
+        let i = by_texture[t.index()];
+        if i.is_none() {
+            undecodable.insert(t.index());
+        }
+        i
+    };
     for m in doc.materials() {
-        if let Some(t) = m.pbr_metallic_roughness().metallic_roughness_texture() {
-            linear_used.insert(t.texture().source().index());
+        if let Some(i) = m.pbr_metallic_roughness().metallic_roughness_texture().and_then(|t| image_of(t.texture())) {
+            linear_used.insert(i);
         }
         let pbr = m.pbr_metallic_roughness();
         let sg = m.pbr_specular_glossiness().and_then(|sg| sg.diffuse_texture());
         for t in [pbr.base_color_texture(), sg, m.emissive_texture()].into_iter().flatten() {
-            srgb_used.insert(t.texture().source().index());
+            if let Some(i) = image_of(t.texture()) {
+                srgb_used.insert(i);
+            }
         }
     }
-    let mut images = Images { srgb: Vec::new(), linear: Vec::new() };
+    if let Some(&first) = undecodable.iter().next() {
+        let kinds: Vec<String> = doc
+            .textures()
+            .nth(first)
+            .and_then(|t| t.extensions().map(|e| e.keys().cloned().collect()))
+            .unwrap_or_default();
+        notes.push(format!(
+            "warning: {}: {} texture(s) have no image wavepath can decode{}; their materials keep their factors",
+            path.display(),
+            undecodable.len(),
+            if kinds.is_empty() { String::new() } else { format!(" ({})", kinds.join(", ")) }
+        ));
+    }
+    let paths = doc
+        .images()
+        .map(|img| match img.source() {
+            gltf::image::Source::Uri { uri, .. } if !uri.starts_with("data:") => base.join(uri_path(uri)),
+            _ => PathBuf::from(format!("{}#image{}", path.display(), img.index())),
+        })
+        .collect();
+    let mut images = Images { srgb: Vec::new(), linear: Vec::new(), paths, by_texture };
     for img in doc.images() {
         let (srgb, linear) = (srgb_used.contains(&img.index()), linear_used.contains(&img.index()));
         if !srgb && !linear {

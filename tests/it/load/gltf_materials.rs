@@ -244,3 +244,36 @@ fn draco_compressed_primitives_decode_to_their_mesh() {
     let e = format!("{:#}", load(&path, &LoadOptions::default()).unwrap_err());
     assert!(e.contains("cut.gltf") && e.contains("KHR_draco_mesh_compression") && !e.contains('\n'), "{e}");
 }
+
+/// Textures whose only image is in an extension: WebP (`EXT_texture_webp`, required) is
+/// decoded; KTX2 (`KHR_texture_basisu`, required) cannot be: the model loads with its
+/// factors and one warning naming the extension.
+#[test]
+fn extension_images_webp_decoded_ktx2_a_warning() {
+    let d = temp_dir("gltf-ext-images");
+    let img =
+        image::RgbImage::from_fn(2, 1, |x, _| if x == 0 { image::Rgb([255, 0, 0]) } else { image::Rgb([0, 0, 255]) });
+    let mut webp = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut webp, image::ImageFormat::WebP).unwrap();
+    let webp_uri = format!("data:image/webp;base64,{}", b64(&webp.into_inner()));
+    let with = |ext: &str, uri: &str| {
+        triangle_doc(&format!(
+            r#""extensionsUsed":["{ext}"],"extensionsRequired":["{ext}"],
+               "materials":[{{"pbrMetallicRoughness":{{"baseColorFactor":[0.5,0.25,1,1],"baseColorTexture":{{"index":0}}}}}}],
+               "textures":[{{"extensions":{{"{ext}":{{"source":0}}}}}}],"images":[{{"uri":"{uri}"}}]"#
+        ))
+    };
+    let s = load_doc(&d, "webp.gltf", &with("EXT_texture_webp", &webp_uri));
+    assert!(s.notes.is_empty(), "{:?}", s.notes);
+    let t = s.materials[0].albedo_texture.as_ref().and_then(|t| t.image.clone()).expect("the WebP image");
+    assert_eq!(t.texels, vec![vec3(1.0, 0.0, 0.0), vec3(0.0, 0.0, 1.0)]);
+    let s = load_doc(&d, "ktx2.gltf", &with("KHR_texture_basisu", "x.ktx2"));
+    assert!(s.materials[0].albedo_texture.as_ref().is_none_or(|t| t.image.is_none()));
+    assert_eq!(s.materials[0].bsdf.diffuse_albedo(), vec3(0.5, 0.25, 1.0));
+    let warned: Vec<&String> = s.notes.iter().filter(|n| n.contains("KHR_texture_basisu")).collect();
+    assert!(
+        !warned.is_empty() && s.notes.iter().all(|n| n.contains("ktx2.gltf") && !n.contains('\n')),
+        "{:?}",
+        s.notes
+    );
+}
