@@ -509,20 +509,19 @@ fn tex_coord(info: &gltf::texture::Info) -> u32 {
     info.texture_transform().and_then(|t| t.tex_coord()).unwrap_or_else(|| info.tex_coord())
 }
 
-/// Every texture a material reads, in the order its uv set is chosen by.
-fn textures_of<'a>(m: &gltf::Material<'a>) -> Vec<gltf::texture::Info<'a>> {
+/// Every texture a material reads, in the order its uv set is chosen by, and whether it
+/// holds linear data (the metallic-roughness map) rather than sRGB colours.
+fn textures_of<'a>(m: &gltf::Material<'a>) -> Vec<(gltf::texture::Info<'a>, bool)> {
     let pbr = m.pbr_metallic_roughness();
     let sg = m.pbr_specular_glossiness().and_then(|sg| sg.diffuse_texture());
-    [pbr.base_color_texture(), sg, m.emissive_texture(), pbr.metallic_roughness_texture()]
-        .into_iter()
-        .flatten()
-        .collect()
+    let colours = [pbr.base_color_texture(), sg, m.emissive_texture()].into_iter().flatten().map(|t| (t, false));
+    colours.chain(pbr.metallic_roughness_texture().map(|t| (t, true))).collect()
 }
 
 /// The uv set a material's primitives are read with: the one its textures use (the base
 /// colour's when they differ, with a warning; one set is kept per vertex).
 fn uv_set(m: &gltf::Material, path: &Path, notes: &mut Vec<String>) -> u32 {
-    let sets: Vec<u32> = textures_of(m).iter().map(tex_coord).collect();
+    let sets: Vec<u32> = textures_of(m).iter().map(|(t, _)| tex_coord(t)).collect();
     let first = sets.first().copied().unwrap_or(0);
     if sets.iter().any(|&s| s != first) {
         notes.push(format!(
@@ -616,14 +615,9 @@ fn decode_images(
         i
     };
     for m in doc.materials() {
-        if let Some(i) = m.pbr_metallic_roughness().metallic_roughness_texture().and_then(|t| image_of(t.texture())) {
-            linear_used.insert(i);
-        }
-        let pbr = m.pbr_metallic_roughness();
-        let sg = m.pbr_specular_glossiness().and_then(|sg| sg.diffuse_texture());
-        for t in [pbr.base_color_texture(), sg, m.emissive_texture()].into_iter().flatten() {
+        for (t, linear) in textures_of(&m) {
             if let Some(i) = image_of(t.texture()) {
-                srgb_used.insert(i);
+                if linear { &mut linear_used } else { &mut srgb_used }.insert(i);
             }
         }
     }

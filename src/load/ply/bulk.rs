@@ -57,20 +57,20 @@ struct Field {
     ty: Ty,
 }
 
-/// Reads one scalar as f32 (`big`: big-endian).
+/// The scalar of type `ty` at the start of `b` (`big`: big-endian). Every PLY scalar is
+/// exact in f64, so converting from it rounds once, as a direct conversion would.
 #[inline(always)]
-fn read(b: &[u8], f: Field, big: bool) -> f32 {
-    let at = &b[f.offset..];
+fn value(b: &[u8], ty: Ty, big: bool) -> f64 {
     macro_rules! num {
         ($t:ty, $n:expr) => {{
             let mut a = [0u8; $n];
-            a.copy_from_slice(&at[..$n]);
-            (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f32
+            a.copy_from_slice(&b[..$n]);
+            (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as f64
         }};
     }
-    match f.ty {
-        Ty::I8 => at[0] as i8 as f32,
-        Ty::U8 => at[0] as f32,
+    match ty {
+        Ty::I8 => b[0] as i8 as f64,
+        Ty::U8 => b[0] as f64,
         Ty::I16 => num!(i16, 2),
         Ty::U16 => num!(u16, 2),
         Ty::I32 => num!(i32, 4),
@@ -80,26 +80,10 @@ fn read(b: &[u8], f: Field, big: bool) -> f32 {
     }
 }
 
-/// One vertex index as i64 (negative values are errors later).
+/// A property of an element as f32.
 #[inline(always)]
-fn read_index(b: &[u8], ty: Ty, big: bool) -> i64 {
-    macro_rules! num {
-        ($t:ty, $n:expr) => {{
-            let mut a = [0u8; $n];
-            a.copy_from_slice(&b[..$n]);
-            (if big { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as i64
-        }};
-    }
-    match ty {
-        Ty::I8 => b[0] as i8 as i64,
-        Ty::U8 => b[0] as i64,
-        Ty::I16 => num!(i16, 2),
-        Ty::U16 => num!(u16, 2),
-        Ty::I32 => num!(i32, 4),
-        Ty::U32 => num!(u32, 4),
-        // Float indices: the general parser refuses them.
-        Ty::F32 | Ty::F64 => -1,
-    }
+fn read(b: &[u8], f: Field, big: bool) -> f32 {
+    value(&b[f.offset..], f.ty, big) as f32
 }
 
 /// Bytes of an element made of scalars only, and each property's field; `None` when it has a
@@ -262,7 +246,8 @@ fn convert(
         .filter_map(|(k, (o, src))| {
             for (j, (t, f)) in o.iter_mut().zip(src.chunks_exact(f_stride)).enumerate() {
                 for (c, slot) in t.iter_mut().enumerate() {
-                    let i = read_index(&f[first + c * isize..], index, big);
+                    // Integer types only (`face_layout` declines float indices).
+                    let i = value(&f[first + c * isize..], index, big) as i64;
                     if i < 0 || i as u64 >= n as u64 {
                         return Some((k * CHUNK + j, i));
                     }

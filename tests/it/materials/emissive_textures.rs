@@ -19,6 +19,19 @@ const HALF_Z: f32 = 0.4;
 const HEIGHT: f32 = 1.0;
 const FACTOR: f32 = 2.0;
 
+/// `image` as an emission texture under a grey `factor`: nearest texel, clamped, uv as is.
+fn emission_texture(image: TextureImage, factor: f32) -> Texture {
+    Texture {
+        path: "emission.png".into(),
+        image: Some(Arc::new(image)),
+        wrap: [Wrap::ClampToEdge; 2],
+        filter: Filter::Nearest,
+        flip_v: false,
+        factor: Vec3::splat(factor),
+        transform: glam::Affine2::IDENTITY,
+    }
+}
+
 /// A floor of albedo 0.5, and an emitter made of two quads (left x < 0, right x > 0) that
 /// map to the two halves of a 4x1 texture: red, red, black, black (nearest, clamped).
 fn scene() -> Scene {
@@ -34,15 +47,7 @@ fn scene() -> Scene {
     mesh.uvs = Some(uvs);
     let red = vec3(1.0, 0.0, 0.0);
     let image = TextureImage { width: 4, height: 1, texels: vec![red, red, Vec3::ZERO, Vec3::ZERO] };
-    let texture = Texture {
-        path: "emission.png".into(),
-        image: Some(Arc::new(image)),
-        wrap: [Wrap::ClampToEdge; 2],
-        filter: Filter::Nearest,
-        flip_v: false,
-        factor: Vec3::splat(FACTOR),
-        transform: glam::Affine2::IDENTITY,
-    };
+    let texture = emission_texture(image, FACTOR);
     let light = Material { emission_texture: Some(texture), ..Material::emitter("light", Vec3::splat(FACTOR)) };
     let mut camera = Camera::look_at(vec3(0.0, 0.9, 0.5), Vec3::ZERO, Vec3::Y, 20.0, W as f32 / H as f32);
     camera.nclip = 0.01;
@@ -127,15 +132,7 @@ fn emissive_triangles_are_drawn_in_proportion_to_their_power() {
     mesh.uvs = Some([uv(lo), uv(lo), uv(lo), uv(1.0 - hi)].concat());
     let white = Vec3::ONE;
     let image = TextureImage { width: 2, height: 1, texels: vec![white, Vec3::ZERO] };
-    let texture = Texture {
-        path: "half.png".into(),
-        image: Some(Arc::new(image)),
-        wrap: [Wrap::ClampToEdge; 2],
-        filter: Filter::Nearest,
-        flip_v: false,
-        factor: Vec3::splat(4.0),
-        transform: glam::Affine2::IDENTITY,
-    };
+    let texture = emission_texture(image, 4.0);
     let materials = vec![
         Material::emitter("one", Vec3::ONE),
         Material::emitter("nine", Vec3::splat(9.0)),
