@@ -79,6 +79,8 @@ pub struct Settings {
     /// The first depth whose continuation plays Russian roulette (`--rr-depth`): 1, the
     /// seed's rule, never stops the first indirect bounce; Mitsuba's default is 5.
     pub rr_depth: u32,
+    /// How each pixel's samples spread over the path space (`--sampler`).
+    pub sampler: crate::sampling::SamplerKind,
 }
 
 impl Default for Settings {
@@ -106,6 +108,7 @@ impl Default for Settings {
             mis: true,
             rr_throughput: false,
             rr_depth: 1,
+            sampler: crate::sampling::SamplerKind::Independent,
         }
     }
 }

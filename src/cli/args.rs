@@ -1,6 +1,6 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use super::choices::{Camera, Fov, Integrator, Roulette, Shading, Split, Tonemap};
+use super::choices::{Camera, Fov, Integrator, Roulette, Sampler, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::cpu::Isa;
@@ -152,6 +152,12 @@ pub struct RenderArgs {
     /// seed's rule). Default: 1 with fixed roulette, 5 with throughput roulette (Mitsuba's).
     #[arg(long, value_name = "D")]
     pub rr_depth: Option<i64>,
+    /// How each pixel's samples spread over the path space: independent (the seed's numbers),
+    /// stratified (jittered strata of -s samples) or sobol (Owen-scrambled Sobol points).
+    /// Default: independent for .dae files and the embedded scene (the seed's pictures),
+    /// sobol for other files.
+    #[arg(long, value_enum)]
+    pub sampler: Option<Sampler>,
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,

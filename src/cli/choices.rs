@@ -34,6 +34,18 @@ choice! {
 }
 
 choice! {
+    /// How each pixel's samples spread over the path space.
+    Sampler => wavepath::sampling::SamplerKind {
+        /// Independent hashed numbers (the seed's).
+        Independent,
+        /// Jittered strata: one sample per cell of each dimension pair's grid.
+        Stratified,
+        /// Owen-scrambled Sobol points, one scrambled sequence per dimension pair.
+        Sobol,
+    }
+}
+
+choice! {
     /// Which light-transport implementation runs.
     Integrator => wavepath::settings::IntegratorKind {
         /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.

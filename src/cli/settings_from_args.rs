@@ -2,6 +2,7 @@
 
 use super::RenderArgs;
 use super::choices::Roulette;
+use wavepath::sampling::SamplerKind;
 use anyhow::{Result, bail};
 use wavepath::settings::{Cell, Settings, Shading};
 
@@ -71,6 +72,9 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.all_effects = a.all_effects;
     s.cs184_light_pdf = a.cs184_light_pdf;
     s.mis = !a.no_mis;
+    // Independent numbers keep the seed's pictures; other files get the pattern that reached a
+    // given error soonest in the end-to-end harness (docs/decisions.md, "Samplers").
+    s.sampler = a.sampler.map(Into::into).unwrap_or(if cs184 { SamplerKind::Independent } else { SamplerKind::Sobol });
     s.shading = a.shading.map(Shading::from).unwrap_or(if s.max_depth > 1 { Shading::Global } else { Shading::Direct });
     if let Some(p) = &a.cell {
         for (name, v) in ["X", "Y", "DX", "DY"].iter().zip(p) {

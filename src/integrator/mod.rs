@@ -22,7 +22,7 @@ use area::{AreaLight, ShadingPoint};
 use crate::bsdf::power_heuristic;
 use crate::geometry::{Hit, Ray};
 use crate::lights::{LightSet, SampledLight};
-use crate::sampling::{Frame, Sampler, warp};
+use crate::sampling::{Frame, Pattern, Sampler, warp};
 use crate::scene::{Scene, Textures};
 use crate::settings::{Settings, Shading};
 use glam::{Vec2, Vec3};
@@ -64,6 +64,8 @@ pub struct Transport<'a> {
     /// First depth that plays roulette.
     pub rr_depth: u32,
     pub seed: u64,
+    /// How each pixel's samples spread over the path space (`--sampler`).
+    pub pattern: Pattern,
     /// Shadow (or hemisphere probe) rays one vertex casts at most.
     pub direct_per_vertex: u32,
     /// tan(hfov / 2), tan(vfov / 2): the pinhole camera's image-plane half extents, computed
@@ -188,6 +190,7 @@ impl<'a> Transport<'a> {
             rr_throughput: settings.rr_throughput,
             rr_depth: settings.rr_depth.max(1),
             seed: settings.seed,
+            pattern: Pattern::new(settings.sampler, settings.spp),
             direct_per_vertex,
             tan_half_fov: (
                 (scene.camera.hfov_deg.to_radians() * 0.5).tan(),
@@ -252,20 +255,20 @@ impl<'a> Transport<'a> {
     /// The stream of the vertex at `depth` of path (pixel, sample).
     #[inline]
     pub fn sampler(&self, pixel: u32, sample: u32, depth: u32) -> Sampler {
-        Sampler::for_bounce(self.seed, pixel as u64, sample as u64, depth + 1)
+        self.vertex_sampler(self.path_key(pixel, sample), depth)
     }
 
-    /// The key of path (pixel, sample)'s random streams (see [`Sampler::path_key`]).
+    /// The key of path (pixel, sample)'s random streams (see [`Pattern::path_key`]).
     #[inline]
     pub fn path_key(&self, pixel: u32, sample: u32) -> u64 {
-        Sampler::path_key(self.seed, pixel as u64, sample as u64)
+        self.pattern.path_key(self.seed, pixel as u64, sample as u64)
     }
 
     /// The stream of the vertex at `depth` of the path with key `key`; the same numbers as
     /// [`sampler`](Self::sampler).
     #[inline]
     pub fn vertex_sampler(&self, key: u64, depth: u32) -> Sampler {
-        Sampler::for_vertex(key, depth + 1)
+        self.pattern.vertex(key, depth + 1)
     }
 
     /// Direct-light rays of the diffuse vertex `v` at `depth` (throughput not applied), handed
@@ -449,7 +452,7 @@ impl<'a> Transport<'a> {
     /// [`camera_ray`](Self::camera_ray) for the path with key `key`.
     #[inline]
     pub fn camera_ray_keyed(&self, x: u32, y: u32, width: usize, height: usize, key: u64, spp: u32) -> Ray {
-        let mut rng = Sampler::for_vertex(key, 0);
+        let mut rng = self.pattern.vertex(key, 0);
         let (jx, jy) = if spp <= 1 { (0.5, 0.5) } else { rng.next_2d() };
         let cam = &self.scene.camera;
         if cam.lens_radius > 0.0 || cam.orthographic {
@@ -469,7 +472,8 @@ impl<'a> Transport<'a> {
         self.scene.camera.lens_radius <= 0.0 && !self.scene.camera.orthographic
     }
 
-    /// The jitter of the camera ray of the path with key `key` inside its pixel.
+    /// The jitter of the camera ray of the path with key `key` inside its pixel, for
+    /// independent numbers.
     #[inline(always)]
     pub fn pixel_jitter(key: u64, spp: u32) -> (f32, f32) {
         if spp <= 1 { (0.5, 0.5) } else { Sampler::for_vertex(key, 0).next_2d() }

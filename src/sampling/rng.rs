@@ -1,3 +1,4 @@
+use super::pattern::{SOBOL_LENGTH, SamplerKind, Strata, sobol_1d, sobol_2d};
 use super::splitmix::splitmix64;
 
 /// The random-number stream of one camera sample of one pixel, one stream per bounce.
@@ -5,10 +6,83 @@ use super::splitmix::splitmix64;
 /// Counter based: the n-th number of a stream is a hash of (key, n), so a stream is fully
 /// described by two integers (`key`, `dim`) that fit in a ray queue, and the numbers a path
 /// draws do not depend on which thread, chunk or wave runs it.
+///
+/// A stratified or Sobol stream (see [`Pattern`]) keys each dimension by (seed, pixel,
+/// vertex, dimension) only and carries the sample's index within its pixel: the pixel's
+/// samples then spread over each dimension instead of falling independently.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Sampler {
     key: u64,
     dim: u32,
+    seq: Seq,
+}
+
+/// Where a stream's numbers come from.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum Seq {
+    /// Hashes of (key, dimension).
+    #[default]
+    Hashed,
+    /// Sample `index` of a stratified pattern.
+    Stratified { index: u32, strata: Strata },
+    /// Point `index` of an Owen-scrambled Sobol sequence.
+    Sobol { index: u32 },
+}
+
+impl Seq {
+    /// The sample's index in its pixel, when the pattern covers it.
+    #[inline(always)]
+    fn index(self) -> Option<u32> {
+        match self {
+            Seq::Hashed => None,
+            Seq::Stratified { index, strata } => (index < strata.count).then_some(index),
+            Seq::Sobol { index } => (index < SOBOL_LENGTH).then_some(index),
+        }
+    }
+}
+
+/// A render's sampler: which pattern, and how many samples per pixel it stratifies.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Pattern {
+    pub kind: SamplerKind,
+    strata: Strata,
+}
+
+impl Pattern {
+    /// `kind` for renders of `spp` samples per pixel.
+    pub fn new(kind: SamplerKind, spp: u32) -> Self {
+        Pattern { kind, strata: Strata::new(spp) }
+    }
+
+    /// The key of path (`pixel`, `sample`) (as [`Sampler::path_key`] for independent numbers).
+    #[inline]
+    pub fn path_key(self, seed: u64, pixel: u64, sample: u64) -> u64 {
+        self.sample_key(Sampler::pixel_key(seed, pixel), sample)
+    }
+
+    /// [`path_key`](Self::path_key) from the pixel's [`Sampler::pixel_key`]. A structured
+    /// pattern's key is the pixel key's top half and the sample index.
+    #[inline]
+    pub fn sample_key(self, pixel_key: u64, sample: u64) -> u64 {
+        match self.kind {
+            SamplerKind::Independent => Sampler::sample_key(pixel_key, sample),
+            _ => (pixel_key & !0xFFFF_FFFF) | (sample & 0xFFFF_FFFF),
+        }
+    }
+
+    /// Stream `bounce` of the path with key `key` (0: the camera ray, d + 1: the vertex at
+    /// depth d).
+    #[inline]
+    pub fn vertex(self, key: u64, bounce: u32) -> Sampler {
+        let index = key as u32;
+        let seq = match self.kind {
+            SamplerKind::Independent => return Sampler::for_vertex(key, bounce),
+            SamplerKind::Stratified => Seq::Stratified { index, strata: self.strata },
+            SamplerKind::Sobol => Seq::Sobol { index },
+        };
+        let key = splitmix64(Sampler::vertex_input(key & !0xFFFF_FFFF, bounce));
+        Sampler { key, dim: 0, seq }
+    }
 }
 
 impl Sampler {
@@ -68,13 +142,19 @@ impl Sampler {
     /// (hashed elsewhere, e.g. eight at a time), at dimension 0.
     #[inline(always)]
     pub fn from_vertex_hash(key: u64) -> Self {
-        Sampler { key, dim: 0 }
+        Sampler { key, dim: 0, seq: Seq::Hashed }
     }
 
     /// What the number at dimension `dim` hashes (`key + dim * golden ratio`).
     #[inline(always)]
     pub fn dim_input(&self, dim: u32) -> u64 {
         self.key.wrapping_add((dim as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15))
+    }
+
+    /// Whether the stream follows a stratified or Sobol pattern (not hashed numbers).
+    #[inline(always)]
+    pub fn patterned(&self) -> bool {
+        self.seq != Seq::Hashed
     }
 
     /// Jumps to dimension `dim` of this stream.
@@ -92,23 +172,47 @@ impl Sampler {
         h
     }
 
-    #[inline]
-    pub fn next_u32(&mut self) -> u32 {
-        (self.next_u64() >> 32) as u32
+    /// The hash of the current dimension, for hashed numbers: a structured stream's samples
+    /// past its pattern mix in their index (their keys do not hold it).
+    #[inline(always)]
+    fn hashed(&self, h: u64) -> u64 {
+        match self.seq {
+            Seq::Hashed => h,
+            Seq::Stratified { index, .. } | Seq::Sobol { index } => {
+                splitmix64(h ^ (index as u64).wrapping_mul(0xE703_7ED1_A0B4_28DB))
+            }
+        }
     }
 
-    /// A uniform number in [0, 1) with 24 bits of precision (never exactly 1).
+    /// A uniform number in [0, 1) with at least 24 bits of precision (never exactly 1).
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
-        unit_f32((self.next_u64() >> 40) as u32)
+        let h = self.next_u64();
+        if let Some(index) = self.seq.index() {
+            match self.seq {
+                Seq::Stratified { strata, .. } => return strata.sample_1d(index, h),
+                Seq::Sobol { .. } => return sobol_1d(index, (h >> 32) as u32),
+                Seq::Hashed => {}
+            }
+        }
+        unit_f32((self.hashed(h) >> 40) as u32)
     }
 
     /// Two uniform numbers in [0, 1) from one hash (one dimension): its top 24 bits and the
     /// 24 bits below them. splitmix64's output bits are all well mixed, so the two are as
     /// independent as two hashes would be, for half the work.
+    /// A structured stream gives the dimension pair of its pattern.
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
         let h = self.next_u64();
+        if let Some(index) = self.seq.index() {
+            match self.seq {
+                Seq::Stratified { strata, .. } => return strata.sample_2d(index, h),
+                Seq::Sobol { .. } => return sobol_2d(index, (h >> 32) as u32),
+                Seq::Hashed => {}
+            }
+        }
+        let h = self.hashed(h);
         (unit_f32((h >> 40) as u32), unit_f32(((h >> 16) & 0xFF_FFFF) as u32))
     }
 }
@@ -145,16 +249,16 @@ mod tests {
 
     #[test]
     fn streams_differ_between_pixels_samples_and_bounces() {
-        let a = Sampler::for_sample(0, 0, 0).next_u32();
-        let b = Sampler::for_sample(0, 1, 0).next_u32();
-        let c = Sampler::for_sample(0, 0, 1).next_u32();
-        let d = Sampler::for_sample(1, 0, 0).next_u32();
-        let e = Sampler::for_bounce(0, 0, 0, 1).next_u32();
+        let a = Sampler::for_sample(0, 0, 0).next_f32();
+        let b = Sampler::for_sample(0, 1, 0).next_f32();
+        let c = Sampler::for_sample(0, 0, 1).next_f32();
+        let d = Sampler::for_sample(1, 0, 0).next_f32();
+        let e = Sampler::for_bounce(0, 0, 0, 1).next_f32();
         assert!(a != b && a != c && a != d && b != c && a != e);
-        assert_eq!(a, Sampler::for_sample(0, 0, 0).next_u32());
+        assert_eq!(a, Sampler::for_sample(0, 0, 0).next_f32());
         let mut s = Sampler::for_sample(3, 4, 5);
-        s.next_u32();
-        assert_eq!(s.next_u32(), Sampler::for_sample(3, 4, 5).at(1).next_u32());
+        s.next_f32();
+        assert_eq!(s.next_f32(), Sampler::for_sample(3, 4, 5).at(1).next_f32());
         let key = Sampler::path_key(3, 4, 5);
         assert_eq!(Sampler::for_vertex(key, 2), Sampler::for_bounce(3, 4, 5, 2));
         assert_eq!(Sampler::sample_key(Sampler::pixel_key(3, 4), 5), key);

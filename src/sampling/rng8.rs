@@ -41,11 +41,19 @@ pub fn for_vertex_x8(avx: Avx2, inputs: &[u64; LANES]) -> [Sampler; LANES] {
 }
 
 /// [`Sampler::next_2d`] of each stream at dimension `dim` (the stream's own dimension is
-/// ignored): `(a, b)` per lane.
+/// ignored): `(a, b)` per lane. Hashed streams are hashed together; streams that follow a
+/// pattern are drawn one by one.
 /// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub fn next_2d_x8(_: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+    if s.iter().any(Sampler::patterned) {
+        let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
+        for j in 0..LANES {
+            (a[j], b[j]) = s[j].at(dim).next_2d();
+        }
+        return (a, b);
+    }
     let mut z = [0u64; LANES];
     for j in 0..LANES {
         z[j] = s[j].dim_input(dim);
@@ -75,6 +83,9 @@ pub fn next_2d_x8(_: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f3
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
+    if s.iter().any(Sampler::patterned) {
+        return s.map(|r| r.at(dim).next_f32());
+    }
     next_2d_x8(avx, s, dim).0
 }
 

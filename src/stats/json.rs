@@ -16,6 +16,7 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
         "width": s.width,
         "height": s.height,
         "spp": s.spp,
+        "sampler": s.sampler.name(),
         "threads": if s.threads == 0 { rayon::current_num_threads() } else { s.threads },
         "effects": effects.names(),
         "effect_reasons": effects.on,

@@ -3,6 +3,8 @@
 //! quadrature; bins expecting fewer than 5 samples are pooled; p-value threshold 1e-3, fixed
 //! seeds), and a quadrature check that each pdf integrates to 1 over the sphere.
 
+mod patterns;
+
 use crate::common::chi2::{chi_square, gamma_q, ln_gamma};
 use glam::{DVec3, Vec3};
 use std::f64::consts::{PI, TAU};

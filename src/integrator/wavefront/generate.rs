@@ -33,7 +33,7 @@ impl Wave<'_> {
 /// Fills the path queue with the wave's camera rays, in slot order. A pixel's samples are
 /// consecutive slots, so the pixel's coordinates and the pixel part of the path key
 /// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
-/// With `lanes` (a pinhole camera and AVX2: `super::Lanes`), the rays of eight samples are
+/// With `lanes` (a pinhole camera, independent numbers and AVX2: `super::Lanes`), the rays of eight samples are
 /// set up lane-parallel (keys and jitters one by one, the directions' normalisations together).
 pub fn generate(
     t: &Transport,
@@ -59,7 +59,7 @@ pub fn generate(
         let (x, y) = (pixel % width as u32, pixel / width as u32);
         let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
         for sample in wave.base..wave.base + wave.batch {
-            let key = Sampler::sample_key(pixel_key, sample as u64);
+            let key = t.pattern.sample_key(pixel_key, sample as u64);
             q.ray.push(t.camera_ray_keyed(x, y, width, height, key, spp));
             q.key.push(key);
         }

@@ -18,7 +18,7 @@ use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
 use crate::integrator::{Bounce, DIM_DIRECT, DIM_ROULETTE, Transport, orient};
 use crate::lights::SampledLight;
-use crate::sampling::{Sampler, rng8};
+use crate::sampling::{Sampler, SamplerKind, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
@@ -252,9 +252,11 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
     let normals = corner_normals.is_some();
     let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays> = Vec::new();
+    let hashed = t.pattern.kind == SamplerKind::Independent;
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
         let mut vertex_input = [0u64; L];
+        let mut patterned = [Sampler::default(); L];
         let mut albedo = [Vec3::ZERO; L];
         let mut direct = [false; L];
         let mut cont = [false; L];
@@ -278,6 +280,9 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
             }
             // As `Transport::vertex_sampler`, hashed for all lanes below.
             vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
+            if !hashed {
+                patterned[j] = t.vertex_sampler(q.key[i], depth);
+            }
             surf.set(t, corner_normals, j, &q.ray[i], &hit);
             albedo[j] = t.albedo[m];
             // As `Transport::direct_rays` and `Transport::scatter` decide.
@@ -287,7 +292,8 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
         if !direct.iter().chain(&cont).any(|&b| b) {
             continue;
         }
-        let rng = rng8::for_vertex_x8(avx, &vertex_input);
+        // Patterned streams (stratified, Sobol) are drawn one lane at a time by `rng8`.
+        let rng = if hashed { rng8::for_vertex_x8(avx, &vertex_input) } else { patterned };
         surface_points(&surf, normals, spheres, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;

@@ -114,7 +114,8 @@ macro_rules! with_kernel {
 /// the token when the stage's lane kernel runs, `None` when its one-path-at-a-time kernel does.
 #[derive(Clone, Copy, Debug)]
 pub struct Lanes {
-    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers).
+    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers)
+    /// and independent numbers (the lanes hash them).
     pub camera: Option<Avx2>,
     /// Shading, eight paths at a time: see [`lanes::can_shade`].
     pub shade: Option<Avx2>,
@@ -125,7 +126,7 @@ impl Lanes {
     /// instruction set and the CPU have AVX2.
     pub fn of(t: &Transport, effects: &Effects, isa: Isa) -> Lanes {
         let avx2 = isa.avx2();
-        Lanes { camera: avx2.filter(|_| t.pinhole()), shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)) }
+        Lanes { camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent), shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)) }
     }
 }
 

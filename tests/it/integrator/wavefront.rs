@@ -7,6 +7,7 @@ use crate::common::agree::assert_regions_agree;
 use crate::common::render::{recursive, wavefront};
 use glam::Vec3;
 use wavepath::load::default_scene;
+use wavepath::sampling::SamplerKind;
 use wavepath::scene::Scene;
 use wavepath::settings::Settings;
 
@@ -95,16 +96,18 @@ fn thin_lens_agrees() {
 #[test]
 fn image_is_identical_for_any_thread_count() {
     // 96x72 at 4 samples: 6912 pixels in waves of 1024 (4096 paths), seven waves per frame,
-    // so every pool has work to share; with and without adaptive sampling.
+    // so every pool has work to share; with and without adaptive sampling, for every sampler.
     let scene = default_scene();
     let accel = wavepath::accel::build(&scene, true, Default::default()).0;
     let base = Settings { width: 96, height: 72, ..settings(3, 4) };
-    for s in [base.clone(), Settings { spp: 8, adaptive: Some((4, 0.05)), ..base.clone() }] {
+    let adaptive = Settings { spp: 8, adaptive: Some((4, 0.05)), ..base.clone() };
+    let patterned = SamplerKind::ALL.map(|sampler| Settings { sampler, ..base.clone() });
+    for s in [base.clone(), adaptive.clone(), Settings { sampler: SamplerKind::Sobol, ..adaptive }].iter().chain(&patterned) {
         let run = |threads| {
             let waves = std::sync::atomic::AtomicUsize::new(0);
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let acc = pool.install(|| {
-                wavepath::integrator::wavefront::render_wavefront(&scene, accel.as_ref(), &s, &|_| {
+                wavepath::integrator::wavefront::render_wavefront(&scene, accel.as_ref(), s, &|_| {
                     waves.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 })
                 .0
@@ -119,7 +122,7 @@ fn image_is_identical_for_any_thread_count() {
         };
         for threads in [2, 3, 8] {
             let (other, _) = run(threads);
-            assert_eq!(bits(&one), bits(&other), "{threads} threads, adaptive {:?}", s.adaptive);
+            assert_eq!(bits(&one), bits(&other), "{threads} threads, adaptive {:?}, {:?}", s.adaptive, s.sampler);
             assert_eq!(one.samples_taken(), other.samples_taken());
         }
     }
