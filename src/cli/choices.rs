@@ -102,6 +102,10 @@ choice! {
         Roulette,
         /// Adaptive sampling (-a 64 T) for T from 0.2 to 0.01, against fixed spp.
         Adaptive,
+        /// Independent numbers, stratified and Sobol samples, each over the spp ladder.
+        Sampler,
+        /// MIS of light and BSDF samples against light sampling alone (--no-mis).
+        Mis,
     }
 }
 

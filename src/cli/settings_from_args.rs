@@ -2,8 +2,8 @@
 
 use super::RenderArgs;
 use super::choices::Roulette;
-use wavepath::sampling::SamplerKind;
 use anyhow::{Result, bail};
+use wavepath::sampling::SamplerKind;
 use wavepath::settings::{Cell, Settings, Shading};
 
 /// Largest image side accepted; beyond this a typo is far more likely than a real render.
@@ -56,7 +56,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.rr_continue = a.rr as f32;
     // The seed's fixed roulette for its own scenes; for other files the estimator that reached
     // a given error soonest in the end-to-end harness (docs/decisions.md, "Russian roulette").
-    let cs184 = a.scene.as_ref().is_none_or(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("dae")));
+    let cs184 = is_cs184(a.scene.as_deref());
     let roulette = a.roulette.unwrap_or(if cs184 { Roulette::Fixed } else { Roulette::Throughput });
     s.rr_throughput = roulette == Roulette::Throughput;
     s.rr_depth = match a.rr_depth {
@@ -72,9 +72,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     s.all_effects = a.all_effects;
     s.cs184_light_pdf = a.cs184_light_pdf;
     s.mis = !a.no_mis;
-    // Independent numbers keep the seed's pictures; other files get the pattern that reached a
-    // given error soonest in the end-to-end harness (docs/decisions.md, "Samplers").
-    s.sampler = a.sampler.map(Into::into).unwrap_or(if cs184 { SamplerKind::Independent } else { SamplerKind::Sobol });
+    s.sampler = a.sampler.map(Into::into).unwrap_or(default_sampler(a.scene.as_deref()));
     s.shading = a.shading.map(Shading::from).unwrap_or(if s.max_depth > 1 { Shading::Global } else { Shading::Direct });
     if let Some(p) = &a.cell {
         for (name, v) in ["X", "Y", "DX", "DY"].iter().zip(p) {
@@ -97,4 +95,17 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
         bail!("-d (focal distance) must be a positive number, got {d}");
     }
     Ok(s)
+}
+
+/// The sampler of a render of `scene` (`None`: the embedded one) without `--sampler`:
+/// independent numbers keep the seed's pictures (.dae files and the embedded scene); other
+/// files get the pattern that reached a given error soonest in the end-to-end harness
+/// (docs/decisions.md, "Samplers").
+pub fn default_sampler(scene: Option<&std::path::Path>) -> SamplerKind {
+    if is_cs184(scene) { SamplerKind::Independent } else { SamplerKind::Sobol }
+}
+
+/// Whether `scene` is one of the seed's own (a .dae file, or `None`: the embedded scene).
+fn is_cs184(scene: Option<&std::path::Path>) -> bool {
+    scene.is_none_or(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("dae")))
 }

@@ -1,6 +1,6 @@
 //! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`wavepath::study`]).
 
-use super::choices::{Camera, Sweep};
+use super::choices::{Camera, Sampler, Sweep};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
@@ -18,7 +18,10 @@ use wavepath::study::StudyConfig;
     per setting), the images at equal time and report.md into --out.\n\n\
     Sweeps: spp (one curve); light-samples (-l 1..64); sampling (light importance vs uniform \
     hemisphere); depth (-m 1..16 without roulette, and -m 4, 16 with --rr); roulette (-m 16, \
-    --rr 1.0 down to 0.1); adaptive (-a 64 T for T = 0.2..0.01, against fixed spp).")]
+    --rr 1.0 down to 0.1); adaptive (-a 64 T for T = 0.2..0.01, against fixed spp); sampler \
+    (independent, stratified, sobol); mis (MIS of light and BSDF samples against light sampling \
+    alone: it differs only where the scene's lights are emissive triangles or an environment \
+    map).")]
 pub struct StudyArgs {
     /// Scene file; omitted: the embedded Cornell box.
     pub scene: Option<PathBuf>,
@@ -65,6 +68,10 @@ pub struct StudyArgs {
     /// COLLADA camera framing.
     #[arg(long, value_enum, default_value_t = Camera::Cs184)]
     pub camera: Camera,
+    /// How each pixel's samples spread (the sampler sweep varies it); default as for a
+    /// render: independent for .dae files and the embedded scene, sobol for other files.
+    #[arg(long, value_enum)]
+    pub sampler: Option<Sampler>,
 }
 
 fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
@@ -93,6 +100,7 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
         rr_continue: a.rr as f32,
         shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
         seed: a.seed,
+        sampler: a.sampler.map(Into::into).unwrap_or(super::settings_from_args::default_sampler(a.scene.as_deref())),
         threads: match a.threads {
             Some(t) => in_range("-t", t, 1, 4096)? as usize,
             None => 0,

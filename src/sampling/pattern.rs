@@ -6,8 +6,7 @@
 //! error. Every dimension pair gets its own scramble, keyed by (seed, pixel, vertex,
 //! dimension) and not by the thread or the order of work: images stay deterministic.
 
-use super::rng::unit_f32;
-use super::splitmix::splitmix64;
+use super::splitmix::{splitmix64, unit_f32};
 
 /// Which pattern a render's samples follow (`--sampler`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

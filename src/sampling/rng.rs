@@ -1,5 +1,5 @@
 use super::pattern::{SOBOL_LENGTH, SamplerKind, Strata, sobol_1d, sobol_2d};
-use super::splitmix::splitmix64;
+use super::splitmix::{splitmix64, unit_f32};
 
 /// The random-number stream of one camera sample of one pixel, one stream per bounce.
 ///
@@ -215,12 +215,6 @@ impl Sampler {
         let h = self.hashed(h);
         (unit_f32((h >> 40) as u32), unit_f32(((h >> 16) & 0xFF_FFFF) as u32))
     }
-}
-
-/// `bits` (< 2^24) as a number in [0, 1).
-#[inline(always)]
-pub(super) fn unit_f32(bits: u32) -> f32 {
-    bits as f32 * (1.0 / (1u32 << 24) as f32)
 }
 
 #[cfg(test)]

@@ -5,7 +5,7 @@
 //! `wrapping_mul`s scalar.
 
 use super::Sampler;
-use super::rng::unit_f32;
+use super::splitmix::unit_f32;
 use crate::cpu::Avx2;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;

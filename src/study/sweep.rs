@@ -2,6 +2,7 @@
 //! rendered at a ladder of sample counts (or, for adaptive sampling, of tolerances), so
 //! error against time shows which setting buys the most accuracy per second.
 
+use crate::sampling::SamplerKind;
 use crate::settings::Settings;
 
 /// The setting a study varies.
@@ -19,6 +20,12 @@ pub enum SweepKind {
     Roulette,
     /// Adaptive sampling (-a 64 T) for T from 0.2 to 0.01, against fixed spp.
     Adaptive,
+    /// Independent numbers, stratified and Sobol samples (`--sampler`), each over the spp
+    /// ladder.
+    Sampler,
+    /// Light sampling combined with the BSDF's sample by MIS, against light sampling alone
+    /// (`--no-mis`), each over the spp ladder.
+    Mis,
 }
 
 impl SweepKind {
@@ -30,6 +37,8 @@ impl SweepKind {
             SweepKind::Depth => "depth",
             SweepKind::Roulette => "roulette",
             SweepKind::Adaptive => "adaptive",
+            SweepKind::Sampler => "sampler",
+            SweepKind::Mis => "mis",
         }
     }
 
@@ -101,6 +110,14 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
                 curve(label, format!("rr{rr}"), depth_settings(&b(), DEEP, rr))
             })
             .collect(),
+        SweepKind::Sampler => SamplerKind::ALL
+            .iter()
+            .map(|&k| curve(format!("--sampler {}", k.name()), k.name().into(), Settings { sampler: k, ..b() }))
+            .collect(),
+        SweepKind::Mis => vec![
+            curve("MIS (light + BSDF samples)".into(), "mis".into(), Settings { mis: true, ..b() }),
+            curve("light sampling alone (--no-mis)".into(), "no-mis".into(), Settings { mis: false, ..b() }),
+        ],
         SweepKind::Adaptive => vec![
             curve("fixed spp".into(), "fixed".into(), b()),
             Curve {

@@ -7,7 +7,7 @@ mod accel;
 mod cli;
 mod common;
 mod cs184;
-mod integrator;
+pub mod integrator;
 mod isa;
 mod layers;
 mod load;

@@ -126,7 +126,10 @@ impl Lanes {
     /// instruction set and the CPU have AVX2.
     pub fn of(t: &Transport, effects: &Effects, isa: Isa) -> Lanes {
         let avx2 = isa.avx2();
-        Lanes { camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent), shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)) }
+        Lanes {
+            camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent),
+            shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)),
+        }
     }
 }
 

@@ -16,7 +16,7 @@ const H: usize = 24;
 const GAP: f32 = 0.02;
 const HALF: f32 = 0.15;
 
-fn scene() -> Scene {
+pub fn scene() -> Scene {
     let mut mesh = Mesh::default();
     quad(&mut mesh, [vec3(-5.0, 0.0, -5.0), vec3(-5.0, 0.0, 5.0), vec3(5.0, 0.0, 5.0), vec3(5.0, 0.0, -5.0)], 0);
     // Wound to face the floor.

@@ -6,7 +6,7 @@ mod analytic;
 mod effects;
 mod envmap;
 mod lens;
-mod mis;
+pub mod mis;
 mod offsets;
 mod roulette;
 mod stability;

@@ -102,7 +102,9 @@ fn image_is_identical_for_any_thread_count() {
     let base = Settings { width: 96, height: 72, ..settings(3, 4) };
     let adaptive = Settings { spp: 8, adaptive: Some((4, 0.05)), ..base.clone() };
     let patterned = SamplerKind::ALL.map(|sampler| Settings { sampler, ..base.clone() });
-    for s in [base.clone(), adaptive.clone(), Settings { sampler: SamplerKind::Sobol, ..adaptive }].iter().chain(&patterned) {
+    for s in
+        [base.clone(), adaptive.clone(), Settings { sampler: SamplerKind::Sobol, ..adaptive }].iter().chain(&patterned)
+    {
         let run = |threads| {
             let waves = std::sync::atomic::AtomicUsize::new(0);
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();

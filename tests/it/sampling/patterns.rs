@@ -13,6 +13,9 @@ use wavepath::load::default_scene;
 use wavepath::sampling::{Pattern, Sampler, SamplerKind};
 use wavepath::settings::Settings;
 
+/// Two numbers of sample `sample` of pixel `pixel` under a pattern.
+type Point2 = dyn Fn(Pattern, u64, u64) -> (f32, f32);
+
 /// The stream of vertex `bounce` of sample `sample` of `pixel` under `pattern`.
 fn stream(pattern: Pattern, pixel: u64, sample: u64, bounce: u32) -> Sampler {
     pattern.vertex(pattern.path_key(7, pixel, sample), bounce)
@@ -78,20 +81,18 @@ fn patterns_spread_a_pixels_samples_evenly_and_keep_dimensions_apart() {
     // vertex) a pattern must stay independent: each marginal is even, so the pair is a Latin
     // hypercube (measured 0.27-0.32), never the clumps of correlated dimensions (< 1.0).
     let n = 64;
-    let mean_ratio = |kind: SamplerKind, point: &dyn Fn(Pattern, u64, u64) -> (f32, f32)| -> f64 {
+    let mean_ratio = |kind: SamplerKind, point: &Point2| -> f64 {
         let pattern = Pattern::new(kind, n as u32);
         let total: f64 = (0..40u64)
             .map(|px| {
-                let p: Vec<(f64, f64)> = (0..n as u64)
-                    .map(|s| point(pattern, px, s))
-                    .map(|(x, y)| (x as f64, y as f64))
-                    .collect();
+                let p: Vec<(f64, f64)> =
+                    (0..n as u64).map(|s| point(pattern, px, s)).map(|(x, y)| (x as f64, y as f64)).collect();
                 l2_star_sq(&p)
             })
             .sum();
         total / 40.0 / random_l2_star_sq(n)
     };
-    let pairs: [(&str, &dyn Fn(Pattern, u64, u64) -> (f32, f32)); 3] = [
+    let pairs: [(&str, &Point2); 3] = [
         ("camera jitter", &|p, px, s| stream(p, px, s, 0).next_2d()),
         ("light sample at vertex 2", &|p, px, s| stream(p, px, s, 2).at(3).next_2d()),
         ("1-D roulette x 1-D lobe", &|p, px, s| {
@@ -99,7 +100,7 @@ fn patterns_spread_a_pixels_samples_evenly_and_keep_dimensions_apart() {
             (r.at(2).next_f32(), r.at(1).next_f32())
         }),
     ];
-    let across: [(&str, &dyn Fn(Pattern, u64, u64) -> (f32, f32)); 2] = [
+    let across: [(&str, &Point2); 2] = [
         ("dimension 0 x dimension 3", &|p, px, s| {
             let r = stream(p, px, s, 1);
             (r.at(0).next_2d().0, r.at(3).next_2d().0)
