@@ -7,6 +7,7 @@
 //! dimension) and not by the thread or the order of work: images stay deterministic.
 
 use super::splitmix::{splitmix64, unit_f32};
+use sobol_burley::parts::{hash, owen_scramble_rev, u32_to_f32_norm};
 
 /// Which pattern a render's samples follow (`--sampler`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -87,21 +88,73 @@ fn jitter(index: u32, hash: u64) -> u64 {
 }
 
 /// Two numbers of Sobol point `index` (< [`SOBOL_LENGTH`]) in the dimension pair whose
-/// scramble is `seed`.
+/// scramble is `seed`: exactly `sobol_burley::sample_4d(index, 0, seed)`'s first two, at
+/// less than half its cost (Sobol's first dimension is the bit reversal of the index and
+/// its second one two table lookups, where the crate walks the index's bits with a
+/// data-dependent loop). A render draws a few of these per path vertex.
 #[inline]
 pub fn sobol_2d(index: u32, seed: u32) -> (f32, f32) {
-    // Four dimensions in one pass (one index shuffle, SIMD scrambles) cost less than two
-    // single ones.
-    let [x, y, _, _] = sobol_burley::sample_4d(index, 0, seed);
-    (x, y)
+    let i = shuffled_index(index, seed);
+    let y = SOBOL_DIM1[0][(i >> 24) as usize] ^ SOBOL_DIM1[1][((i >> 16) & 0xFF) as usize];
+    (scrambled(sobol_dim0(i), seed, 0x912f_69ba), scrambled(y, seed, 0x174f_18ab))
 }
 
 /// One number of Sobol point `index` (< [`SOBOL_LENGTH`]) in the dimension whose scramble is
-/// `seed`.
+/// `seed`: exactly `sobol_burley::sample(index, 0, seed)`.
 #[inline]
 pub fn sobol_1d(index: u32, seed: u32) -> f32 {
-    sobol_burley::sample(index, 0, seed)
+    scrambled(sobol_dim0(shuffled_index(index, seed)), seed, 0x912f_69ba)
 }
+
+/// The sequence's index shuffled by `seed` (Burley's nested uniform scramble of the
+/// bit-reversed index), bit-reversed: the crate's `sample_4d` step by step.
+#[inline(always)]
+fn shuffled_index(index: u32, seed: u32) -> u32 {
+    owen_scramble_rev(index.reverse_bits(), hash(seed ^ 0x79c6_8e4a))
+}
+
+/// Sobol dimension 0 of a bit-reversed shuffled index, bit-reversed (its top 16 bits
+/// reversed).
+#[inline(always)]
+fn sobol_dim0(i: u32) -> u32 {
+    (i >> 16).reverse_bits() >> 16
+}
+
+/// A bit-reversed Sobol coordinate Owen-scrambled by `seed` (and the crate's constant of
+/// its dimension), as a number in [0, 1).
+#[inline(always)]
+fn scrambled(v: u32, seed: u32, dimension: u32) -> f32 {
+    let scramble = hash(seed.wrapping_mul(0x9c8f_2d3b) ^ dimension);
+    u32_to_f32_norm(owen_scramble_rev(v, scramble).reverse_bits())
+}
+
+/// Sobol dimension 1 over GF(2), bit-reversed: for each byte of the bit-reversed index's
+/// top 16 bits, the XOR of the direction numbers its set bits select. Direction numbers:
+/// v_0 = 2^31, v_k = v_(k-1) ^ (v_(k-1) >> 1) (primitive polynomial x + 1).
+const SOBOL_DIM1: [[u32; 256]; 2] = {
+    let mut v = [0u32; 16];
+    v[0] = 1 << 31;
+    let mut k = 1;
+    while k < 16 {
+        v[k] = v[k - 1] ^ (v[k - 1] >> 1);
+        k += 1;
+    }
+    let mut t = [[0u32; 256]; 2];
+    let mut b = 0;
+    while b < 256 {
+        let mut j = 0;
+        while j < 8 {
+            // Bit 7 - j of the top byte is bit j of the index; of the next byte, bit 8 + j.
+            if b & (0x80 >> j) != 0 {
+                t[0][b] ^= v[j].reverse_bits();
+                t[1][b] ^= v[8 + j].reverse_bits();
+            }
+            j += 1;
+        }
+        b += 1;
+    }
+    t
+};
 
 /// `x` rounded down to the largest float below 1 when the division rounded it up to 1.
 #[inline(always)]
@@ -160,6 +213,17 @@ mod tests {
                     assert!(p < n && !seen[p as usize], "n {n} seed {seed}: {i} -> {p} twice");
                     seen[p as usize] = true;
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn sobol_points_are_the_crates() {
+        for seed in [0u32, 1, 12_345, 0xDEAD_BEEF] {
+            for index in 0..SOBOL_LENGTH {
+                let [x, y, _, _] = sobol_burley::sample_4d(index, 0, seed);
+                assert_eq!(sobol_2d(index, seed), (x, y), "index {index} seed {seed}");
+                assert_eq!(sobol_1d(index, seed), sobol_burley::sample(index, 0, seed));
             }
         }
     }
