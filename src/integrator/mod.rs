@@ -43,6 +43,8 @@ pub struct Transport<'a> {
     /// Per material: diffuse albedo and emitted radiance.
     pub albedo: Vec<Vec3>,
     pub emission: Vec<Vec3>,
+    /// Per material: whether it emits from both faces or only from the front one.
+    pub two_sided_emission: Vec<bool>,
     /// Per material: metalness and roughness factors (metallic-roughness materials).
     pub metal_rough: Vec<Vec2>,
     /// Per material: its scattering model (used only when `non_diffuse`).
@@ -169,6 +171,7 @@ impl<'a> Transport<'a> {
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
+            two_sided_emission: scene.materials.iter().map(|m| m.two_sided_emission).collect(),
             metal_rough: scene
                 .materials
                 .iter()
@@ -239,13 +242,18 @@ impl<'a> Transport<'a> {
         let sp = self.scene.surface_point_with(ray, hit, self.textures.any());
         let (ng, ns, front) = orient(sp.geometric_normal, sp.shading_normal, ray.dir);
         let m = sp.material as usize;
+        let emission = if front || self.two_sided_emission[m] {
+            self.textures.emission(m, sp.uv).unwrap_or(self.emission[m])
+        } else {
+            Vec3::ZERO
+        };
         Vertex {
             p: sp.position,
             p_error: sp.p_error,
             ng,
             ns,
             albedo: self.textures.albedo(m, sp.uv).unwrap_or(self.albedo[m]) * sp.color,
-            emission: self.textures.emission(m, sp.uv).unwrap_or(self.emission[m]),
+            emission,
             metal_rough: self.textures.metal_rough(m, sp.uv).unwrap_or(self.metal_rough[m]),
             material: sp.material,
             front,
@@ -356,7 +364,9 @@ impl<'a> Transport<'a> {
         match hit {
             Some(h) => {
                 let m = self.material_of(h.prim);
-                if self.textures.has_emission(m) {
+                if !self.two_sided_emission[m] && !self.scene.front_face(ray, h) {
+                    Vec3::ZERO
+                } else if self.textures.has_emission(m) {
                     let uv = self.scene.surface_point_with(ray, h, true).uv;
                     self.textures.emission(m, uv).unwrap_or(self.emission[m])
                 } else {

@@ -8,8 +8,8 @@ use glam::{Vec2, Vec3};
 
 /// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
 /// power (area x mean emitted illuminance) and a point uniformly on it, so a dim emitter
-/// takes few samples and a bright one many. Emission is two-sided, as the reference's
-/// emission BSDF is. A triangle under an emission texture emits factor x texel at each
+/// takes few samples and a bright one many. A triangle emits from both faces or from its
+/// front only, as its material says (a two-sided emitter has twice the power). A triangle under an emission texture emits factor x texel at each
 /// point: its mean is estimated from a grid of lookups, floored at a tenth of its brightest
 /// texel so that no point that emits has zero density (the estimator stays unbiased
 /// whatever the estimate); one whose texels are all black over its uv footprint emits
@@ -19,6 +19,8 @@ pub struct EmissiveTriangles {
     /// Corner 0 and the two edges from it.
     corners: Vec<[Vec3; 3]>,
     emission: Vec<Vec3>,
+    /// Per triangle, whether it emits from its front face only.
+    one_sided: Vec<bool>,
     /// For a textured triangle: its material's emission texture and its corners' uvs.
     textured: Vec<Option<(u32, [Vec2; 3])>>,
     /// Per material, the decoded emission texture (when the mesh has uvs).
@@ -44,6 +46,7 @@ impl EmissiveTriangles {
         let mut textured = Vec::new();
         let mut corners = Vec::new();
         let mut emission = Vec::new();
+        let mut one_sided = Vec::new();
         let mut cdf = Vec::new();
         let mut powers = Vec::new();
         let mut prims = Vec::new();
@@ -70,6 +73,7 @@ impl EmissiveTriangles {
                 }
                 None => illuminance(mat.emission),
             };
+            let brightness = if mat.two_sided_emission { 2.0 * brightness } else { brightness };
             let power = area * brightness;
             if area > 0.0 && power > 0.0 && power.is_finite() {
                 total += power;
@@ -79,6 +83,7 @@ impl EmissiveTriangles {
                 max_error = max_error.max(gamma(4) * (a.abs() + e1.abs() + e2.abs()));
                 corners.push([a, e1, e2]);
                 emission.push(mat.emission);
+                one_sided.push(!mat.two_sided_emission);
                 textured.push(tex.map(|(_, uv)| (m, uv)));
                 cdf.push(total);
                 powers.push(brightness);
@@ -89,6 +94,7 @@ impl EmissiveTriangles {
         (total > 0.0).then_some(EmissiveTriangles {
             corners,
             emission,
+            one_sided,
             textured,
             textures,
             cdf,
@@ -135,8 +141,8 @@ impl EmissiveTriangles {
         let (bu, bv) = warp::uniform_triangle(u[0], u[1]);
         let q = a + bu * e1 + bv * e2;
         let n = e1.cross(e2).try_normalize()?;
-        // Area density `density[i]`; emission is two-sided.
-        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, 1.0 / self.density[i], false)?;
+        // Area density `density[i]`.
+        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, 1.0 / self.density[i], self.one_sided[i])?;
         let le = match self.textured[i] {
             Some((m, [ua, ub, uc])) => {
                 let uv = ua + bu * (ub - ua) + bv * (uc - ua);

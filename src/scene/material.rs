@@ -90,6 +90,10 @@ pub struct Material {
     /// glTF `metallicRoughnessTexture` (linear): green scales roughness, blue metalness;
     /// `factor` holds (1, roughness, metallic), so a lookup gives the values at a point.
     pub metallic_roughness_texture: Option<Texture>,
+    /// Whether the surface emits from both faces (the CS184 emission BSDF, a glTF
+    /// `doubleSided` material) or only from its front, the side its winding's normal points
+    /// to (OBJ `Ke`, a single-sided glTF material: what the formats' own renderers show).
+    pub two_sided_emission: bool,
 }
 
 impl Default for Material {
@@ -107,6 +111,7 @@ impl Material {
             albedo_texture: None,
             emission_texture: None,
             metallic_roughness_texture: None,
+            two_sided_emission: true,
         }
     }
 
@@ -119,6 +124,7 @@ impl Material {
             albedo_texture: None,
             emission_texture: None,
             metallic_roughness_texture: None,
+            two_sided_emission: true,
         }
     }
 

@@ -26,6 +26,20 @@ impl Scene {
         self.surface_point_with(ray, hit, true)
     }
 
+    /// Whether `ray` hits the front of `hit`'s surface: the side a triangle's winding (or a
+    /// sphere's outward normal) points to, the side a one-sided emitter lights. The same rule
+    /// as shading's orientation of the geometric normal.
+    pub fn front_face(&self, ray: &Ray, hit: &Hit) -> bool {
+        let prim = hit.prim as usize;
+        let n = if prim < self.mesh.triangles.len() {
+            let [a, b, c] = self.mesh.corners(prim);
+            (b - a).cross(c - a)
+        } else {
+            ray.at(hit.t) - self.spheres[prim - self.mesh.triangles.len()].center
+        };
+        n.dot(ray.dir) <= 0.0
+    }
+
     /// [`surface_point`](Self::surface_point); a sphere point's `uv` (an `atan2` and an `acos`)
     /// only when `uv` is asked for (zero otherwise: untextured shading never reads it).
     #[inline(always)]

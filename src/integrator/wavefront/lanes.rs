@@ -33,6 +33,7 @@ pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
     !non_diffuse
         && !t.hemisphere
         && !t.mis
+        && t.two_sided_emission.iter().all(|&two| two)
         && !t.textures.any()
         && t.scene.mesh.colors.is_none()
         && t.area_lights.iter().all(Option::is_some)

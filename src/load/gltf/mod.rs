@@ -467,7 +467,8 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
     if m.unlit() {
         // What the eye sees is the base colour itself: emitted, with no light reflected.
         let emission_texture = base_texture(base).filter(|_| base.max_element() > 0.0);
-        return Material { emission_texture, ..Material::emitter(&name, base) };
+        let two_sided_emission = m.double_sided();
+        return Material { emission_texture, two_sided_emission, ..Material::emitter(&name, base) };
     }
     if let Some(sg) = m.pbr_specular_glossiness() {
         let [r, g, b, _] = sg.diffuse_factor();
@@ -489,6 +490,7 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
             albedo_texture: sg.diffuse_texture().map(|info| texture(&info, images, false, diffuse)),
             emission_texture,
             metallic_roughness_texture: None,
+            two_sided_emission: m.double_sided(),
         };
     }
     let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
@@ -501,6 +503,7 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
         metallic_roughness_texture: pbr
             .metallic_roughness_texture()
             .map(|info| texture(&info, images, true, Vec3::new(1.0, roughness, metallic))),
+        two_sided_emission: m.double_sided(),
     }
 }
 

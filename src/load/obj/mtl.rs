@@ -32,7 +32,12 @@ pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
                 let albedo = colour(&rest).map_err(|e| at(&e))?;
                 mat.bsdf = crate::scene::Bsdf::Diffuse { albedo };
             }
-            "Ke" => mat.emission = colour(&rest).map_err(|e| at(&e))?,
+            "Ke" => {
+                mat.emission = colour(&rest).map_err(|e| at(&e))?;
+                // Front face only, as the renderers that read MTL files emit (Mitsuba, pbrt,
+                // Blender's importer): the side the face's winding points to.
+                mat.two_sided_emission = false;
+            }
             "map_Kd" => {
                 // Options (`-bm 1 ...`) come first; the file name is the last word.
                 let Some(file) = rest.last() else { return Err(at("map_Kd without a file name")) };

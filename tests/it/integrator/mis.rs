@@ -11,10 +11,10 @@ use glam::{DVec3, Vec3, vec3};
 use wavepath::scene::{Camera, Material, Mesh, Scene};
 use wavepath::settings::Settings;
 
-const W: usize = 32;
-const H: usize = 24;
-const GAP: f32 = 0.02;
-const HALF: f32 = 0.15;
+pub const W: usize = 32;
+pub const H: usize = 24;
+pub const GAP: f32 = 0.02;
+pub const HALF: f32 = 0.15;
 
 pub fn scene() -> Scene {
     let mut mesh = Mesh::default();
@@ -36,7 +36,7 @@ pub fn scene() -> Scene {
 /// The floor points across pixel (x, y) on a 6x6 grid (its samples are jittered uniformly
 /// across it, and next to the emitter the radiance changes within a pixel), when nothing but
 /// floor lies anywhere in the pixel (a sample that saw the emitter would add its emission).
-fn floor_points(cam: &Camera, x: usize, y: usize) -> Option<Vec<Vec3>> {
+pub fn floor_points(cam: &Camera, x: usize, y: usize) -> Option<Vec<Vec3>> {
     let at = |fx: f32, fy: f32, h: f32| {
         let r = cam.generate_ray((x as f32 + fx) / W as f32, (y as f32 + fy) / H as f32);
         r.at((h - r.origin.y) / r.dir.y)

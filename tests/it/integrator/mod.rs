@@ -4,6 +4,7 @@
 
 mod analytic;
 mod effects;
+mod emitter_sides;
 mod envmap;
 mod lens;
 pub mod mis;

@@ -69,7 +69,9 @@ fn gltf_materials_map_onto_their_models() {
              {},
              {"pbrMetallicRoughness":{"baseColorFactor":[0.3,0.6,0.9,1]},"extensions":{"KHR_materials_unlit":{}}},
              {"extensions":{"KHR_materials_pbrSpecularGlossiness":{"diffuseFactor":[0.5,0.5,0.25,1],"specularFactor":[0.2,0.3,0.4],"glossinessFactor":0.7}}},
-             {"pbrMetallicRoughness":{"metallicFactor":0},"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":1},"KHR_materials_iridescence":{"iridescenceFactor":1}}}
+             {"pbrMetallicRoughness":{"metallicFactor":0},"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":1},"KHR_materials_iridescence":{"iridescenceFactor":1}}},
+             {"emissiveFactor":[1,1,1],"doubleSided":true},
+             {"emissiveFactor":[1,1,1],"doubleSided":true,"extensions":{"KHR_materials_unlit":{}}}
            ]"#,
     );
     let s = load_doc(&d, "m.gltf", &doc);
@@ -82,6 +84,9 @@ fn gltf_materials_map_onto_their_models() {
         Bsdf::SpecularGlossiness { diffuse: vec3(0.5, 0.5, 0.25), specular: vec3(0.2, 0.3, 0.4), glossiness: 0.7 }
     );
     assert_eq!(m[4].bsdf, Bsdf::MetallicRoughness { base: Vec3::ONE, metallic: 0.0, roughness: 1.0 });
+    // Emission from the front face only unless the material is double-sided.
+    let two_sided: Vec<bool> = m.iter().take(7).map(|m| m.two_sided_emission).collect();
+    assert_eq!(two_sided, [false, false, false, false, false, true, true]);
     assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
     let note = &s.notes[0];
     assert!(note.contains("KHR_materials_clearcoat, KHR_materials_iridescence") && note.contains("m.gltf"), "{note}");

@@ -129,6 +129,8 @@ fn obj_polygons_groups_and_relative_indices_keep_file_order() {
     }
     let b = &scene.materials[scene.mesh.material_ids[3] as usize];
     assert_eq!(b.emission, vec3(1.0, 2.0, 3.0));
+    // An MTL emitter lights the side its faces' winding points to, as MTL readers render it.
+    assert!(!b.two_sided_emission);
     assert_eq!(b.albedo_texture.as_ref().unwrap().path, d.join("tex/b.png"));
     // Only some corners have normals: geometric normals are used.
     assert!(scene.mesh.normals.is_none());
