@@ -190,6 +190,11 @@ pub struct RenderArgs {
     /// with the BSDF's sample by multiple importance sampling.
     #[arg(long)]
     pub no_mis: bool,
+    /// Every emitter emits from both faces. Default: as its format says (CS184 .dae and
+    /// double-sided glTF materials both faces; OBJ Ke and single-sided glTF materials the
+    /// front face, the side the winding points to).
+    #[arg(long)]
+    pub two_sided_emission: bool,
     /// Force every effect (stage and kernel feature) on, even those the scene does not need;
     /// the image is the same, only slower: for measuring what specialisation saves.
     #[arg(long)]

@@ -14,7 +14,14 @@ use wavepath::stats::RenderStats;
 /// Loads the scene the arguments name (or the default) with the camera adjustments applied.
 pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     let mut scene = match &a.scene {
-        Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
+        Some(p) => super::load_scene(
+            p,
+            &LoadOptions {
+                camera: a.camera.into(),
+                two_sided_emission: a.two_sided_emission,
+                ..LoadOptions::default()
+            },
+        )?,
         None => default_scene(),
     };
     if let Some(c) = &a.camera_file {

@@ -31,11 +31,14 @@ pub struct LoadOptions {
     /// COLLADA: replace the file's normals by smooth area-weighted vertex normals, as the
     /// reference renderer does (default for .dae).
     pub smooth_normals: bool,
+    /// Every emitter emits from both faces, whatever its format says (for comparisons with
+    /// renderers and scenes that treat all emitters so).
+    pub two_sided_emission: bool,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        LoadOptions { camera: CameraMode::Cs184, smooth_normals: true }
+        LoadOptions { camera: CameraMode::Cs184, smooth_normals: true, two_sided_emission: false }
     }
 }
 
@@ -62,6 +65,9 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene> {
         other => bail!("{shown}: unknown scene format '.{other}'; expected .dae, .obj, .ply, .gltf or .glb"),
     };
     scene.name = path.display().to_string();
+    if opts.two_sided_emission {
+        scene.materials.iter_mut().for_each(|m| m.two_sided_emission = true);
+    }
     if scene.mesh.triangles.is_empty() && scene.spheres.is_empty() {
         bail!("{shown}: the scene has no triangles and no spheres");
     }

@@ -26,7 +26,10 @@ fn every_cs184_file_loads_in_every_mode() {
     let files = common::files_with_ext(&dir, &["dae"]);
     assert!(files.len() >= 40, "expected the CS184 scenes in {}", dir.display());
     for f in &files {
-        for opts in [LoadOptions::default(), LoadOptions { camera: CameraMode::File, smooth_normals: false }] {
+        for opts in [
+            LoadOptions::default(),
+            LoadOptions { camera: CameraMode::File, smooth_normals: false, ..LoadOptions::default() },
+        ] {
             let s = load(f, &opts).unwrap_or_else(|e| panic!("{e}"));
             assert!(s.primitive_count() > 0, "{}", f.display());
             s.validate().unwrap();
@@ -599,7 +602,10 @@ fn damaged_real_file_never_panics() {
             }
         }
         let Ok(t) = String::from_utf8(b) else { continue };
-        for opts in [LoadOptions::default(), LoadOptions { camera: CameraMode::File, smooth_normals: false }] {
+        for opts in [
+            LoadOptions::default(),
+            LoadOptions { camera: CameraMode::File, smooth_normals: false, ..LoadOptions::default() },
+        ] {
             if let Err(e) = parse_str(&t, "damaged.dae", &opts) {
                 let msg = e.to_string();
                 assert!(msg.starts_with("damaged.dae: ") && !msg.contains('\n'), "{msg}");

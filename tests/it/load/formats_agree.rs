@@ -14,7 +14,7 @@ fn authored(ext: &str) -> PathBuf {
 
 fn load_as(ext: &str) -> Scene {
     // The .dae keeps its own camera and normals so that it is comparable with the others.
-    let opts = LoadOptions { camera: CameraMode::File, smooth_normals: false };
+    let opts = LoadOptions { camera: CameraMode::File, smooth_normals: false, ..LoadOptions::default() };
     load(&authored(ext), &opts).unwrap_or_else(|e| panic!("{e:#}"))
 }
 
