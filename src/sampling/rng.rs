@@ -30,13 +30,24 @@ enum Seq {
 }
 
 impl Seq {
-    /// The sample's index in its pixel, when the pattern covers it.
+    /// The pattern's number of the dimension whose hash is `h`, when the pattern covers the
+    /// sample (`None`: hashed numbers).
     #[inline(always)]
-    fn index(self) -> Option<u32> {
+    fn pattern_1d(self, h: u64) -> Option<f32> {
         match self {
-            Seq::Hashed => None,
-            Seq::Stratified { index, strata } => (index < strata.count).then_some(index),
-            Seq::Sobol { index } => (index < SOBOL_LENGTH).then_some(index),
+            Seq::Stratified { index, strata } if index < strata.count => Some(strata.sample_1d(index, h)),
+            Seq::Sobol { index } if index < SOBOL_LENGTH => Some(sobol_1d(index, (h >> 32) as u32)),
+            _ => None,
+        }
+    }
+
+    /// [`pattern_1d`](Self::pattern_1d) for a dimension pair.
+    #[inline(always)]
+    fn pattern_2d(self, h: u64) -> Option<(f32, f32)> {
+        match self {
+            Seq::Stratified { index, strata } if index < strata.count => Some(strata.sample_2d(index, h)),
+            Seq::Sobol { index } if index < SOBOL_LENGTH => Some(sobol_2d(index, (h >> 32) as u32)),
+            _ => None,
         }
     }
 }
@@ -60,8 +71,8 @@ impl Pattern {
         self.sample_key(Sampler::pixel_key(seed, pixel), sample)
     }
 
-    /// [`path_key`](Self::path_key) from the pixel's [`Sampler::pixel_key`]. A structured
-    /// pattern's key is the pixel key's top half and the sample index.
+    /// [`path_key`](Self::path_key) from the pixel's [`Sampler::pixel_key`]. A patterned
+    /// key is the pixel key's top half and the sample index.
     #[inline]
     pub fn sample_key(self, pixel_key: u64, sample: u64) -> u64 {
         match self.kind {
@@ -172,7 +183,7 @@ impl Sampler {
         h
     }
 
-    /// The hash of the current dimension, for hashed numbers: a structured stream's samples
+    /// The hash of the current dimension, for hashed numbers: a patterned stream's samples
     /// past its pattern mix in their index (their keys do not hold it).
     #[inline(always)]
     fn hashed(&self, h: u64) -> u64 {
@@ -188,12 +199,8 @@ impl Sampler {
     #[inline]
     pub fn next_f32(&mut self) -> f32 {
         let h = self.next_u64();
-        if let Some(index) = self.seq.index() {
-            match self.seq {
-                Seq::Stratified { strata, .. } => return strata.sample_1d(index, h),
-                Seq::Sobol { .. } => return sobol_1d(index, (h >> 32) as u32),
-                Seq::Hashed => {}
-            }
+        if let Some(x) = self.seq.pattern_1d(h) {
+            return x;
         }
         unit_f32((self.hashed(h) >> 40) as u32)
     }
@@ -201,16 +208,12 @@ impl Sampler {
     /// Two uniform numbers in [0, 1) from one hash (one dimension): its top 24 bits and the
     /// 24 bits below them. splitmix64's output bits are all well mixed, so the two are as
     /// independent as two hashes would be, for half the work.
-    /// A structured stream gives the dimension pair of its pattern.
+    /// A patterned stream gives the dimension pair of its pattern.
     #[inline]
     pub fn next_2d(&mut self) -> (f32, f32) {
         let h = self.next_u64();
-        if let Some(index) = self.seq.index() {
-            match self.seq {
-                Seq::Stratified { strata, .. } => return strata.sample_2d(index, h),
-                Seq::Sobol { .. } => return sobol_2d(index, (h >> 32) as u32),
-                Seq::Hashed => {}
-            }
+        if let Some(xy) = self.seq.pattern_2d(h) {
+            return xy;
         }
         let h = self.hashed(h);
         (unit_f32((h >> 40) as u32), unit_f32(((h >> 16) & 0xFF_FFFF) as u32))
