@@ -25,7 +25,9 @@ pub mod stats;
 pub mod integrator;
 // 6: a whole render.
 pub mod render;
-// 7: built on whole renders: split renders, accuracy-versus-time studies, ray files.
+// 7: built on whole renders: split renders, accuracy-versus-time studies, ray files, the
+// interactive viewer.
 pub mod parts;
 pub mod rayfile;
 pub mod study;
+pub mod view;

@@ -37,6 +37,27 @@ pub enum Command {
     /// Subdivide a mesh at its edges' midpoints into a binary PLY (the same surface, 4^N
     /// times the triangles): large test meshes from any scene file.
     Subdivide(SubdivideArgs),
+    /// Watch the render converge in a browser: orbit, pan and zoom the camera, change
+    /// settings, save images, copy the command that renders the view offline.
+    View(Box<ViewArgs>),
+}
+
+#[derive(Args, Debug)]
+pub struct ViewArgs {
+    /// Port to serve on (0: a free one, printed).
+    #[arg(long, default_value_t = 0)]
+    pub port: u16,
+    /// Address to listen on. The default, loopback, is reachable from this machine only (or
+    /// through an SSH tunnel); another address exposes the viewer to the network.
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1")]
+    pub listen: std::net::IpAddr,
+    /// Folder where the page's "save" buttons write images (default: saving is off).
+    #[arg(long, value_name = "DIR")]
+    pub save_dir: Option<PathBuf>,
+    /// The render flags (as for a render). `-s` is the samples-per-pixel cap at which the
+    /// view stops refining; with the default 1 it refines to 1024.
+    #[command(flatten)]
+    pub render: RenderArgs,
 }
 
 #[derive(Args, Debug)]

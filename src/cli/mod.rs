@@ -11,8 +11,9 @@ mod render_cmd;
 mod settings_from_args;
 pub mod study_cmd;
 mod subdivide_cmd;
+mod view_cmd;
 
-pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs, SubdivideArgs};
+pub use args::{Cli, Command, MergeArgs, RaysCommand, RenderArgs, SubdivideArgs, ViewArgs};
 
 use clap::Parser;
 
@@ -40,6 +41,7 @@ pub fn main() -> i32 {
         Some(Command::Merge(a)) => merge_cmd::run(a),
         Some(Command::Study(a)) => study_cmd::run(a),
         Some(Command::Subdivide(a)) => subdivide_cmd::run(a),
+        Some(Command::View(a)) => view_cmd::run(a),
         None if cli.render.part.is_some() => part_cmd::run(&cli.render),
         None => render_cmd::run(&cli.render),
     };

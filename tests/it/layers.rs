@@ -15,7 +15,7 @@ const LAYERS: &[&[&str]] = &[
     &["stats"],
     &["integrator"],
     &["render"],
-    &["parts", "rayfile", "study"],
+    &["parts", "rayfile", "study", "view"],
 ];
 
 /// Module path (`["accel", "bvh", "traverse"]`) -> its source without comments and unit tests.

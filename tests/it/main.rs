@@ -15,3 +15,4 @@ mod materials;
 mod parts;
 mod sampling;
 mod study;
+mod view;

@@ -145,6 +145,30 @@ impl Bvh {
         &self.nodes
     }
 
+    /// The boxes `depth` levels below the root's children (0: the root's children), inner
+    /// nodes and leaves alike, as (lower, upper) corners: what a BVH view outlines.
+    pub fn boxes_at_depth(&self, depth: u32) -> Vec<(Vec3, Vec3)> {
+        let mut level = vec![0usize];
+        for _ in 0..depth {
+            level = level
+                .iter()
+                .flat_map(|&n| self.nodes.get(n).into_iter().flat_map(|node| node.child))
+                .filter(|&c| c != wide::EMPTY && c & wide::LEAF_BIT == 0)
+                .map(|c| c as usize)
+                .collect();
+        }
+        let mut out = Vec::new();
+        for node in level.iter().filter_map(|&n| self.nodes.get(n)) {
+            for k in 0..wide::WIDTH {
+                if node.child[k] != wide::EMPTY {
+                    let b = |i: usize| node.b[i][k];
+                    out.push((Vec3::new(b(0), b(2), b(4)), Vec3::new(b(1), b(3), b(5))));
+                }
+            }
+        }
+        out
+    }
+
     fn dispatch_closest(&self, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit> {
         on_isa!(self, |isa| traverse::closest_hit(self, isa, ray, counters))
     }

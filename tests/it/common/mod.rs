@@ -2,6 +2,7 @@
 //! comparison, and the submodules below.
 
 pub mod agree;
+pub mod cdp;
 pub mod chi2;
 pub mod gltf_brdf;
 pub mod meshgen;

@@ -1,0 +1,45 @@
+//! `wavepath view SCENE [render flags]`: load, build, serve the viewer until Ctrl-C.
+
+use super::ViewArgs;
+use super::render_cmd::prepare_scene;
+use super::settings_from_args::settings;
+use anyhow::{Result, bail};
+use std::net::SocketAddr;
+use wavepath::accel::Bvh;
+use wavepath::view::{ViewOptions, Viewer};
+
+/// The samples-per-pixel cap when `-s` is left at its default of 1.
+const DEFAULT_CAP: u32 = 1024;
+
+pub fn run(a: &ViewArgs) -> Result<()> {
+    let mut s = settings(&a.render)?;
+    if a.render.spp == 1 {
+        s.spp = DEFAULT_CAP;
+    }
+    if let Some(d) = &a.save_dir
+        && !d.is_dir()
+    {
+        bail!("{}: --save-dir is not a folder", d.display());
+    }
+    let scene = super::with_spinner("loading", || prepare_scene(&a.render, &s))?;
+    let bvh = super::with_spinner("building the BVH", || Bvh::build(&scene).with_isa(s.isa));
+    let opts = ViewOptions {
+        listen: SocketAddr::new(a.listen, a.port),
+        save_dir: a.save_dir.clone(),
+        scene_path: a.render.scene.as_ref().map(|p| p.display().to_string()),
+        envmap_path: a.render.envmap.as_ref().map(|p| p.display().to_string()),
+        sampler: s.sampler.name().to_string(),
+    };
+    let viewer = Viewer::bind(&scene, s.clone(), &opts)?;
+    // The URL on stdout (scripts and tests read it); everything else on stderr.
+    println!("http://{}/", viewer.addr);
+    eprintln!("[wavepath view] {} at {}x{}, up to {} spp; Ctrl-C stops", scene.name, s.width, s.height, s.spp);
+    if !a.listen.is_loopback() {
+        eprintln!("[wavepath view] listening on {}: reachable from the network", a.listen);
+    }
+    let session = viewer.session.clone();
+    ctrlc::set_handler(move || session.stop())?;
+    wavepath::render::with_threads(s.threads, || viewer.run(scene, &bvh, &opts))?;
+    eprintln!("[wavepath view] stopped");
+    Ok(())
+}

@@ -1,0 +1,61 @@
+//! "Copy command": the offline `wavepath` command line and camera file (`-c`, the CS184
+//! format) that render what the viewer shows.
+
+use super::server::ViewOptions;
+use super::session::ViewState;
+use crate::scene::format_camera_settings;
+use crate::settings::Shading;
+
+/// The camera file's name in the command.
+pub const CAMERA_FILE: &str = "view-camera.txt";
+
+/// `{"command": "...", "camera_file": "...", "camera_file_name": "..."}` for `st`.
+pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
+    let s = &st.settings;
+    // The fields of view as this image size has them, written out (the file's are kept as
+    // written).
+    let mut cam = st.orbit.camera;
+    cam.fit_to(s.width as f32, s.height as f32);
+    let quote = |p: &str| {
+        if p.chars().all(|c| c.is_ascii_alphanumeric() || "/._-+".contains(c)) {
+            p.to_string()
+        } else {
+            format!("'{}'", p.replace('\'', "'\\''"))
+        }
+    };
+    let mut args = vec!["wavepath".to_string()];
+    if let Some(p) = &opts.scene_path {
+        args.push(quote(p));
+    }
+    args.push(format!("-r {} {} -s {} -l {} -m {}", s.width, s.height, s.spp, s.light_samples, s.max_depth));
+    let shading = match s.shading {
+        Shading::Normals => "normals",
+        Shading::Direct => "direct",
+        Shading::Global => "global",
+    };
+    args.push(format!("--shading {shading}"));
+    if s.rr_throughput {
+        args.push(format!("--roulette throughput --rr-depth {}", s.rr_depth));
+    } else {
+        args.push(format!("--roulette fixed --rr {} --rr-depth {}", s.rr_continue, s.rr_depth));
+    }
+    args.push(format!("--sampler {} --seed {}", opts.sampler, s.seed));
+    if s.hemisphere {
+        args.push("-H".into());
+    }
+    if !s.mis {
+        args.push("--no-mis".into());
+    }
+    if cam.lens_radius > 0.0 {
+        args.push(format!("-b {} -d {}", cam.lens_radius, cam.focal_distance));
+    }
+    if let (true, Some(e)) = (st.environment, &opts.envmap_path) {
+        args.push(format!("-e {}", quote(e)));
+    }
+    args.push(format!("-c {CAMERA_FILE} -f view.png"));
+    serde_json::json!({
+        "command": args.join(" "),
+        "camera_file_name": CAMERA_FILE,
+        "camera_file": format_camera_settings(&cam, s.width, s.height),
+    })
+}

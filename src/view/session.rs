@@ -1,0 +1,329 @@
+//! One interactive render: the state clients change, and the loop that renders it frame by
+//! frame with the same wavefront integrator as an offline render. Any change bumps a
+//! generation counter; the loop notices it between batches, shows a quarter-resolution
+//! one-sample image at once, then accumulates full-resolution batches of samples (sample
+//! indices 0, 1, 2, ... of the offline render, so the converged image is the offline one)
+//! until the samples-per-pixel cap. Frames are published as the latest one only: a slow
+//! client skips frames, it never queues them.
+
+use super::controls::Change;
+use super::orbit::Orbit;
+use crate::accel::{Bvh, Intersector};
+use crate::effects::Effects;
+use crate::film::{Accumulator, Film, Tonemap};
+use crate::scene::{Environment, Scene};
+use crate::settings::{Settings, Shading};
+use glam::Vec3;
+use std::sync::{Arc, Condvar, Mutex};
+use std::time::{Duration, Instant};
+
+/// One published image and the figures shown beside it.
+#[derive(Clone, Debug)]
+pub struct Frame {
+    /// Increases with every frame.
+    pub seq: u64,
+    /// The generation (camera and settings) it shows.
+    pub generation: u64,
+    pub width: usize,
+    pub height: usize,
+    /// Samples per pixel accumulated.
+    pub spp: u32,
+    /// The cap was reached: the image is final (sent losslessly).
+    pub converged: bool,
+    /// Encoded image: JPEG while refining, PNG when converged.
+    pub mime: &'static str,
+    pub image: Vec<u8>,
+    /// The linear image (for saving).
+    pub film: Arc<Film>,
+    /// Figures as JSON (rays, Mrays/s, stage times, effects, the BVH boxes' outlines).
+    pub info: serde_json::Value,
+}
+
+/// What clients change and the loop renders.
+#[derive(Clone, Debug)]
+pub struct ViewState {
+    pub generation: u64,
+    pub orbit: Orbit,
+    /// The file's camera (the reset target).
+    pub home: Orbit,
+    pub settings: Settings,
+    pub environment: bool,
+    pub bvh_depth: Option<u32>,
+    pub stop: bool,
+}
+
+/// State, latest frame and the condition variables that wake the loop and the clients.
+pub struct Session {
+    pub state: Mutex<ViewState>,
+    pub changed: Condvar,
+    pub frame: Mutex<Option<Arc<Frame>>>,
+    pub new_frame: Condvar,
+}
+
+/// Samples per batch are chosen so that a batch takes about this long: short enough to
+/// notice a camera move quickly, long enough that the per-frame costs stay small.
+const BATCH_TARGET: Duration = Duration::from_millis(60);
+
+impl Session {
+    pub fn new(scene: &Scene, settings: Settings) -> Arc<Session> {
+        let center = scene.bounds().map_or(Vec3::ZERO, |(lo, hi)| 0.5 * (lo + hi));
+        let home = Orbit::new(scene.camera, center);
+        let state =
+            ViewState { generation: 1, orbit: home, home, settings, environment: true, bvh_depth: None, stop: false };
+        Arc::new(Session {
+            state: Mutex::new(state),
+            changed: Condvar::new(),
+            frame: Mutex::new(None),
+            new_frame: Condvar::new(),
+        })
+    }
+
+    /// Applies `changes` (already validated) as one new generation. `focus` needs the
+    /// accelerator to find the distance to what a pixel sees.
+    pub fn apply(&self, changes: &[Change], accel: &dyn Intersector) {
+        let mut guard = self.state.lock().unwrap();
+        let st = &mut *guard;
+        for &c in changes {
+            let (s, orbit) = (&mut st.settings, &mut st.orbit);
+            match c {
+                Change::Orbit(yaw, pitch) => orbit.orbit(yaw, pitch),
+                Change::Pan(dx, dy) => orbit.pan(dx, dy),
+                Change::Zoom(f) => orbit.zoom(f),
+                Change::Reset => *orbit = st.home,
+                Change::Focus(x, y) => {
+                    let mut cam = orbit.camera;
+                    cam.fit_to(s.width as f32, s.height as f32);
+                    let ray = cam.generate_ray(x, 1.0 - y);
+                    if let Some(h) = accel.closest_hit(&ray, &mut Default::default()) {
+                        // The lens focuses at a distance along the view axis.
+                        orbit.camera.focal_distance = (h.t * ray.dir.dot(-cam.c2w.z_axis)).max(1e-6);
+                    }
+                }
+                Change::Spp(n) => s.spp = n,
+                Change::LightSamples(n) => s.light_samples = n,
+                Change::MaxDepth(m) => s.max_depth = m,
+                Change::Shading(sh) => s.shading = sh,
+                Change::Roulette(p) => {
+                    s.rr_continue = p;
+                    s.rr_throughput = false;
+                }
+                Change::Hemisphere(h) => s.hemisphere = h,
+                Change::LensRadius(r) => orbit.camera.lens_radius = r,
+                Change::FocalDistance(d) => orbit.camera.focal_distance = d,
+                Change::Environment(on) => st.environment = on,
+                Change::BvhDepth(d) => st.bvh_depth = d,
+                Change::Resolution(w, h) => (s.width, s.height) = (w, h),
+            }
+        }
+        st.generation += 1;
+        self.changed.notify_all();
+    }
+
+    /// Asks the loop to stop after its current batch.
+    pub fn stop(&self) {
+        self.state.lock().unwrap().stop = true;
+        self.changed.notify_all();
+        self.new_frame.notify_all();
+    }
+
+    pub fn stopped(&self) -> bool {
+        self.state.lock().unwrap().stop
+    }
+
+    /// The latest frame newer than `after`, waiting up to `timeout` for one.
+    pub fn frame_after(&self, after: u64, timeout: Duration) -> Option<Arc<Frame>> {
+        let guard = self.frame.lock().unwrap();
+        let (guard, _) = self
+            .new_frame
+            .wait_timeout_while(guard, timeout, |f| f.as_ref().is_none_or(|f| f.seq <= after) && !self.stopped())
+            .unwrap();
+        guard.as_ref().filter(|f| f.seq > after).cloned()
+    }
+
+    fn publish(&self, frame: Frame) {
+        *self.frame.lock().unwrap() = Some(Arc::new(frame));
+        self.new_frame.notify_all();
+    }
+
+    /// Renders until [`stop`](Self::stop): the viewer's one render thread.
+    pub fn run(&self, mut scene: Scene, bvh: &Bvh) {
+        let environment = scene.env.clone();
+        let mut seq = 0u64;
+        let mut shown = 0u64;
+        let mut acc = Accumulator::new(1, 1);
+        let mut taken = 0u32;
+        let mut batch = 1u32;
+        let mut totals = Totals::default();
+        loop {
+            let st = {
+                let guard = self.state.lock().unwrap();
+                let done = |s: &ViewState| {
+                    s.generation == shown && (taken >= s.settings.spp || s.settings.shading == Shading::Normals)
+                };
+                let guard = self.changed.wait_while(guard, |s| !s.stop && done(s)).unwrap();
+                if guard.stop {
+                    return;
+                }
+                guard.clone()
+            };
+            let s = &st.settings;
+            scene.camera = st.orbit.camera;
+            scene.env = if st.environment { environment.clone() } else { Environment::None };
+            let fresh = st.generation != shown;
+            if fresh {
+                shown = st.generation;
+                acc = Accumulator::new(s.width, s.height);
+                taken = 0;
+                totals = Totals::default();
+                // A coarse image at once: a quarter of the resolution, one sample.
+                let (w, h) = ((s.width / 4).max(1), (s.height / 4).max(1));
+                let quick = Settings { width: w, height: h, spp: 1, adaptive: None, sample_range: None, ..s.clone() };
+                scene.camera.fit_to(w as f32, h as f32);
+                let t = Instant::now();
+                if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &quick, &|_| {}) {
+                    totals.add(&out.stats, t.elapsed());
+                    seq += 1;
+                    let info = Self::info(&st, &scene, bvh, &totals, 0, (w, h));
+                    self.publish(encode(seq, shown, out.film, 0, false, info));
+                }
+                if s.shading == Shading::Normals {
+                    // Normals have no samples to accumulate: one full image and done.
+                    let full = Settings { adaptive: None, sample_range: None, ..s.clone() };
+                    scene.camera = st.orbit.camera;
+                    scene.camera.fit_to(s.width as f32, s.height as f32);
+                    if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &full, &|_| {}) {
+                        seq += 1;
+                        let info = Self::info(&st, &scene, bvh, &totals, s.spp, (s.width, s.height));
+                        self.publish(encode(seq, shown, out.film, s.spp, true, info));
+                    }
+                    taken = s.spp;
+                }
+                continue;
+            }
+            scene.camera.fit_to(s.width as f32, s.height as f32);
+            let end = (taken + batch).min(s.spp);
+            let part = Settings { adaptive: None, sample_range: Some((taken, end)), ..s.clone() };
+            let t = Instant::now();
+            let Ok((sums, stats)) = crate::render::render_sums(&scene, bvh, &part, &|_| {}) else {
+                taken = s.spp;
+                continue;
+            };
+            let dt = t.elapsed();
+            totals.add(&stats, dt);
+            for (a, b) in acc.pixels.iter_mut().zip(&sums.pixels) {
+                a.merge(b);
+            }
+            taken = end;
+            // Next batch: as many samples as fit the target time (at least one, at most 4x).
+            let per = dt.as_secs_f64() / (end - part.sample_range.unwrap().0).max(1) as f64;
+            batch = ((BATCH_TARGET.as_secs_f64() / per.max(1e-6)) as u32).clamp(1, (batch * 4).max(4));
+            // A newer generation makes this frame stale: skip publishing it.
+            if self.state.lock().unwrap().generation != shown {
+                continue;
+            }
+            seq += 1;
+            let converged = taken >= s.spp;
+            let info = Self::info(&st, &scene, bvh, &totals, taken, (s.width, s.height));
+            self.publish(encode(seq, shown, acc.to_film(), taken, converged, info));
+        }
+    }
+
+    fn info(
+        st: &ViewState,
+        scene: &Scene,
+        bvh: &Bvh,
+        t: &Totals,
+        spp: u32,
+        (w, h): (usize, usize),
+    ) -> serde_json::Value {
+        let effects = Effects::of(scene, &st.settings);
+        let boxes = st.bvh_depth.map(|d| outlines(bvh, scene, d, w, h)).unwrap_or_default();
+        serde_json::json!({
+            "spp": spp,
+            "spp_cap": st.settings.spp,
+            "width": w,
+            "height": h,
+            "rays": t.rays,
+            "render_s": t.seconds,
+            "mrays_per_s": if t.seconds > 0.0 { t.rays as f64 / t.seconds / 1e6 } else { 0.0 },
+            "stages": t.stages,
+            "effects": effects.on.iter().map(|e| serde_json::json!({"name": e.name, "reason": e.reason})).collect::<Vec<_>>(),
+            "settings": {
+                "l": st.settings.light_samples, "m": st.settings.max_depth,
+                "shading": format!("{:?}", st.settings.shading).to_lowercase(),
+                "rr": st.settings.rr_continue, "hemisphere": st.settings.hemisphere,
+                "lens": st.orbit.camera.lens_radius, "focal": st.orbit.camera.focal_distance,
+                "env": st.environment, "bvh": st.bvh_depth,
+            },
+            "bvh_boxes": boxes,
+        })
+    }
+}
+
+/// Rays, seconds and stage times of the current generation so far.
+#[derive(Default)]
+struct Totals {
+    rays: u64,
+    seconds: f64,
+    stages: std::collections::BTreeMap<String, f64>,
+}
+
+impl Totals {
+    fn add(&mut self, st: &crate::stats::RenderStats, dt: Duration) {
+        self.rays += st.total_rays();
+        self.seconds += dt.as_secs_f64();
+        if let Ok(serde_json::Value::Object(m)) = serde_json::to_value(st.stages) {
+            for (k, v) in m {
+                if let Some(x) = v.as_f64() {
+                    *self.stages.entry(k).or_default() += x;
+                }
+            }
+        }
+    }
+}
+
+/// The film as an image to send: JPEG while it refines, PNG (lossless) once converged.
+fn encode(seq: u64, generation: u64, film: Film, spp: u32, converged: bool, info: serde_json::Value) -> Frame {
+    let (w, h) = (film.width, film.height);
+    let mut rgb = Vec::with_capacity(w * h * 3);
+    for y in (0..h).rev() {
+        for x in 0..w {
+            let p = film.get(x, y);
+            rgb.extend([Tonemap::Srgb.byte(p.x), Tonemap::Srgb.byte(p.y), Tonemap::Srgb.byte(p.z)]);
+        }
+    }
+    let mut image = Vec::new();
+    let mime = if converged {
+        let enc = image::codecs::png::PngEncoder::new(&mut image);
+        let _ = image::ImageEncoder::write_image(enc, &rgb, w as u32, h as u32, image::ExtendedColorType::Rgb8);
+        "image/png"
+    } else {
+        let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut image, 85);
+        let _ = image::ImageEncoder::write_image(enc, &rgb, w as u32, h as u32, image::ExtendedColorType::Rgb8);
+        "image/jpeg"
+    };
+    Frame { seq, generation, width: w, height: h, spp, converged, mime, image, film: Arc::new(film), info }
+}
+
+/// The boxes of the BVH at `depth` projected onto a `w x h` image: each box as its 12 edges,
+/// segments (x0, y0, x1, y1) in [0, 1]^2 (top-left origin), edges behind the camera dropped.
+/// At most 4096 boxes.
+fn outlines(bvh: &Bvh, scene: &Scene, depth: u32, w: usize, h: usize) -> Vec<[f32; 4]> {
+    let mut cam = scene.camera;
+    cam.fit_to(w as f32, h as f32);
+    let (tx, ty) = ((cam.hfov_deg.to_radians() * 0.5).tan(), (cam.vfov_deg.to_radians() * 0.5).tan());
+    let project = |p: Vec3| -> Option<(f32, f32)> {
+        let d = cam.c2w.transpose() * (p - cam.position);
+        (d.z < -1e-6).then(|| (0.5 + d.x / (-d.z * 2.0 * tx), 0.5 - d.y / (-d.z * 2.0 * ty)))
+    };
+    let mut out = Vec::new();
+    for (lo, hi) in bvh.boxes_at_depth(depth).into_iter().take(4096) {
+        let corner = |i: usize| Vec3::new([lo.x, hi.x][i & 1], [lo.y, hi.y][(i >> 1) & 1], [lo.z, hi.z][(i >> 2) & 1]);
+        for (a, b) in [(0, 1), (2, 3), (4, 5), (6, 7), (0, 2), (1, 3), (4, 6), (5, 7), (0, 4), (1, 5), (2, 6), (3, 7)] {
+            if let (Some(p), Some(q)) = (project(corner(a)), project(corner(b))) {
+                out.push([p.0, p.1, q.0, q.1]);
+            }
+        }
+    }
+    out
+}
