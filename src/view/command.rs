@@ -1,7 +1,7 @@
 //! "Copy command": the offline `wavepath` command line and camera file (`-c`, the CS184
 //! format) that render what the viewer shows.
 
-use super::server::ViewOptions;
+use super::options::ViewOptions;
 use super::session::ViewState;
 use crate::scene::format_camera_settings;
 use crate::settings::Shading;

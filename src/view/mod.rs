@@ -5,8 +5,10 @@
 
 pub mod command;
 pub mod controls;
+pub mod options;
 pub mod orbit;
 pub mod server;
 pub mod session;
 
-pub use server::{ViewOptions, Viewer};
+pub use options::ViewOptions;
+pub use server::Viewer;

@@ -3,6 +3,7 @@
 //! to the folder given on the command line under names the server makes.
 
 use super::controls::parse_query;
+use super::options::ViewOptions;
 use super::session::{Frame, Session};
 use crate::accel::Bvh;
 use crate::film::write_image;
@@ -11,7 +12,6 @@ use anyhow::{Context, Result};
 use base64::Engine;
 use std::io::Write;
 use std::net::SocketAddr;
-use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
@@ -22,19 +22,6 @@ const PAGE: &str = include_str!("page.html");
 
 /// Frame streams open at once; more get a 503 (each holds a thread).
 pub const MAX_STREAMS: usize = 16;
-
-/// How the viewer is reached and what it may write.
-#[derive(Clone, Debug)]
-pub struct ViewOptions {
-    pub listen: SocketAddr,
-    /// Folder for saved images (`None`: saving is refused).
-    pub save_dir: Option<PathBuf>,
-    /// The scene file and environment map, for the reproducing command line.
-    pub scene_path: Option<String>,
-    pub envmap_path: Option<String>,
-    /// Sampler name as the command line spells it.
-    pub sampler: String,
-}
 
 /// A running viewer: its address and the session it serves.
 pub struct Viewer {
