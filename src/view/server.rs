@@ -167,7 +167,7 @@ fn json_response(v: &serde_json::Value) -> Response<std::io::Cursor<Vec<u8>>> {
 fn frame_json(f: &Frame, image: bool) -> serde_json::Value {
     let mut v = serde_json::json!({
         "seq": f.seq, "generation": f.generation, "width": f.width, "height": f.height,
-        "spp": f.spp, "converged": f.converged, "mime": f.mime, "info": f.info,
+        "spp": f.spp, "converged": f.converged, "coarse": f.coarse, "mime": f.mime, "info": f.info,
     });
     if image {
         v["image"] = base64::engine::general_purpose::STANDARD.encode(&f.image).into();

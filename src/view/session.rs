@@ -1,9 +1,9 @@
 //! One interactive render: the state clients change, and the loop that renders it frame by
 //! frame with the same wavefront integrator as an offline render. Any change bumps a
 //! generation counter; the loop notices it between batches, shows a quarter-resolution
-//! one-sample image at once, then accumulates full-resolution batches of samples (sample
-//! indices 0, 1, 2, ... of the offline render, so the converged image is the offline one)
-//! until the samples-per-pixel cap. Frames are published as the latest one only: a slow
+//! one-sample image at once, then refines the full-resolution image band by band, 16 samples
+//! per pixel per pass (sample indices 0, 1, 2, ... of the offline render, so the converged
+//! image is the offline one) until the samples-per-pixel cap. Frames are published as the latest one only: a slow
 //! client skips frames, it never queues them.
 
 use super::controls::Change;
@@ -30,6 +30,8 @@ pub struct Frame {
     pub spp: u32,
     /// The cap was reached: the image is final (sent losslessly).
     pub converged: bool,
+    /// The quarter-resolution first image of a generation.
+    pub coarse: bool,
     /// Encoded image: JPEG while refining, PNG when converged.
     pub mime: &'static str,
     pub image: Vec<u8>,
@@ -60,9 +62,13 @@ pub struct Session {
     pub new_frame: Condvar,
 }
 
-/// Samples per batch are chosen so that a batch takes about this long: short enough to
-/// notice a camera move quickly, long enough that the per-frame costs stay small.
-const BATCH_TARGET: Duration = Duration::from_millis(60);
+/// Bands of rows are chosen so that one takes about this long: short enough to notice a
+/// camera move quickly and show ten or more updates a second, long enough that the per-frame
+/// costs stay small.
+const BATCH_TARGET: Duration = Duration::from_millis(80);
+
+/// Samples per pixel of one pass over the image (a band's batch).
+const PASS_SAMPLES: u32 = 16;
 
 impl Session {
     pub fn new(scene: &Scene, settings: Settings) -> Arc<Session> {
@@ -151,8 +157,12 @@ impl Session {
         let mut seq = 0u64;
         let mut shown = 0u64;
         let mut acc = Accumulator::new(1, 1);
+        // The generation's coarse image, shown where the first pass has not been yet.
+        let mut coarse: Option<Film> = None;
+        // Samples every pixel has (completed passes); the current pass renders band `band` of
+        // `bands`, and has taken `pass_s` seconds so far.
         let mut taken = 0u32;
-        let mut batch = 1u32;
+        let (mut band, mut bands, mut pass_s) = (0usize, 1usize, 0.0f64);
         let mut totals = Totals::default();
         loop {
             let st = {
@@ -173,7 +183,7 @@ impl Session {
             if fresh {
                 shown = st.generation;
                 acc = Accumulator::new(s.width, s.height);
-                taken = 0;
+                (taken, band, pass_s, coarse) = (0, 0, 0.0, None);
                 totals = Totals::default();
                 // A coarse image at once: a quarter of the resolution, one sample.
                 let (w, h) = ((s.width / 4).max(1), (s.height / 4).max(1));
@@ -181,10 +191,15 @@ impl Session {
                 scene.camera.fit_to(w as f32, h as f32);
                 let t = Instant::now();
                 if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &quick, &|_| {}) {
+                    // The first pass's bands from this one-sample image's time (16x fewer
+                    // pixels, PASS_SAMPLES x fewer samples).
+                    let estimate = t.elapsed().as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.spp) as f64;
+                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.height);
                     totals.add(&out.stats, t.elapsed());
                     seq += 1;
                     let info = Self::info(&st, &scene, bvh, &totals, 0, (w, h));
-                    self.publish(encode(seq, shown, out.film, 0, false, info));
+                    coarse = Some(out.film.clone());
+                    self.publish(encode(seq, shown, out.film, 0, false, true, info));
                 }
                 if s.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
@@ -194,29 +209,39 @@ impl Session {
                     if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &full, &|_| {}) {
                         seq += 1;
                         let info = Self::info(&st, &scene, bvh, &totals, s.spp, (s.width, s.height));
-                        self.publish(encode(seq, shown, out.film, s.spp, true, info));
+                        self.publish(encode(seq, shown, out.film, s.spp, true, false, info));
                     }
                     taken = s.spp;
                 }
                 continue;
             }
             scene.camera.fit_to(s.width as f32, s.height as f32);
-            let end = (taken + batch).min(s.spp);
-            let part = Settings { adaptive: None, sample_range: Some((taken, end)), ..s.clone() };
+            // One band of rows, the pass's samples for each of its pixels at once (as an
+            // offline render takes them: a pixel's samples side by side in a wave trace
+            // coherent rays; two samples per pixel over the whole image run 28% slower).
+            let end = (taken + PASS_SAMPLES).min(s.spp);
+            let (y0, y1) = (band * s.height / bands, (band + 1) * s.height / bands);
+            let cell = crate::settings::Cell { x: 0, y: y0, w: s.width, h: y1 - y0 };
+            let part = Settings { adaptive: None, cell: Some(cell), sample_range: Some((taken, end)), ..s.clone() };
             let t = Instant::now();
             let Ok((sums, stats)) = crate::render::render_sums(&scene, bvh, &part, &|_| {}) else {
                 taken = s.spp;
                 continue;
             };
-            let dt = t.elapsed();
-            totals.add(&stats, dt);
-            for (a, b) in acc.pixels.iter_mut().zip(&sums.pixels) {
+            pass_s += t.elapsed().as_secs_f64();
+            totals.add(&stats, t.elapsed());
+            let rows = y0 * s.width..y1 * s.width;
+            for (a, b) in acc.pixels[rows.clone()].iter_mut().zip(&sums.pixels[rows]) {
                 a.merge(b);
             }
-            taken = end;
-            // Next batch: as many samples as fit the target time (at least one, at most 4x).
-            let per = dt.as_secs_f64() / (end - part.sample_range.unwrap().0).max(1) as f64;
-            batch = ((BATCH_TARGET.as_secs_f64() / per.max(1e-6)) as u32).clamp(1, (batch * 4).max(4));
+            band += 1;
+            if band == bands {
+                // The pass is complete: the next one's bands take about the target time each.
+                taken = end;
+                band = 0;
+                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.height);
+                pass_s = 0.0;
+            }
             // A newer generation makes this frame stale: skip publishing it.
             if self.state.lock().unwrap().generation != shown {
                 continue;
@@ -224,7 +249,17 @@ impl Session {
             seq += 1;
             let converged = taken >= s.spp;
             let info = Self::info(&st, &scene, bvh, &totals, taken, (s.width, s.height));
-            self.publish(encode(seq, shown, acc.to_film(), taken, converged, info));
+            let mut film = acc.to_film();
+            if let Some(c) = coarse.as_ref().filter(|_| taken == 0) {
+                for (i, p) in film.pixels.iter_mut().enumerate() {
+                    if acc.pixels[i].taken == 0 {
+                        let (x, y) = (i % s.width, i / s.width);
+                        *p = c
+                            .get((x * c.width / s.width).min(c.width - 1), (y * c.height / s.height).min(c.height - 1));
+                    }
+                }
+            }
+            self.publish(encode(seq, shown, film, taken, converged, false, info));
         }
     }
 
@@ -283,13 +318,25 @@ impl Totals {
 }
 
 /// The film as an image to send: JPEG while it refines, PNG (lossless) once converged.
-fn encode(seq: u64, generation: u64, film: Film, spp: u32, converged: bool, info: serde_json::Value) -> Frame {
+fn encode(
+    seq: u64,
+    generation: u64,
+    film: Film,
+    spp: u32,
+    converged: bool,
+    coarse: bool,
+    info: serde_json::Value,
+) -> Frame {
     let (w, h) = (film.width, film.height);
+    // sRGB bytes from a table over [0, 1] in 4096 steps (a power per channel and pixel would
+    // cost more than the encoding, on the render thread).
+    let table: Vec<u8> = (0..=4096).map(|i| Tonemap::Srgb.byte(i as f32 / 4096.0)).collect();
+    let byte = |l: f32| table[(l.clamp(0.0, 1.0) * 4096.0) as usize];
     let mut rgb = Vec::with_capacity(w * h * 3);
     for y in (0..h).rev() {
         for x in 0..w {
             let p = film.get(x, y);
-            rgb.extend([Tonemap::Srgb.byte(p.x), Tonemap::Srgb.byte(p.y), Tonemap::Srgb.byte(p.z)]);
+            rgb.extend([byte(p.x), byte(p.y), byte(p.z)]);
         }
     }
     let mut image = Vec::new();
@@ -302,7 +349,7 @@ fn encode(seq: u64, generation: u64, film: Film, spp: u32, converged: bool, info
         let _ = image::ImageEncoder::write_image(enc, &rgb, w as u32, h as u32, image::ExtendedColorType::Rgb8);
         "image/jpeg"
     };
-    Frame { seq, generation, width: w, height: h, spp, converged, mime, image, film: Arc::new(film), info }
+    Frame { seq, generation, width: w, height: h, spp, converged, coarse, mime, image, film: Arc::new(film), info }
 }
 
 /// The boxes of the BVH at `depth` projected onto a `w x h` image: each box as its 12 edges,

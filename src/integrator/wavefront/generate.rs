@@ -48,8 +48,10 @@ pub fn generate(
     let n = wave.len();
     q.ray.reserve(n);
     q.key.reserve(n);
+    // Eight lanes hold eight samples of one pixel: with fewer per pixel (a viewer's or a
+    // part's small batches) most lanes would be wasted, and the one-by-one loop is cheaper.
     #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = lanes {
+    if let Some(avx) = lanes.filter(|_| wave.batch as usize >= L) {
         // SAFETY: the token proves the CPU has AVX2 and FMA.
         unsafe { pinhole_lanes(avx, t, q, wave, width, height, spp) };
         q.start_camera_paths(n);
