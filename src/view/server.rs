@@ -100,8 +100,8 @@ fn handle(req: Request, path: &str, session: &Session, bvh: &Bvh, opts: &ViewOpt
             };
             match frame {
                 Some(f) => req.respond(
-                    Response::from_data(f.image.clone())
-                        .with_header(header("Content-Type", f.mime))
+                    Response::from_data(f.image().to_vec())
+                        .with_header(header("Content-Type", f.mime()))
                         .with_header(header("X-Frame", &f.seq.to_string()))
                         .with_header(header("X-Spp", &f.spp.to_string())),
                 ),
@@ -167,10 +167,10 @@ fn json_response(v: &serde_json::Value) -> Response<std::io::Cursor<Vec<u8>>> {
 fn frame_json(f: &Frame, image: bool) -> serde_json::Value {
     let mut v = serde_json::json!({
         "seq": f.seq, "generation": f.generation, "width": f.width, "height": f.height,
-        "spp": f.spp, "converged": f.converged, "coarse": f.coarse, "mime": f.mime, "info": f.info,
+        "spp": f.spp, "converged": f.converged, "coarse": f.coarse, "mime": f.mime(), "info": f.info,
     });
     if image {
-        v["image"] = base64::engine::general_purpose::STANDARD.encode(&f.image).into();
+        v["image"] = base64::engine::general_purpose::STANDARD.encode(f.image()).into();
     }
     v
 }

@@ -14,7 +14,7 @@ use crate::film::{Accumulator, Film, Tonemap};
 use crate::scene::{Environment, Scene};
 use crate::settings::{Settings, Shading};
 use glam::Vec3;
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 
 /// One published image and the figures shown beside it.
@@ -32,13 +32,12 @@ pub struct Frame {
     pub converged: bool,
     /// The quarter-resolution first image of a generation.
     pub coarse: bool,
-    /// Encoded image: JPEG while refining, PNG when converged.
-    pub mime: &'static str,
-    pub image: Vec<u8>,
     /// The linear image (for saving).
     pub film: Arc<Film>,
     /// Figures as JSON (rays, Mrays/s, stage times, effects, the BVH boxes' outlines).
     pub info: serde_json::Value,
+    /// See [`Frame::image`].
+    encoded: OnceLock<Vec<u8>>,
 }
 
 /// What clients change and the loop renders.
@@ -199,7 +198,7 @@ impl Session {
                     seq += 1;
                     let info = Self::info(&st, &scene, bvh, &totals, 0, (w, h));
                     coarse = Some(out.film.clone());
-                    self.publish(encode(seq, shown, out.film, 0, false, true, info));
+                    self.publish(frame(seq, shown, out.film, 0, false, true, info));
                 }
                 if s.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
@@ -209,7 +208,7 @@ impl Session {
                     if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &full, &|_| {}) {
                         seq += 1;
                         let info = Self::info(&st, &scene, bvh, &totals, s.spp, (s.width, s.height));
-                        self.publish(encode(seq, shown, out.film, s.spp, true, false, info));
+                        self.publish(frame(seq, shown, out.film, s.spp, true, false, info));
                     }
                     taken = s.spp;
                 }
@@ -259,7 +258,7 @@ impl Session {
                     }
                 }
             }
-            self.publish(encode(seq, shown, film, taken, converged, false, info));
+            self.publish(frame(seq, shown, film, taken, converged, false, info));
         }
     }
 
@@ -317,8 +316,8 @@ impl Totals {
     }
 }
 
-/// The film as an image to send: JPEG while it refines, PNG (lossless) once converged.
-fn encode(
+/// A frame of `film`; its image is encoded when a client first asks for it.
+fn frame(
     seq: u64,
     generation: u64,
     film: Film,
@@ -327,9 +326,28 @@ fn encode(
     coarse: bool,
     info: serde_json::Value,
 ) -> Frame {
+    let (width, height) = (film.width, film.height);
+    let film = Arc::new(film);
+    Frame { seq, generation, width, height, spp, converged, coarse, film, info, encoded: OnceLock::new() }
+}
+
+impl Frame {
+    /// JPEG while the image refines, PNG (lossless) once converged.
+    pub fn mime(&self) -> &'static str {
+        if self.converged { "image/png" } else { "image/jpeg" }
+    }
+
+    /// The encoded image. The first thread that asks (a client's) encodes it, never the
+    /// render thread, and a frame no client asks for is never encoded.
+    pub fn image(&self) -> &[u8] {
+        self.encoded.get_or_init(|| encode(&self.film, self.converged))
+    }
+}
+
+fn encode(film: &Film, lossless: bool) -> Vec<u8> {
     let (w, h) = (film.width, film.height);
     // sRGB bytes from a table over [0, 1] in 4096 steps (a power per channel and pixel would
-    // cost more than the encoding, on the render thread).
+    // cost more than the encoding).
     let table: Vec<u8> = (0..=4096).map(|i| Tonemap::Srgb.byte(i as f32 / 4096.0)).collect();
     let byte = |l: f32| table[(l.clamp(0.0, 1.0) * 4096.0) as usize];
     let mut rgb = Vec::with_capacity(w * h * 3);
@@ -340,16 +358,19 @@ fn encode(
         }
     }
     let mut image = Vec::new();
-    let mime = if converged {
-        let enc = image::codecs::png::PngEncoder::new(&mut image);
-        let _ = image::ImageEncoder::write_image(enc, &rgb, w as u32, h as u32, image::ExtendedColorType::Rgb8);
-        "image/png"
+    let (w, h, rgb8) = (w as u32, h as u32, image::ExtendedColorType::Rgb8);
+    let _ = if lossless {
+        image::ImageEncoder::write_image(image::codecs::png::PngEncoder::new(&mut image), &rgb, w, h, rgb8)
     } else {
-        let enc = image::codecs::jpeg::JpegEncoder::new_with_quality(&mut image, 85);
-        let _ = image::ImageEncoder::write_image(enc, &rgb, w as u32, h as u32, image::ExtendedColorType::Rgb8);
-        "image/jpeg"
+        image::ImageEncoder::write_image(
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut image, 85),
+            &rgb,
+            w,
+            h,
+            rgb8,
+        )
     };
-    Frame { seq, generation, width: w, height: h, spp, converged, coarse, mime, image, film: Arc::new(film), info }
+    image
 }
 
 /// The boxes of the BVH at `depth` projected onto a `w x h` image: each box as its 12 edges,
