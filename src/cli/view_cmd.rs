@@ -41,5 +41,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     ctrlc::set_handler(move || session.stop())?;
     wavepath::render::with_threads(s.threads, || viewer.run(scene, &bvh, &opts))?;
     eprintln!("[wavepath view] stopped");
-    Ok(())
+    // The render thread has been joined. Connections whose clients stopped reading may still
+    // block their writers (and the server's drop on them): the process ends without waiting.
+    std::process::exit(0)
 }

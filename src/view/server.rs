@@ -54,7 +54,9 @@ impl Viewer {
                         continue;
                     }
                     let (session, streams) = (self.session.clone(), streams.clone());
-                    s.spawn(move || {
+                    // Detached: a client that stops reading blocks its writer, which must
+                    // not keep the process alive after Ctrl-C (the render thread is joined).
+                    std::thread::spawn(move || {
                         let _ = stream_frames(req.into_writer(), &session);
                         streams.fetch_sub(1, Ordering::SeqCst);
                     });
@@ -188,7 +190,7 @@ fn encode_file(f: &Frame, ext: &str) -> Result<Vec<u8>> {
 
 /// An `/events` response, written straight to the connection and flushed after every event
 /// (a buffering writer would hold an event's end back until the next one): each new frame as
-/// one server-sent event, a comment every 15 s without one (so a closed client is noticed),
+/// one server-sent event, a comment every 5 s without one (so a closed client is noticed),
 /// the end when the viewer stops. It always sends the latest frame: a slow client skips
 /// frames, it never queues them.
 fn stream_frames(mut w: Box<dyn Write + Send>, session: &Session) -> std::io::Result<()> {
@@ -198,7 +200,7 @@ fn stream_frames(mut w: Box<dyn Write + Send>, session: &Session) -> std::io::Re
     w.flush()?;
     let mut last = 0;
     while !session.stopped() {
-        match session.frame_after(last, Duration::from_secs(15)) {
+        match session.frame_after(last, Duration::from_secs(5)) {
             Some(f) => {
                 last = f.seq;
                 write!(w, "event: frame\ndata: {}\n\n", frame_json(&f, true))?;

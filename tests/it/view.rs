@@ -231,9 +231,44 @@ fn view_refuses_bad_requests_and_serves_several_clients() {
     let (s, name) = view.post("/save?format=png");
     assert_eq!(s, 200, "{name}");
     assert!(dir.join(name.trim()).is_file() && std::fs::read_dir(&dir).unwrap().count() == 1);
-    // Two streams, each gets frames as the render refines.
+    // Streams that stop reading after their status line (slow clients) up to the limit,
+    // then one more: refused with a 503; the render still converges (frames are dropped for
+    // them, never queued) and Ctrl-C still ends the process.
+    let status = |s: &mut BufReader<TcpStream>| {
+        let mut line = String::new();
+        s.read_line(&mut line).unwrap();
+        line
+    };
+    let mut idle = Vec::new();
+    for _ in 0..wavepath::view::server::MAX_STREAMS {
+        let mut s = view.events();
+        assert!(status(&mut s).contains(" 200 "));
+        idle.push(s);
+    }
+    let mut extra = view.events();
+    assert!(status(&mut extra).contains(" 503 "), "stream {} past the limit", idle.len() + 1);
+    let g = generation(&view.post("/control?spp=256").1);
+    view.wait(g, |v| v["converged"] == true && v["spp"] == 256);
+    drop((idle, extra));
+
+    // Two more streams (the idle ones' slots free as their writes fail or time out; the limit
+    // is checked above), each gets frames as the render refines.
+    // A closed stream's slot frees when the server's next write to it fails (a new frame, or
+    // its keep-alive comment within 5 s): retry a refused stream for up to 15 s.
+    let open = || {
+        let t = Instant::now();
+        loop {
+            let mut s = view.events();
+            if status(&mut s).contains(" 200 ") {
+                return s;
+            }
+            assert!(t.elapsed() < Duration::from_secs(15), "stream slots never freed");
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    };
+    let streams: Vec<_> = (0..2).map(|_| open()).collect();
+    // A new generation after both are open: each sees its frames.
     let g = generation(&view.post("/control?spp=64&m=2").1);
-    let streams: Vec<_> = (0..2).map(|_| view.events()).collect();
     for mut s in streams {
         let first = next_frame(&mut s);
         let second = next_frame(&mut s);
