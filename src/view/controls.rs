@@ -54,6 +54,12 @@ fn bounded(key: &str, v: &str, lo: f32, hi: f32) -> Result<f32, String> {
     if (lo..=hi).contains(&x) { Ok(x) } else { Err(format!("{key}: {x} is outside [{lo}, {hi}]")) }
 }
 
+/// A number in (0, `hi`].
+fn positive(key: &str, v: &str, hi: f32) -> Result<f32, String> {
+    let x = bounded(key, v, 0.0, hi)?;
+    if x > 0.0 { Ok(x) } else { Err(format!("{key}: must be above 0")) }
+}
+
 fn pair(key: &str, v: &str, limit: f32) -> Result<(f32, f32), String> {
     let (a, b) = v.split_once(',').ok_or_else(|| format!("{key}: expected two numbers 'a,b', got '{v}'"))?;
     Ok((bounded(key, a, -limit, limit)?, bounded(key, b, -limit, limit)?))
@@ -96,22 +102,10 @@ pub fn parse(key: &str, v: &str) -> Result<Change, String> {
             "global" => Shading::Global,
             _ => return Err(format!("shading: expected normals, direct or global, got '{v}'")),
         }),
-        "rr" => {
-            let p = bounded(key, v, 0.0, 1.0)?;
-            if p <= 0.0 {
-                return Err("rr: must be above 0".into());
-            }
-            Change::Roulette(p)
-        }
+        "rr" => Change::Roulette(positive(key, v, 1.0)?),
         "hemisphere" => Change::Hemisphere(flag(key, v)?),
         "lens" => Change::LensRadius(bounded(key, v, 0.0, 1e6)?),
-        "focal" => {
-            let d = bounded(key, v, 0.0, 1e9)?;
-            if d <= 0.0 {
-                return Err("focal: must be above 0".into());
-            }
-            Change::FocalDistance(d)
-        }
+        "focal" => Change::FocalDistance(positive(key, v, 1e9)?),
         "env" => Change::Environment(flag(key, v)?),
         "bvh" => Change::BvhDepth(match v {
             "off" | "-1" => None,

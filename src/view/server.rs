@@ -168,7 +168,7 @@ fn json_response(v: &serde_json::Value) -> Response<std::io::Cursor<Vec<u8>>> {
 /// A frame as the stream sends it: its figures, and (with `image`) the encoded image.
 fn frame_json(f: &Frame, image: bool) -> serde_json::Value {
     let mut v = serde_json::json!({
-        "seq": f.seq, "generation": f.generation, "width": f.width, "height": f.height,
+        "seq": f.seq, "generation": f.generation, "width": f.film.width, "height": f.film.height,
         "spp": f.spp, "converged": f.converged, "coarse": f.coarse, "mime": f.mime(), "info": f.info,
     });
     if image {

@@ -24,8 +24,6 @@ pub struct Frame {
     pub seq: u64,
     /// The generation (camera and settings) it shows.
     pub generation: u64,
-    pub width: usize,
-    pub height: usize,
     /// Samples per pixel accumulated.
     pub spp: u32,
     /// The cap was reached: the image is final (sent losslessly).
@@ -326,9 +324,7 @@ fn frame(
     coarse: bool,
     info: serde_json::Value,
 ) -> Frame {
-    let (width, height) = (film.width, film.height);
-    let film = Arc::new(film);
-    Frame { seq, generation, width, height, spp, converged, coarse, film, info, encoded: OnceLock::new() }
+    Frame { seq, generation, spp, converged, coarse, film: Arc::new(film), info, encoded: OnceLock::new() }
 }
 
 impl Frame {
