@@ -43,7 +43,7 @@ fn best(scene: &Scene, bvh: &dyn Intersector, cases: &[&Settings]) -> Vec<(f64, 
 
 fn main() {
     let scene = scene();
-    let (bvh, _) = accel::build(&scene, true, wavepath::cpu::Isa::default());
+    let (bvh, _) = accel::build(&scene, &Default::default());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("thread pool");
     pool.install(|| {
         let base = Settings { width: 240, height: 180, spp: 16, light_samples: 4, threads: 2, ..Settings::default() };

@@ -54,6 +54,8 @@ pub struct Settings {
     pub rr_continue: f32,
     /// Use the BVH (false: brute force, `--no-bvh`).
     pub use_bvh: bool,
+    /// How the BVH's leaves hold their triangles (`--bvh-leaves`).
+    pub leaves: LeafLayout,
     pub seed: u64,
     pub cell: Option<Cell>,
     pub integrator: IntegratorKind,
@@ -83,6 +85,20 @@ pub struct Settings {
     pub sampler: crate::sampling::SamplerKind,
 }
 
+/// How BVH leaves hold their triangles: the same hits either way, a trade of memory for
+/// speed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum LeafLayout {
+    /// Indexed for large meshes, corners otherwise.
+    #[default]
+    Auto,
+    /// Each leaf holds its triangles' corners (192 bytes a leaf of up to four): no lookup.
+    Corners,
+    /// Each leaf holds vertex indices into one vertex array (64 bytes a leaf plus 12 a
+    /// vertex): about a third of the leaf memory, one gather per leaf test.
+    Indexed,
+}
+
 impl Default for Settings {
     fn default() -> Self {
         Settings {
@@ -98,6 +114,7 @@ impl Default for Settings {
             shading: Shading::Global,
             rr_continue: 0.65,
             use_bvh: true,
+            leaves: LeafLayout::Auto,
             seed: 0,
             cell: None,
             integrator: IntegratorKind::Wavefront,

@@ -67,15 +67,21 @@ pub trait Intersector: Sync + Send {
 pub struct BuildInfo {
     pub build_s: f64,
     pub nodes: usize,
+    /// Leaf blocks (each holds at most four primitives).
+    pub leaves: usize,
     pub depth: usize,
     pub sah_cost: f64,
+    /// Resident bytes of the inner nodes and of the leaf blocks: with the mesh, what a
+    /// render keeps in memory.
+    pub node_bytes: usize,
+    pub leaf_bytes: usize,
 }
 
-/// Builds the intersector the settings ask for: the BVH (box tests of at most `isa`), or
-/// brute force for `--no-bvh`.
-pub fn build(scene: &crate::scene::Scene, use_bvh: bool, isa: crate::cpu::Isa) -> (Box<dyn Intersector>, BuildInfo) {
-    if use_bvh {
-        let bvh = Bvh::build(scene).with_isa(isa);
+/// Builds the intersector the settings ask for: the BVH (leaves in `s.leaves`, box tests of
+/// at most `s.isa`), or brute force for `--no-bvh`.
+pub fn build(scene: &crate::scene::Scene, s: &crate::settings::Settings) -> (Box<dyn Intersector>, BuildInfo) {
+    if s.use_bvh {
+        let bvh = Bvh::build_with(scene, s.leaves).with_isa(s.isa);
         let info = bvh.info();
         return (Box::new(bvh), info);
     }

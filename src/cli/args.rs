@@ -1,6 +1,6 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use super::choices::{Camera, Fov, Integrator, Roulette, Sampler, Shading, Split, Tonemap};
+use super::choices::{Camera, Fov, Integrator, Leaves, Roulette, Sampler, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::cpu::Isa;
@@ -182,6 +182,10 @@ pub struct RenderArgs {
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,
+    /// How the BVH's leaves hold their triangles: corners (fastest), indexed (a third of the
+    /// leaf memory) or auto (indexed from 4 million primitives). Same image either way.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub bvh_leaves: Leaves,
     /// Widest SIMD instruction set the kernels may use: scalar, sse, avx2, avx512 (capped by
     /// what the CPU has; every choice gives the same image).
     #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
@@ -280,6 +284,9 @@ pub struct TraceArgs {
     /// Widest SIMD instruction set of the box tests: scalar, sse, avx2, avx512.
     #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
     pub isa: Isa,
+    /// How the BVH's leaves hold their triangles: corners, indexed or auto.
+    #[arg(long, value_enum, default_value = "auto")]
+    pub bvh_leaves: Leaves,
 }
 
 /// `--isa`: one of the instruction-set names.

@@ -46,6 +46,18 @@ choice! {
 }
 
 choice! {
+    /// How the BVH's leaves hold their triangles (same hits either way).
+    Leaves => wavepath::settings::LeafLayout {
+        /// Indexed from 4 million primitives, corners below.
+        Auto,
+        /// Triangle corners copied into the leaves: no lookup, 192 bytes a leaf.
+        Corners,
+        /// Vertex indices into one vertex array: about a third of the leaf memory.
+        Indexed,
+    }
+}
+
+choice! {
     /// Which light-transport implementation runs.
     Integrator => wavepath::settings::IntegratorKind {
         /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.

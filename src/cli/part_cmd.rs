@@ -22,7 +22,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let scene = prepare_scene(a, &s)?;
     let scene_hash = identity::scene_hash(&scene);
     let (acc, mut stats) = wavepath::render::with_threads(s.threads, || -> Result<_> {
-        let (accel, build) = wavepath::accel::build(&scene, s.use_bvh, s.isa);
+        let (accel, build) = wavepath::accel::build(&scene, &s);
         let (acc, mut stats) = wavepath::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
         stats.build_s = build.build_s;
         stats.threads = rayon::current_num_threads();

@@ -33,7 +33,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
     let scene = super::with_spinner("loading", || super::load_scene(&args.mesh, &LoadOptions::default()))?;
-    let bvh = super::with_spinner("building the BVH", || Bvh::build(&scene)).with_isa(args.isa);
+    let bvh = super::with_spinner("building the BVH", || Bvh::build_with(&scene, args.bvh_leaves.into())).with_isa(args.isa);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];
     for _ in 0..args.warmup {
@@ -62,8 +62,9 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let per_ray = |x: u64| x as f64 / counters.rays.max(1) as f64;
     let notes = format!(
         "wavepath bvh8 (binned SAH, 16 bins x 3 axes, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
-         isa={}; nodes={} depth={} sah_cost={:.2}; {:.1} nodes and {:.1} prim tests per ray",
+         isa={}; leaves={}; nodes={} depth={} sah_cost={:.2}; {:.1} nodes and {:.1} prim tests per ray",
         bvh.isa().name(),
+        if bvh.indexed() { "indexed" } else { "corners" },
         info.nodes,
         info.depth,
         info.sah_cost,
@@ -75,6 +76,10 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
         "variant": args.variant,
         "build_s": info.build_s,
         "tris": scene.mesh.triangle_count(),
+        "mesh_bytes": scene.mesh.bytes(),
+        "node_bytes": info.node_bytes,
+        "leaf_bytes": info.leaf_bytes,
+        "leaves": info.leaves,
         "rays": rays.len(),
         "threads": threads,
         "reps": reps,

@@ -68,13 +68,18 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     let (film, build) = wavepath::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
         let (accel, build) =
-            super::with_spinner("building the BVH", || wavepath::accel::build(&scene, s.use_bvh, s.isa));
+            super::with_spinner("building the BVH", || wavepath::accel::build(&scene, &s));
+        let mb = |b: usize| b as f64 / 1e6;
         eprintln!(
-            "[wavepath] Built {} in {:.4} s ({} nodes, depth {})",
+            "[wavepath] Built {} in {:.4} s ({} nodes, {} leaves, depth {}); resident: mesh {:.1} MB, nodes {:.1} MB, leaves {:.1} MB",
             accel.name(),
             build.build_s,
             build.nodes,
-            build.depth
+            build.leaves,
+            build.depth,
+            mb(scene.mesh.bytes()),
+            mb(build.node_bytes),
+            mb(build.leaf_bytes)
         );
         let bar = progress_bar(&s);
         let tick = |n: u64| {

@@ -66,6 +66,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     };
     s.hemisphere = a.hemisphere;
     s.use_bvh = !a.no_bvh;
+    s.leaves = a.bvh_leaves.into();
     s.isa = a.isa;
     s.seed = a.seed;
     s.integrator = a.integrator.into();

@@ -131,7 +131,7 @@ pub fn run(a: &StudyArgs) -> Result<()> {
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
     let result = wavepath::render::with_threads(cfg.base.threads, || -> Result<_> {
-        let (accel, _) = wavepath::accel::build(&scene, true, cfg.base.isa);
+        let (accel, _) = wavepath::accel::build(&scene, &cfg.base);
         wavepath::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
     })??;
     wavepath::study::report::write_all(&result, &out, &stem, &command)?;

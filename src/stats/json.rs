@@ -12,6 +12,7 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
         "scene": scene.name,
         "triangles": scene.mesh.triangle_count(),
         "spheres": scene.spheres.len(),
+        "mesh_bytes": scene.mesh.bytes(),
         "lights": scene.lights.len(),
         "width": s.width,
         "height": s.height,

@@ -95,7 +95,7 @@ fn hit_bounds(film: &Film) -> [i64; 4] {
 }
 
 fn normals_film(scene: &Scene, w: usize, h: usize) -> Film {
-    let accel = wavepath::accel::build(scene, true, Default::default()).0;
+    let accel = wavepath::accel::build(scene, &Default::default()).0;
     let s = Settings { width: w, height: h, shading: Shading::Normals, ..Settings::default() };
     wavepath::render::render(scene, accel.as_ref(), &s).unwrap().0
 }

@@ -10,7 +10,7 @@ use wavepath::scene::Scene;
 use wavepath::settings::{Settings, Shading};
 
 fn image(scene: &Scene, s: &Settings) -> Vec<[u32; 3]> {
-    let (accel, _) = build(scene, true, s.isa);
+    let (accel, _) = build(scene, s);
     let (film, stats) = render(scene, accel.as_ref(), s).unwrap();
     assert_eq!(stats.invalid_samples, 0);
     film.pixels.iter().map(|p| p.to_array().map(f32::to_bits)).collect()

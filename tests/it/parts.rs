@@ -90,7 +90,7 @@ fn sample_parts_merge_within_the_summation_order_bound() {
     let scene = default_scene();
     let mut st = Settings { width: 48, height: 36, spp: 24, max_depth: 4, ..Settings::default() };
     st.shading = wavepath::settings::Shading::Global;
-    let (bvh, _) = accel::build(&scene, true, wavepath::cpu::Isa::default());
+    let (bvh, _) = accel::build(&scene, &Settings::default());
     let (single, _) = wavepath::render::render_sums(&scene, bvh.as_ref(), &st, &|_| {}).unwrap();
     let n = 5;
     let mut files = Vec::new();

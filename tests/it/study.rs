@@ -41,7 +41,7 @@ fn run(scene: &Scene, accel: &dyn Intersector, cfg: &StudyConfig) -> study::Stud
 #[test]
 fn rmse_falls_as_one_over_sqrt_spp() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
     for depth in [1, 3] {
         let b = base(depth);
         let ref_s = study::reference::reference_settings(&b, 8192);
@@ -92,7 +92,7 @@ fn importance_sampling_beats_hemisphere_sampling() {
         scenes.push(s);
     }
     for scene in scenes {
-        let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+        let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
         let cfg = config(SweepKind::Sampling, base(1), 32, 2048, temp_dir("study-sampling"));
         let r = run(&scene, accel.as_ref(), &cfg);
         assert_eq!(r.curves.len(), 2);
@@ -114,7 +114,7 @@ fn importance_sampling_beats_hemisphere_sampling() {
 #[test]
 fn sampler_sweep_shows_what_patterns_buy() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
     let cfg = config(SweepKind::Sampler, base(3), 32, 2048, temp_dir("study-sampler"));
     let r = run(&scene, accel.as_ref(), &cfg);
     let kinds: Vec<SamplerKind> = r.curves.iter().map(|c| c.settings.sampler).collect();
@@ -134,7 +134,7 @@ fn sampler_sweep_shows_what_patterns_buy() {
 fn mis_sweep_shows_what_mis_buys() {
     let mut scene = crate::integrator::mis::scene();
     scene.camera.fit_aspect(W as f32 / H as f32);
-    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
     let cfg = config(SweepKind::Mis, base(2), 32, 4096, temp_dir("study-mis"));
     let r = run(&scene, accel.as_ref(), &cfg);
     assert_eq!(r.curves.iter().map(|c| c.settings.mis).collect::<Vec<_>>(), [true, false]);
@@ -150,7 +150,7 @@ fn mis_sweep_shows_what_mis_buys() {
 #[test]
 fn reference_is_cached_and_keyed_by_settings() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
     let cache = temp_dir("study-cache");
     let cfg = config(SweepKind::Spp, base(1), 2, 64, cache.clone());
     let a = run(&scene, accel.as_ref(), &cfg);
@@ -177,7 +177,7 @@ fn reference_is_cached_and_keyed_by_settings() {
 #[test]
 fn depth_sweep_shows_truncation_bias() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
     let cfg = config(SweepKind::Depth, base(5), 16, 512, temp_dir("study-depth"));
     let r = run(&scene, accel.as_ref(), &cfg);
     assert_eq!(r.reference_settings.max_depth, study::sweep::DEEP);

@@ -1,8 +1,8 @@
 //! Binned SAH build of a binary BVH into one flat node array.
 //!
-//! The top levels split in parallel (`rayon::join`); each parallel subtree builds into its
-//! own array, which the parent appends to its own with the child indices shifted, so the
-//! result is still one flat array with the root at 0 and no pointer per node.
+//! The top levels split in parallel (`rayon::join`); each right subtree builds into its own
+//! array, which the parent appends to its own with the child indices shifted, so the result
+//! is still one flat preorder array with the root at 0 and no pointer per node.
 use glam::{Vec3, Vec3A};
 
 /// Most primitives in one leaf (the wide leaves keep this bound).
@@ -23,17 +23,37 @@ pub const C_TRAV: f32 = 1.0;
 /// changed nothing there.
 const SMALL_SPLIT: f32 = 0.7;
 
-/// A primitive as the builder sees it: its box and its id (triangles first, then spheres).
+/// A primitive as the builder sees it: its box and its id (triangles first, then spheres),
+/// whose top bit marks a sphere (28 bytes, not 32 with a flag of its own: one of these per
+/// triangle is the builder's largest array).
 #[derive(Clone, Copy, Debug)]
 pub struct PrimRef {
     pub lo: Vec3,
     pub hi: Vec3,
-    pub id: u32,
-    /// Spheres are tested one by one, outside the leaf's SIMD triangle block.
-    pub sphere: bool,
+    key: u32,
 }
+const _: () = assert!(std::mem::size_of::<PrimRef>() == 28);
 
 impl PrimRef {
+    const SPHERE: u32 = 1 << 31;
+
+    /// `id` is below 2^31 (a tree holds far fewer primitives).
+    pub fn new(lo: Vec3, hi: Vec3, id: u32, sphere: bool) -> PrimRef {
+        debug_assert!(id < Self::SPHERE);
+        PrimRef { lo, hi, key: id | if sphere { Self::SPHERE } else { 0 } }
+    }
+
+    #[inline]
+    pub fn id(&self) -> u32 {
+        self.key & !Self::SPHERE
+    }
+
+    /// Spheres are tested one by one, outside the leaf's SIMD triangle block.
+    #[inline]
+    pub fn sphere(&self) -> bool {
+        self.key & Self::SPHERE != 0
+    }
+
     #[inline]
     fn centroid(&self) -> Vec3 {
         0.5 * (self.lo + self.hi)
@@ -75,38 +95,52 @@ fn bounds(refs: &[PrimRef]) -> Bounds {
 /// Builds the tree over `refs`, reordering them into leaf order.
 pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
     let b = bounds(refs);
-    build_par(refs, b, 0, 0)
+    let mut out = Vec::with_capacity(node_bound(refs.len()));
+    build_into(refs, b, 0, 0, &mut out);
+    out
 }
 
-/// `b`: the bounds of `refs` (known from the parent's bins, so no pass computes them).
-fn build_par(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize) -> Vec<Node2> {
+/// Most binary nodes over `n` primitives (every leaf holds one or more). Arrays are
+/// reserved this large and written densely from the front, so what is never written is
+/// never made resident: the reservation costs address space, not memory.
+fn node_bound(n: usize) -> usize {
+    2 * n.max(1) - 1
+}
+
+/// Appends the subtree over `refs` to `out` in preorder, child indices absolute in `out`;
+/// returns its root's index. `b`: the bounds of `refs` (known from the parent's bins, so no
+/// pass computes them). The left child is built straight into `out` while the right one
+/// builds into its own array in parallel, appended afterwards with its indices shifted: a
+/// node is copied once per parallel level at which it lies right, never held twice.
+fn build_into(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
     if refs.len() < PARALLEL_MIN {
-        let mut out = Vec::with_capacity(2 * refs.len() / MAX_LEAF + 1);
-        build_seq(refs, b, base, depth, &mut out);
-        return out;
+        return build_seq(refs, b, base, depth, out);
     }
     let (lo, hi, _, _) = b;
     let Some((mid, lb, rb)) = split(refs, b, depth) else {
-        let mut out = Vec::new();
-        build_seq(refs, b, base, depth, &mut out);
-        return out;
+        return build_seq(refs, b, base, depth, out);
     };
+    let me = out.len();
+    out.push(Node2 { lo, hi, a: 0, b: 0, count: 0 });
     let (l, r) = refs.split_at_mut(mid);
-    let (left, right) = rayon::join(|| build_par(l, lb, base, depth + 1), || build_par(r, rb, base + mid, depth + 1));
-    let mut out = Vec::with_capacity(1 + left.len() + right.len());
-    let lofs = 1u32;
-    let rofs = 1 + left.len() as u32;
-    out.push(Node2 { lo, hi, a: lofs, b: rofs, count: 0 });
-    for (nodes, ofs) in [(left, lofs), (right, rofs)] {
-        out.extend(nodes.into_iter().map(|mut n| {
-            if n.count == 0 {
-                n.a += ofs;
-                n.b += ofs;
-            }
-            n
-        }));
-    }
-    out
+    let (_, right) = rayon::join(
+        || build_into(l, lb, base, depth + 1, out),
+        || {
+            let mut own = Vec::with_capacity(node_bound(r.len()));
+            build_into(r, rb, base + mid, depth + 1, &mut own);
+            own
+        },
+    );
+    let ofs = out.len() as u32;
+    out.extend(right.into_iter().map(|mut n| {
+        if n.count == 0 {
+            n.a += ofs;
+            n.b += ofs;
+        }
+        n
+    }));
+    out[me] = Node2 { lo, hi, a: me as u32 + 1, b: ofs, count: 0 };
+    me as u32
 }
 
 fn build_seq(refs: &mut [PrimRef], bnd: Bounds, base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
@@ -183,7 +217,7 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
     if n <= 1 {
         return None;
     }
-    let one_block = n <= MAX_LEAF && !refs.iter().any(|r| r.sphere);
+    let one_block = n <= MAX_LEAF && !refs.iter().any(PrimRef::sphere);
     let ext = chi - clo;
     let axis = ext.max_position();
     let median = |refs: &mut [PrimRef]| {
@@ -279,7 +313,7 @@ mod tests {
     use super::*;
 
     fn unit_box(at: Vec3, id: u32, sphere: bool) -> PrimRef {
-        PrimRef { lo: at - Vec3::splat(0.5), hi: at + Vec3::splat(0.5), id, sphere }
+        PrimRef::new(at - Vec3::splat(0.5), at + Vec3::splat(0.5), id, sphere)
     }
 
     /// Leaves of the binary tree, as sets of ids.
@@ -288,7 +322,7 @@ mod tests {
             .iter()
             .filter(|n| n.count > 0)
             .map(|n| {
-                let mut v: Vec<u32> = refs[n.a as usize..(n.a + n.count) as usize].iter().map(|r| r.id).collect();
+                let mut v: Vec<u32> = refs[n.a as usize..(n.a + n.count) as usize].iter().map(PrimRef::id).collect();
                 v.sort();
                 v
             })

@@ -33,6 +33,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::geometry::{Hit, Ray};
 use crate::scene::Scene;
+pub use crate::settings::LeafLayout;
 
 use crate::cpu::{Avx2, Isa, Sse};
 use boxtest::{BoxRay, BoxTest, RootBox};
@@ -45,14 +46,15 @@ pub use wide::Node8;
 /// An 8-wide BVH over the triangles and spheres of a scene.
 pub struct Bvh {
     nodes: Vec<Node8>,
-    /// Leaf-ordered primitive data: triangle corners, or (centre, (radius, 0, 0), 0); every
-    /// leaf starts at a multiple of [`leaf::LANES`] (padding slots are never read). Traversal
-    /// reads triangle corners from `blocks` and only spheres from here.
-    prims: Vec<[Vec3; 3]>,
-    /// Scene primitive id of each leaf slot (triangles first, then spheres).
-    ids: Vec<u32>,
-    /// The triangles of leaf `first / LANES`, lane by lane, for the SIMD filter.
-    blocks: Vec<leaf::Tri4>,
+    /// Leaf `first / LANES`: its triangles lane by lane (or their vertex indices), for the
+    /// SIMD filter, and the ids of all its primitives.
+    leaves: leaf::LeafStore,
+    /// Address and size of the leaf blocks, for prefetching.
+    leaf_base: (usize, usize),
+    /// (centre, radius) of each scene sphere; a sphere's primitive id is `tri_count` + its
+    /// index.
+    spheres: Vec<(Vec3, f32)>,
+    tri_count: u32,
     stack_need: usize,
     isa: Isa,
     /// The kernel tokens `isa` allows, made once (not per ray).
@@ -63,8 +65,14 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Builds the tree; the box test is the best the CPU has (see [`Bvh::with_isa`]).
+    /// Builds the tree with the leaf layout chosen by size; the box test is the best the CPU
+    /// has (see [`Bvh::with_isa`]).
     pub fn build(scene: &Scene) -> Bvh {
+        Bvh::build_with(scene, LeafLayout::Auto)
+    }
+
+    /// Builds the tree with leaves in `layout`.
+    pub fn build_with(scene: &Scene, layout: LeafLayout) -> Bvh {
         let start = Instant::now();
         let mesh = &scene.mesh;
         let tri_count = mesh.triangle_count();
@@ -74,37 +82,39 @@ impl Bvh {
             .into_par_iter()
             .map(|i| {
                 let [a, b, c] = mesh.corners(i);
-                PrimRef { lo: a.min(b).min(c), hi: a.max(b).max(c), id: i as u32, sphere: false }
+                PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32, false)
             })
             .collect();
         refs.extend(scene.spheres.iter().enumerate().map(|(i, s)| {
             let r = Vec3::splat(s.radius.abs());
-            PrimRef { lo: s.center - r, hi: s.center + r, id: (tri_count + i) as u32, sphere: true }
+            PrimRef::new(s.center - r, s.center + r, (tri_count + i) as u32, true)
         }));
-        let (nodes, depth, sah_cost, ids, prims) = if refs.is_empty() {
-            (vec![], 0, 0.0, vec![], vec![])
+        let (mut nodes, depth, sah_cost, ids) = if refs.is_empty() {
+            (vec![], 0, 0.0, vec![])
         } else {
             let bin = build::build(&mut refs);
+            // Only the ids are kept: the references are freed before the collapse allocates.
+            let ids: Vec<u32> = std::mem::take(&mut refs).par_iter().map(PrimRef::id).collect();
             let w = wide::collapse(&bin);
-            let ids: Vec<u32> = refs.iter().map(|r| r.id).collect();
-            let prims = ids
-                .par_iter()
-                .map(|&id| {
-                    let id = id as usize;
-                    if id < tri_count {
-                        mesh.corners(id)
-                    } else {
-                        let s = &scene.spheres[id - tri_count];
-                        [s.center, Vec3::new(s.radius, 0.0, 0.0), Vec3::ZERO]
-                    }
-                })
-                .collect();
-            (w.nodes, w.depth, w.sah_cost, ids, prims)
+            (w.nodes, w.depth, w.sah_cost, ids)
         };
-        let mut nodes = nodes;
-        let leaves = leaf::pad_leaves(&mut nodes, &prims, &ids, tri_count as u32);
+        let indexed = match layout {
+            LeafLayout::Corners => false,
+            LeafLayout::Indexed => true,
+            LeafLayout::Auto => total >= INDEXED_FROM,
+        };
+        let leaves = leaf::pad_leaves(&mut nodes, &ids, scene, indexed);
+        drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
-        let info = BuildInfo { build_s: start.elapsed().as_secs_f64(), nodes: nodes.len(), depth, sah_cost };
+        let info = BuildInfo {
+            build_s: start.elapsed().as_secs_f64(),
+            nodes: nodes.len(),
+            leaves: leaves.len(),
+            depth,
+            sah_cost,
+            node_bytes: std::mem::size_of_val(&nodes[..]),
+            leaf_bytes: leaves.bytes() + scene.spheres.len() * std::mem::size_of::<(Vec3, f32)>(),
+        };
         let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         if let Some(root) = nodes.first() {
             for i in 0..wide::WIDTH {
@@ -115,9 +125,13 @@ impl Bvh {
         Bvh {
             root: RootBox::new(lo, hi),
             nodes,
-            prims: leaves.prims,
-            ids: leaves.ids,
-            blocks: leaves.blocks,
+            leaf_base: match &leaves {
+                leaf::LeafStore::Corners(b) => (b.as_ptr() as usize, std::mem::size_of::<leaf::Tri4>()),
+                leaf::LeafStore::Indexed { blocks, .. } => (blocks.as_ptr() as usize, std::mem::size_of::<leaf::Idx4>()),
+            },
+            leaves,
+            spheres: scene.spheres.iter().map(|s| (s.center, s.radius)).collect(),
+            tri_count: tri_count as u32,
             stack_need: WIDTH_STACK * (depth + 1),
             isa: Isa::detect(),
             tokens: tokens_of(Isa::detect()),
@@ -173,6 +187,23 @@ impl Bvh {
         on_isa!(self, |isa| traverse::closest_hit(self, isa, ray, counters))
     }
 
+    /// Leaf block `i` as the SIMD filter reads it: in place, or gathered into `scratch`.
+    #[inline(always)]
+    fn block<'a>(&'a self, i: usize, scratch: &'a mut leaf::Tri4) -> &'a leaf::Tri4 {
+        match &self.leaves {
+            leaf::LeafStore::Corners(blocks) => &blocks[i],
+            leaf::LeafStore::Indexed { blocks, verts } => {
+                blocks[i].gather(verts, self.tri_count, scratch);
+                scratch
+            }
+        }
+    }
+
+    /// Whether the leaves index their corners (see [`LeafLayout`]).
+    pub fn indexed(&self) -> bool {
+        matches!(self.leaves, leaf::LeafStore::Indexed { .. })
+    }
+
     #[inline(always)]
     fn tokens(&self) -> (Option<Sse>, Option<Avx2>) {
         self.tokens
@@ -183,6 +214,10 @@ impl Bvh {
 fn tokens_of(isa: Isa) -> (Option<Sse>, Option<Avx2>) {
     (isa.sse(), isa.avx2())
 }
+
+/// Primitives from which [`LeafLayout::Auto`] indexes the corners (chosen by measurement:
+/// see docs/decisions.md).
+const INDEXED_FROM: usize = 4_000_000;
 
 /// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
 /// in the mask of rays that may enter the tree).
@@ -292,3 +327,4 @@ impl Bvh {
         on_isa!(self, |isa| run!(isa))
     }
 }
+

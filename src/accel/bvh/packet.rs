@@ -67,7 +67,7 @@ impl PacketTest for super::boxtest::Scalar {}
 /// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
 pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
-    let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need] };
+    let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need], leaf: Tri4::default() };
     let mut single = traverse::BigStack::boxed();
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
     // left out of line would be compiled outside the AVX2 context (see `Bvh::closest_hits`).
@@ -92,6 +92,8 @@ pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], counters: &mut T
 struct Stack {
     nodes: Vec<u32>,
     masks: Vec<u32>,
+    /// The block of the leaf being tested, when the tree's leaves index their corners.
+    leaf: Tri4,
 }
 
 /// The box-test values ([`BoxRay`]) of a packet's rays, one array per field (lane `k` is ray
@@ -351,7 +353,7 @@ fn packet_any<B: PacketTest>(
                     continue;
                 }
                 let (first, count) = leaf_range(child);
-                let blk = &bvh.blocks[first / LANES];
+                let blk = bvh.block(first / LANES, &mut stack.leaf);
                 // As `leaf_any`: the filter's triangle lanes and every other lane, then the
                 // exact test in lane order up to the first hit.
                 let others = ((1u32 << count) - 1) & !blk.tri_lanes;
@@ -369,7 +371,7 @@ fn packet_any<B: PacketTest>(
                         let lane = cand.trailing_zeros() as usize;
                         cand &= cand - 1;
                         let sr = sh.sheared(k, &rays[k]);
-                        if lane_hit(bvh, blk, first, lane, &sr, &rays[k], rays[k].tmax).is_some() {
+                        if lane_hit(bvh, blk, lane, &sr, &rays[k], rays[k].tmax).is_some() {
                             hit |= 1 << k;
                             break;
                         }

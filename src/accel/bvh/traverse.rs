@@ -24,6 +24,8 @@ pub const BIG_STACK: usize = 1024;
 pub struct Stack<const N: usize> {
     pub nodes: [u32; N],
     pub dists: [f32; N],
+    /// The block of the leaf being tested, when the tree's leaves index their corners.
+    pub leaf: Tri4,
 }
 
 impl<const N: usize> Stack<N> {
@@ -37,7 +39,7 @@ impl<const N: usize> Stack<N> {
     };
 
     pub fn new() -> Self {
-        Stack { nodes: [0; N], dists: [0.0; N] }
+        Stack { nodes: [0; N], dists: [0.0; N], leaf: Tri4::default() }
     }
 
     pub fn boxed() -> Box<Self> {
@@ -164,7 +166,9 @@ fn walk<B: BoxTest, const N: usize>(
                 continue;
             }
         } else {
-            leaf_closest(bvh, isa, cur, sr.get_or_insert_with(|| ShearedRay::of(ray)), ray, &mut best, counters);
+            let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
+            counters.prim_tests += leaf_range(cur).1 as u64;
+            leaf_closest(bvh, isa, cur, sr, ray, &mut best, &mut stack.leaf);
         }
         // Pop the nearest pending child that can still hold something closer.
         loop {
@@ -190,12 +194,13 @@ fn walk<B: BoxTest, const N: usize>(
 pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
     let leaf = 0usize.wrapping_sub((r >> 31) as usize);
     let node = bvh.nodes.as_ptr().wrapping_add(r as usize) as usize;
-    let block = bvh.blocks.as_ptr().wrapping_add(leaf_range(r).0 / LANES) as usize;
+    let (base, size) = bvh.leaf_base;
+    let block = base.wrapping_add(leaf_range(r).0 / LANES * size);
     isa.prefetch_at((block & leaf | node & !leaf) as *const u8);
 }
 
 /// Lanes of leaf `r` that need the scalar test (the SIMD kernels drop certain misses), with
-/// the leaf's first slot and block.
+/// the leaf's block (`scratch` holds it when the leaves index their corners).
 #[inline(always)]
 fn leaf_candidates<'a, B: BoxTest>(
     bvh: &'a Bvh,
@@ -204,20 +209,20 @@ fn leaf_candidates<'a, B: BoxTest>(
     sr: &ShearedRay,
     tmin: f32,
     tmax: f32,
-) -> (usize, u32, &'a Tri4) {
+    scratch: &'a mut Tri4,
+) -> (u32, &'a Tri4) {
     let (first, count) = leaf_range(r);
     let all = (1u32 << count) - 1;
-    let blk = &bvh.blocks[first / LANES];
-    (first, isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes), blk)
+    let blk = bvh.block(first / LANES, scratch);
+    (isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes), blk)
 }
 
 /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the filter
-/// just read (the same values as `prims`, already in cache); only spheres read `prims`.
+/// just read (already in cache); spheres from the tree's sphere list.
 #[inline(always)]
 pub(super) fn lane_hit(
     bvh: &Bvh,
     blk: &Tri4,
-    first: usize,
     lane: usize,
     sr: &ShearedRay,
     ray: &Ray,
@@ -227,7 +232,9 @@ pub(super) fn lane_hit(
         let corner = |k: usize| Vec3::new(blk.c[k][0][lane], blk.c[k][1][lane], blk.c[k][2][lane]);
         intersect_sheared(sr, ray.tmin, tmax, corner(0), corner(1), corner(2))
     } else {
-        sphere_hit(ray, tmax, &bvh.prims[first + lane])
+        let (centre, radius) = bvh.spheres[(blk.ids[lane] - bvh.tri_count) as usize];
+        let r = Ray { tmax, ..*ray };
+        sphere::intersect(&r, centre, radius).map(|t| (t, 0.0, 0.0))
     }
 }
 
@@ -239,27 +246,19 @@ pub(super) fn leaf_closest<B: BoxTest>(
     sr: &ShearedRay,
     ray: &Ray,
     best: &mut Best,
-    counters: &mut TraceCounters,
+    scratch: &mut Tri4,
 ) {
-    counters.prim_tests += leaf_range(r).1 as u64;
-    let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t);
+    let (mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t, scratch);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;
-        if let Some((t, u, v)) = lane_hit(bvh, blk, first, lane, sr, ray, best.t) {
-            let id = bvh.ids[first + lane];
+        if let Some((t, u, v)) = lane_hit(bvh, blk, lane, sr, ray, best.t) {
+            let id = blk.ids[lane];
             if !best.found || t < best.t || (t == best.t && id < best.prim) {
                 *best = Best { t, prim: id, u, v, found: true };
             }
         }
     }
-}
-
-/// Spheres are stored in the leaf arrays as (centre, (radius, 0, 0), unused).
-#[inline(always)]
-fn sphere_hit(ray: &Ray, tmax: f32, p: &[Vec3; 3]) -> Option<(f32, f32, f32)> {
-    let r = Ray { tmax, ..*ray };
-    sphere::intersect(&r, p[0], p[1].x).map(|t| (t, 0.0, 0.0))
 }
 
 #[inline(always)]
@@ -336,7 +335,7 @@ fn walk_any<B: BoxTest, const N: usize>(
             }
             tests += leaf_range(child).1 as u64;
             let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
-            if leaf_any(bvh, isa, child, sr, ray) {
+            if leaf_any(bvh, isa, child, sr, ray, &mut stack.leaf) {
                 break 'trace true;
             }
         }
@@ -353,12 +352,12 @@ fn walk_any<B: BoxTest, const N: usize>(
 
 /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
 #[inline(always)]
-fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray) -> bool {
-    let (first, mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax);
+fn leaf_any<B: BoxTest>(bvh: &Bvh, isa: B, r: u32, sr: &ShearedRay, ray: &Ray, scratch: &mut Tri4) -> bool {
+    let (mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, ray.tmax, scratch);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;
-        if lane_hit(bvh, blk, first, lane, sr, ray, ray.tmax).is_some() {
+        if lane_hit(bvh, blk, lane, sr, ray, ray.tmax).is_some() {
             return true;
         }
     }

@@ -154,39 +154,10 @@ const C_NODE: f64 = 1.0;
 
 impl Plan {
     fn new(bin: &[Node2], root_area: f64) -> Plan {
-        // `cost[n][k - 1]`: least SAH cost of subtree `n` in at most `k` slots.
-        let mut cost = vec![[0.0; WIDTH]; bin.len()];
         let mut left = vec![[0u8; WIDTH]; bin.len()];
         let mut open = vec![1u8; bin.len()];
-        // Children are stored after their parents (both build paths push the parent first).
-        for n in (0..bin.len()).rev() {
-            let node = &bin[n];
-            let a = area(node.lo, node.hi) as f64 / root_area;
-            if node.count > 0 {
-                cost[n] = [a; WIDTH];
-                continue;
-            }
-            let (l, r) = (node.a as usize, node.b as usize);
-            debug_assert!(l > n && r > n);
-            // Best spread of the two children over `k` slots (k >= 2).
-            let spread = |k: usize| -> (f64, u8) {
-                (1..k)
-                    .map(|j| (cost[l][j - 1] + cost[r][k - j - 1], j as u8))
-                    .fold((f64::INFINITY, 0), |b, c| if c.0 < b.0 { c } else { b })
-            };
-            let (full, j8) = spread(WIDTH);
-            let one = C_NODE * a + full;
-            open[n] = j8.max(1);
-            let (mut c, mut d) = ([one; WIDTH], [0u8; WIDTH]);
-            for k in 2..=WIDTH {
-                let (s, j) = spread(k);
-                if s < one {
-                    (c[k - 1], d[k - 1]) = (s, j);
-                }
-            }
-            (cost[n], left[n]) = (c, d);
-        }
-        Plan { root_cost: cost[0][0], left, open }
+        let cost = plan_subtree(bin, 0, &mut left, &mut open, root_area);
+        Plan { root_cost: cost[0], left, open }
     }
 
     /// The binary nodes that fill the slots of the wide node made from inner node `n`.
@@ -207,6 +178,54 @@ impl Plan {
             self.fill(bin, bin[n].b as usize, k - j, out);
         }
     }
+}
+
+/// Binary nodes from which [`plan_subtree`] plans the two children in parallel.
+const PARALLEL_PLAN: usize = 1 << 14;
+
+/// `cost[k - 1]`: the least SAH cost of subtree `n` in at most `k` slots; fills the plan of
+/// every node of the subtree. Both build paths store a subtree contiguously in preorder
+/// (`n`, then the left child's subtree, then the right child's), so `left` and `open` are
+/// the subtree's own entries (`[0]` is `n`'s) and split into the children's without
+/// overlap: the children are planned in parallel, and only one cost row per level of the
+/// recursion is ever held (the table of every node's costs took 64 bytes a node).
+fn plan_subtree(bin: &[Node2], n: usize, left: &mut [[u8; WIDTH]], open: &mut [u8], root_area: f64) -> [f64; WIDTH] {
+    let node = &bin[n];
+    let a = area(node.lo, node.hi) as f64 / root_area;
+    if node.count > 0 {
+        return [a; WIDTH];
+    }
+    let (l, r) = (node.a as usize, node.b as usize);
+    debug_assert!(l == n + 1 && r > l && r - n < left.len());
+    let size = left.len();
+    let (own_left, rest_left) = left.split_at_mut(1);
+    let (own_open, rest_open) = open.split_at_mut(1);
+    let (left_l, left_r) = rest_left.split_at_mut(r - l);
+    let (open_l, open_r) = rest_open.split_at_mut(r - l);
+    let (cl, cr) = if size >= PARALLEL_PLAN {
+        rayon::join(
+            || plan_subtree(bin, l, left_l, open_l, root_area),
+            || plan_subtree(bin, r, left_r, open_r, root_area),
+        )
+    } else {
+        (plan_subtree(bin, l, left_l, open_l, root_area), plan_subtree(bin, r, left_r, open_r, root_area))
+    };
+    // Best spread of the two children over `k` slots (k >= 2).
+    let spread = |k: usize| -> (f64, u8) {
+        (1..k).map(|j| (cl[j - 1] + cr[k - j - 1], j as u8)).fold((f64::INFINITY, 0), |b, c| if c.0 < b.0 { c } else { b })
+    };
+    let (full, j8) = spread(WIDTH);
+    let one = C_NODE * a + full;
+    own_open[0] = j8.max(1);
+    let (mut c, mut d) = ([one; WIDTH], [0u8; WIDTH]);
+    for k in 2..=WIDTH {
+        let (s, j) = spread(k);
+        if s < one {
+            (c[k - 1], d[k - 1]) = (s, j);
+        }
+    }
+    own_left[0] = d;
+    c
 }
 
 /// Emits the wide node for binary inner node `i`; returns the depth of its subtree.
@@ -321,7 +340,7 @@ mod tests {
                     let cluster = if scene % 2 == 0 { (rnd() * 5.0).floor() * 10.0 } else { 0.0 };
                     let c = Vec3::new(rnd() * 20.0 + cluster, rnd() * 3.0, rnd() * 20.0);
                     let half = Vec3::new(rnd(), rnd(), rnd()) * if rnd() < 0.1 { 3.0 } else { 0.2 };
-                    PrimRef { lo: c - half, hi: c + half, id: id as u32, sphere: false }
+                    PrimRef::new(c - half, c + half, id as u32, false)
                 })
                 .collect();
             let bin = build(&mut refs);

@@ -131,8 +131,8 @@ fn batches_of_every_isa_match_single_rays() {
 #[test]
 fn accel_build_switches_between_bvh_and_brute_force() {
     let scene = scene_of(icosphere(4), vec![]);
-    let (bvh, info) = build(&scene, true, Isa::default());
-    let (brute, binfo) = build(&scene, false, Isa::default());
+    let (bvh, info) = build(&scene, &wavepath::settings::Settings::default());
+    let (brute, binfo) = build(&scene, &wavepath::settings::Settings { use_bvh: false, ..Default::default() });
     assert!(bvh.name().starts_with("bvh8"));
     assert_eq!(brute.name(), "brute force");
     assert!(info.nodes > 0 && binfo.nodes == 0);

@@ -92,7 +92,7 @@ fn a_scene_without_lights_runs_no_shadow_stage() {
 #[test]
 fn forcing_all_effects_on_gives_the_same_image() {
     let scene = default_scene();
-    let (bvh, _) = accel::build(&scene, true, wavepath::cpu::Isa::default());
+    let (bvh, _) = accel::build(&scene, &Settings::default());
     for (depth, hemisphere, rr) in
         [(1, false, 0.65), (2, false, 0.65), (5, false, 1.0), (5, false, 0.65), (3, true, 0.65)]
     {

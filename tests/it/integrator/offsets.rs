@@ -64,7 +64,7 @@ fn shoot(scene: &Scene, accel: &dyn Intersector, from: Vec3, target: Vec3) -> Op
 /// and a ray may then rightly hit the other half).
 /// Returns (rays cast, re-hits).
 fn plane_rehits(scene: &Scene, o: Vec3, e1: Vec3, e2: Vec3, seed: u64) -> (usize, usize) {
-    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(scene, &wavepath::settings::Settings::default());
     let brute = BruteForce::new(scene);
     let n = e1.cross(e2).normalize();
     let size = e1.length().max(e2.length());
@@ -161,7 +161,7 @@ fn no_rehits_on_spheres() {
         (1.0, Vec3::splat(1e4)),
     ] {
         let s = scene(Mesh::default(), vec![Sphere { center, radius, material: 0 }]);
-        let (accel, _) = build(&s, true, wavepath::cpu::Isa::default());
+        let (accel, _) = build(&s, &wavepath::settings::Settings::default());
         let mut rng = Sampler::for_sample(11, 0, 0);
         let (mut cast, mut rehits) = (0, 0);
         for _ in 0..RAYS {
@@ -217,7 +217,7 @@ fn no_leaks_between_close_parallel_planes() {
         parallelogram(&mut mesh, o + vec3(0.0, gap, 0.0), e1, e2);
         let gap = (o.y + gap) - o.y; // the gap f32 can express there
         let s = scene(mesh, vec![]);
-        let (accel, _) = build(&s, true, wavepath::cpu::Isa::default());
+        let (accel, _) = build(&s, &wavepath::settings::Settings::default());
         let mut rng = Sampler::for_sample(5, 0, 0);
         let mut bad = 0;
         for _ in 0..RAYS * 4 {
@@ -273,7 +273,7 @@ fn shadow_rays_toward_a_light_skip_the_lights_leaf() {
         parallelogram(&mut mesh, p(-1.0, 1.5, -1.0), vec3(s2, 0.0, 0.0), vec3(0.0, 0.0, s2)); // ceiling, -y
         parallelogram(&mut mesh, p(-0.4, 1.49, -0.3), vec3(0.8 * scale, 0.0, 0.0), vec3(0.0, 0.0, 0.6 * scale)); // light
         let s = scene(mesh, vec![]);
-        let (accel, _) = build(&s, true, wavepath::cpu::Isa::default());
+        let (accel, _) = build(&s, &wavepath::settings::Settings::default());
         let mut rng = Sampler::for_sample(11, 0, 0);
         let (mut rays, mut c) = (Vec::new(), TraceCounters::default());
         while rays.len() < RAYS / 5 {

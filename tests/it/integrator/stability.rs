@@ -22,7 +22,7 @@ fn settings(w: usize, h: usize, spp: u32, max_depth: u32) -> Settings {
 }
 
 fn render(scene: &Scene, s: &Settings) -> Accumulator {
-    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(scene, &wavepath::settings::Settings::default());
     let (acc, st) = render_wavefront(scene, accel.as_ref(), s, &|_| {});
     assert_eq!(st.invalid_samples, 0, "{}: NaN/Inf samples", scene.name);
     assert!(acc.to_film().all_finite(), "{}: non-finite film", scene.name);
@@ -30,7 +30,7 @@ fn render(scene: &Scene, s: &Settings) -> Accumulator {
 }
 
 fn normals(scene: &Scene, w: usize, h: usize) -> Film {
-    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(scene, &wavepath::settings::Settings::default());
     render_normals(scene, accel.as_ref(), &settings(w, h, 1, 1)).0
 }
 
@@ -46,7 +46,7 @@ fn background_pixels(f: &Film) -> usize {
 /// A point inside a closed mesh: the midpoint between entering and leaving along the
 /// ray (from outside, toward the centre) with the longest inside span.
 fn inside_point(scene: &Scene) -> Vec3 {
-    let (accel, _) = build(scene, true, wavepath::cpu::Isa::default());
+    let (accel, _) = build(scene, &wavepath::settings::Settings::default());
     let (lo, hi) = scene.bounds().unwrap();
     let (c, r) = (0.5 * (lo + hi), (hi - lo).length());
     let mut s = Sampler::for_sample(3, 0, 0);
@@ -311,7 +311,7 @@ fn rays_parallel_to_slabs_and_triangle_planes() {
         mesh.append(w);
     }
     let scene = meshgen::scene_of(mesh, vec![]);
-    let (bvh, _) = build(&scene, true, wavepath::cpu::Isa::default());
+    let (bvh, _) = build(&scene, &wavepath::settings::Settings::default());
     let brute = BruteForce::new(&scene);
     let mut tc = TraceCounters::default();
     let mut n = 0;
@@ -343,7 +343,7 @@ fn rays_parallel_to_slabs_and_triangle_planes() {
 
 /// Random rays through a scene: BVH and brute force agree on hit/miss and distance.
 fn assert_bvh_matches_brute_force(scene: &Scene, rays: usize) {
-    let (bvh, _) = build(scene, true, wavepath::cpu::Isa::default());
+    let (bvh, _) = build(scene, &wavepath::settings::Settings::default());
     let brute = BruteForce::new(scene);
     let (lo, hi) = scene.bounds().unwrap();
     let mut s = Sampler::for_sample(5, 0, 0);

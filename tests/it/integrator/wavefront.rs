@@ -98,7 +98,7 @@ fn image_is_identical_for_any_thread_count() {
     // 96x72 at 4 samples: 6912 pixels in waves of 1024 (4096 paths), seven waves per frame,
     // so every pool has work to share; with and without adaptive sampling, for every sampler.
     let scene = default_scene();
-    let accel = wavepath::accel::build(&scene, true, Default::default()).0;
+    let accel = wavepath::accel::build(&scene, &Default::default()).0;
     let base = Settings { width: 96, height: 72, ..settings(3, 4) };
     let adaptive = Settings { spp: 8, adaptive: Some((4, 0.05)), ..base.clone() };
     let patterned = SamplerKind::ALL.map(|sampler| Settings { sampler, ..base.clone() });
