@@ -89,14 +89,14 @@ pub struct Settings {
 /// speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum LeafLayout {
-    /// Indexed for large meshes, corners otherwise.
+    /// Packed for large meshes, corners otherwise.
     #[default]
     Auto,
     /// Each leaf holds its triangles' corners (192 bytes a leaf of up to four): no lookup.
     Corners,
-    /// Each leaf holds vertex indices into one vertex array (64 bytes a leaf plus 12 a
-    /// vertex): about a third of the leaf memory, one gather per leaf test.
-    Indexed,
+    /// Each leaf one record of its distinct vertices and byte indices into them: about two
+    /// thirds of the leaf memory, no lookup outside the leaf.
+    Packed,
 }
 
 impl Default for Settings {

@@ -7,7 +7,7 @@ pub mod sphere;
 pub mod triangle;
 
 pub use brute::BruteForce;
-pub use bvh::Bvh;
+pub use bvh::{Bvh, LeafLayout};
 
 use crate::geometry::{Hit, Ray};
 

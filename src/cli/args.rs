@@ -182,8 +182,9 @@ pub struct RenderArgs {
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,
-    /// How the BVH's leaves hold their triangles: corners (fastest), indexed (a third of the
-    /// leaf memory) or auto (indexed from 4 million primitives). Same image either way.
+    /// How the BVH's leaves hold their triangles: corners (three cache lines a leaf), packed
+    /// (each distinct vertex once: two thirds of the memory, a gather per leaf test) or auto
+    /// (packed from 4 million primitives). Same image either way.
     #[arg(long, value_enum, default_value = "auto")]
     pub bvh_leaves: Leaves,
     /// Widest SIMD instruction set the kernels may use: scalar, sse, avx2, avx512 (capped by
@@ -284,7 +285,7 @@ pub struct TraceArgs {
     /// Widest SIMD instruction set of the box tests: scalar, sse, avx2, avx512.
     #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
     pub isa: Isa,
-    /// How the BVH's leaves hold their triangles: corners, indexed or auto.
+    /// How the BVH's leaves hold their triangles: corners, packed or auto.
     #[arg(long, value_enum, default_value = "auto")]
     pub bvh_leaves: Leaves,
 }

@@ -48,12 +48,12 @@ choice! {
 choice! {
     /// How the BVH's leaves hold their triangles (same hits either way).
     Leaves => wavepath::settings::LeafLayout {
-        /// Indexed from 4 million primitives, corners below.
+        /// Packed from 4 million primitives, corners below.
         Auto,
         /// Triangle corners copied into the leaves: no lookup, 192 bytes a leaf.
         Corners,
-        /// Vertex indices into one vertex array: about a third of the leaf memory.
-        Indexed,
+        /// Each leaf's distinct vertices once, with byte indices: about two thirds.
+        Packed,
     }
 }
 

@@ -64,7 +64,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
         "wavepath bvh8 (binned SAH, 16 bins x 3 axes, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
          isa={}; leaves={}; nodes={} depth={} sah_cost={:.2}; {:.1} nodes and {:.1} prim tests per ray",
         bvh.isa().name(),
-        if bvh.indexed() { "indexed" } else { "corners" },
+        bvh.layout(),
         info.nodes,
         info.depth,
         info.sah_cost,

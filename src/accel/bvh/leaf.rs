@@ -26,63 +26,95 @@ pub struct Tri4 {
 }
 const _: () = assert!(std::mem::size_of::<Tri4>() == 192);
 
-/// Leaf `i` of the indexed layout: each lane's corners as indices into the tree's own vertex
-/// array, and each lane's scene primitive id (padding `u32::MAX`; a sphere's id is at least
-/// the triangle count): one cache line, a third of a [`Tri4`].
-#[derive(Clone, Copy, Debug, Default)]
+/// One cache line of packed leaf records (32-bit words: ids and indices, or coordinate bits).
+#[derive(Clone, Copy, Debug, Default, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C, align(64))]
-pub struct Idx4 {
-    pub v: [[u32; 3]; LANES],
-    pub ids: [u32; LANES],
-}
-const _: () = assert!(std::mem::size_of::<Idx4>() == 64);
+pub struct Line(pub [u32; 16]);
 
-impl Idx4 {
-    /// Writes the block the SIMD filter reads: the lanes' corners fetched from `verts`.
-    /// Branch-free (padding and sphere lanes index vertex 0 and are masked out), and each
-    /// row written whole, so the filter's vector loads are forwarded from these stores
-    /// rather than stalled behind twelve narrow ones.
-    #[inline(always)]
-    pub fn gather(&self, verts: &[Vec3], tri_count: u32, out: &mut Tri4) {
-        for corner in 0..3 {
-            let p: [Vec3; LANES] = std::array::from_fn(|lane| verts[self.v[lane][corner] as usize]);
-            out.c[corner] = [[p[0].x, p[1].x, p[2].x, p[3].x], [p[0].y, p[1].y, p[2].y, p[3].y], [p[0].z, p[1].z, p[2].z, p[3].z]];
-        }
-        out.tri_lanes = (0..LANES).fold(0, |m, lane| m | ((self.ids[lane] < tri_count) as u32) << lane);
-        out.ids = self.ids;
+/// Words of a packed record before its vertices: four ids, twelve byte-sized corner
+/// indices, and the triangle lanes.
+const PACKED_HEAD: usize = 8;
+
+/// Writes the block the SIMD filter reads from the packed record at the start of `rec`:
+/// ids (words 0-3), corner `k` of lane `l` as local vertex `byte 3 l + k` of words 4-6,
+/// triangle lanes (word 7), then each local vertex's x, y, z. Padding and sphere lanes use
+/// vertex 0 and are masked out. `rec` is four lines (the store ends with spare ones) and
+/// every index is taken modulo its length, so no access needs a bounds check.
+#[inline(always)]
+fn gather_packed(rec: &[u32; 64], out: &mut Tri4) {
+    let idx: [u8; 12] = bytemuck::cast([rec[4], rec[5], rec[6]]);
+    let coord = |lane: usize, corner: usize, axis: usize| {
+        f32::from_bits(rec[(PACKED_HEAD + 3 * idx[3 * lane + corner] as usize + axis) & 63])
+    };
+    for corner in 0..3 {
+        out.c[corner] = std::array::from_fn(|axis| std::array::from_fn(|lane| coord(lane, corner, axis)));
     }
+    out.tri_lanes = rec[7];
+    out.ids = [rec[0], rec[1], rec[2], rec[3]];
 }
+
+/// Lines after the last record, so that every record can be read as four lines.
+const SPARE_LINES: usize = 3;
 
 /// The leaves in one of the two layouts.
 pub enum LeafStore {
-    /// Corners copied into the blocks: fastest, 192 bytes a leaf.
+    /// Corners copied into the blocks: no lookup, 192 bytes a leaf.
     Corners(Vec<Tri4>),
-    /// Corners as indices into `verts`, the mesh's vertices in the order the leaves first use
-    /// them (a leaf's corners lie together): 64 bytes a leaf plus 12 a vertex.
-    Indexed { blocks: Vec<Idx4>, verts: Vec<Vec3> },
+    /// Each leaf one self-contained record of whole cache lines: its distinct vertices once
+    /// each (a leaf of four neighbouring triangles has about six) and byte indices into them:
+    /// two lines where a [`Tri4`] takes three, no dependent load.
+    Packed { lines: Vec<Line>, leaves: usize },
 }
 
 impl LeafStore {
-    pub fn len(&self) -> usize {
+    /// How many leaves it holds.
+    pub fn leaves(&self) -> usize {
         match self {
             LeafStore::Corners(b) => b.len(),
-            LeafStore::Indexed { blocks, .. } => blocks.len(),
+            LeafStore::Packed { leaves, .. } => *leaves,
         }
     }
 
     pub fn bytes(&self) -> usize {
         match self {
             LeafStore::Corners(b) => std::mem::size_of_val(&b[..]),
-            LeafStore::Indexed { blocks, verts } => std::mem::size_of_val(&blocks[..]) + std::mem::size_of_val(&verts[..]),
+            LeafStore::Packed { lines, .. } => std::mem::size_of_val(&lines[..]),
+        }
+    }
+
+    /// Where the leaf at `first` begins, per unit of `first` (for prefetching).
+    pub fn base(&self) -> (usize, usize) {
+        match self {
+            LeafStore::Corners(b) => (b.as_ptr() as usize, std::mem::size_of::<Tri4>()),
+            LeafStore::Packed { lines, .. } => (lines.as_ptr() as usize, std::mem::size_of::<Line>()),
+        }
+    }
+
+    /// Leaf `first` as the SIMD filter reads it: in place, or gathered into `scratch`.
+    #[inline(always)]
+    pub fn block<'a>(&'a self, first: usize, scratch: &'a mut Tri4) -> &'a Tri4 {
+        match self {
+            LeafStore::Corners(blocks) => &blocks[first],
+            LeafStore::Packed { lines, .. } => {
+                let rec: &[Line; 4] = lines[first..first + 4].try_into().expect("a record is read as four lines");
+                gather_packed(bytemuck::cast_ref(rec), scratch);
+                scratch
+            }
         }
     }
 }
 
-/// Gives every leaf of `nodes` its own block (rewriting the leaf references so leaf `i`, in
-/// node order, starts at slot `4 i`) and fills the blocks from the scene in the chosen
-/// layout. `ids` are the primitive ids in the builder's leaf order. A leaf holds at most
-/// [`LANES`] primitives, so every block is filled independently, in parallel.
-pub fn pad_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, indexed: bool) -> LeafStore {
+/// The leaf layouts [`pad_leaves`] makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    Corners,
+    Packed,
+}
+
+/// Stores every leaf of `nodes` in `layout`, rewriting each leaf reference's `first` to the
+/// leaf's place in the store. `ids` are the primitive ids in the builder's leaf order. A
+/// leaf holds at most [`LANES`] primitives; leaves are filled independently, in parallel.
+pub fn pad_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Layout) -> LeafStore {
     use rayon::prelude::*;
     let tri_count = scene.mesh.triangle_count() as u32;
     // (node, slot, first, count) of every leaf child, in node order.
@@ -96,27 +128,55 @@ pub fn pad_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, indexed: bool
             }
         }
     }
-    assert!(leaves.len() * LANES < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} padded primitive slots");
     let lane_ids = |first: u32, count: u8| {
         let mut out = [u32::MAX; LANES];
         out[..count as usize].copy_from_slice(&ids[first as usize..first as usize + count as usize]);
         out
     };
-    let store = if indexed {
-        let mut blocks: Vec<Idx4> = leaves
-            .par_iter()
-            .map(|&(_, _, first, count)| {
-                let ids = lane_ids(first, count);
-                let v = std::array::from_fn(|lane| {
-                    if ids[lane] < tri_count { scene.mesh.triangles[ids[lane] as usize] } else { [0; 3] }
-                });
-                Idx4 { v, ids }
-            })
-            .collect();
-        let verts = first_use_order(&mut blocks, &scene.mesh.positions, tri_count);
-        LeafStore::Indexed { blocks, verts }
-    } else {
-        LeafStore::Corners(
+    let corners = |ids: &[u32; LANES]| -> [[u32; 3]; LANES] {
+        std::array::from_fn(|lane| if ids[lane] < tri_count { scene.mesh.triangles[ids[lane] as usize] } else { [0; 3] })
+    };
+    // Where each leaf goes in the store.
+    let mut place: Vec<u32> = (0..leaves.len() as u32).collect();
+    let store = match layout {
+        Layout::Packed => {
+            let records: Vec<u8> = leaves
+                .par_iter()
+                .map(|&(_, _, first, count)| {
+                    let ids = lane_ids(first, count);
+                    Packed::of(&ids, &corners(&ids), tri_count).lines() as u8
+                })
+                .collect();
+            let mut at = 0u32;
+            for (p, &n) in place.iter_mut().zip(&records) {
+                *p = at;
+                at += n as u32;
+            }
+            assert!((at as usize) < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} leaf lines");
+            let mut lines = vec![Line::default(); at as usize + SPARE_LINES];
+            // Leaves in chunks, each chunk writing its own run of lines.
+            const CHUNK: usize = 4096;
+            let mut runs = Vec::with_capacity(leaves.len() / CHUNK + 1);
+            let mut rest = &mut lines[..];
+            for (k, chunk) in leaves.chunks(CHUNK).enumerate() {
+                let n: usize = records[k * CHUNK..k * CHUNK + chunk.len()].iter().map(|&n| n as usize).sum();
+                let (run, tail) = rest.split_at_mut(n);
+                runs.push((chunk, run));
+                rest = tail;
+            }
+            runs.into_par_iter().for_each(|(chunk, run)| {
+                let mut at = 0;
+                for &(_, _, first, count) in chunk {
+                    let ids = lane_ids(first, count);
+                    let rec = Packed::of(&ids, &corners(&ids), tri_count);
+                    let n = rec.lines();
+                    rec.write(bytemuck::cast_slice_mut(&mut run[at..at + n]), &scene.mesh.positions);
+                    at += n;
+                }
+            });
+            LeafStore::Packed { lines, leaves: leaves.len() }
+        }
+        Layout::Corners => LeafStore::Corners(
             leaves
                 .par_iter()
                 .map(|&(_, _, first, count)| {
@@ -135,33 +195,59 @@ pub fn pad_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, indexed: bool
                     block
                 })
                 .collect(),
-        )
+        ),
     };
-    for (i, &(n, slot, _, count)) in leaves.iter().enumerate() {
-        nodes[n as usize].child[slot as usize] = leaf_ref((i * LANES) as u32, count as u32);
+    assert!(place.last().is_none_or(|&p| (p as usize) < MAX_PRIMS), "a BVH holds at most {MAX_PRIMS} leaves");
+    for (&p, &(n, slot, _, count)) in place.iter().zip(&leaves) {
+        nodes[n as usize].child[slot as usize] = leaf_ref(p, count as u32);
     }
     store
 }
 
-/// Renumbers the blocks' vertex indices in the order the blocks first use them and returns
-/// the positions in that order (vertices no triangle uses are left out).
-fn first_use_order(blocks: &mut [Idx4], positions: &[Vec3], tri_count: u32) -> Vec<Vec3> {
-    let mut new_index = vec![u32::MAX; positions.len()];
-    let mut verts = Vec::with_capacity(positions.len());
-    for b in blocks.iter_mut() {
+/// A leaf's packed record before it is written: its distinct vertices (mesh indices) and
+/// each corner's place among them.
+struct Packed {
+    ids: [u32; LANES],
+    tri_lanes: u32,
+    verts: [u32; 3 * LANES],
+    nverts: usize,
+    local: [u8; 3 * LANES],
+}
+
+impl Packed {
+    fn of(ids: &[u32; LANES], corners: &[[u32; 3]; LANES], tri_count: u32) -> Packed {
+        let mut p = Packed { ids: *ids, tri_lanes: 0, verts: [0; 3 * LANES], nverts: 0, local: [0; 3 * LANES] };
         for lane in 0..LANES {
-            if b.ids[lane] >= tri_count {
+            if ids[lane] >= tri_count {
                 continue;
             }
-            for v in &mut b.v[lane] {
-                let slot = &mut new_index[*v as usize];
-                if *slot == u32::MAX {
-                    *slot = verts.len() as u32;
-                    verts.push(positions[*v as usize]);
-                }
-                *v = *slot;
+            p.tri_lanes |= 1 << lane;
+            for (k, &v) in corners[lane].iter().enumerate() {
+                let at = p.verts[..p.nverts].iter().position(|&u| u == v).unwrap_or_else(|| {
+                    p.verts[p.nverts] = v;
+                    p.nverts += 1;
+                    p.nverts - 1
+                });
+                p.local[3 * lane + k] = at as u8;
             }
         }
+        // A leaf of spheres only still reads vertex 0 (masked out): keep one.
+        p.nverts = p.nverts.max(1);
+        p
     }
-    verts
+
+    fn lines(&self) -> usize {
+        (PACKED_HEAD + 3 * self.nverts).div_ceil(16)
+    }
+
+    fn write(&self, out: &mut [u32], positions: &[Vec3]) {
+        out[..LANES].copy_from_slice(&self.ids);
+        let idx: [u32; 3] = bytemuck::cast(self.local);
+        out[4..7].copy_from_slice(&idx);
+        out[7] = self.tri_lanes;
+        for (i, &v) in self.verts[..self.nverts].iter().enumerate() {
+            let p = if self.tri_lanes == 0 { Vec3::ZERO } else { positions[v as usize] };
+            out[PACKED_HEAD + 3 * i..PACKED_HEAD + 3 * i + 3].copy_from_slice(&p.to_array().map(f32::to_bits));
+        }
+    }
 }

@@ -46,10 +46,10 @@ pub use wide::Node8;
 /// An 8-wide BVH over the triangles and spheres of a scene.
 pub struct Bvh {
     nodes: Vec<Node8>,
-    /// Leaf `first / LANES`: its triangles lane by lane (or their vertex indices), for the
-    /// SIMD filter, and the ids of all its primitives.
+    /// The leaves (a leaf reference's `first` is its place here): for the SIMD filter, the
+    /// triangles lane by lane or a packed record; and the ids of all its primitives.
     leaves: leaf::LeafStore,
-    /// Address and size of the leaf blocks, for prefetching.
+    /// Address of the leaf store and bytes per unit of `first`, for prefetching.
     leaf_base: (usize, usize),
     /// (centre, radius) of each scene sphere; a sphere's primitive id is `tri_count` + its
     /// index.
@@ -98,18 +98,19 @@ impl Bvh {
             let w = wide::collapse(&bin);
             (w.nodes, w.depth, w.sah_cost, ids)
         };
-        let indexed = match layout {
-            LeafLayout::Corners => false,
-            LeafLayout::Indexed => true,
-            LeafLayout::Auto => total >= INDEXED_FROM,
+        let layout = match layout {
+            LeafLayout::Corners => leaf::Layout::Corners,
+            LeafLayout::Packed => leaf::Layout::Packed,
+            LeafLayout::Auto if total >= PACKED_FROM => leaf::Layout::Packed,
+            LeafLayout::Auto => leaf::Layout::Corners,
         };
-        let leaves = leaf::pad_leaves(&mut nodes, &ids, scene, indexed);
+        let leaves = leaf::pad_leaves(&mut nodes, &ids, scene, layout);
         drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
         let info = BuildInfo {
             build_s: start.elapsed().as_secs_f64(),
             nodes: nodes.len(),
-            leaves: leaves.len(),
+            leaves: leaves.leaves(),
             depth,
             sah_cost,
             node_bytes: std::mem::size_of_val(&nodes[..]),
@@ -125,10 +126,7 @@ impl Bvh {
         Bvh {
             root: RootBox::new(lo, hi),
             nodes,
-            leaf_base: match &leaves {
-                leaf::LeafStore::Corners(b) => (b.as_ptr() as usize, std::mem::size_of::<leaf::Tri4>()),
-                leaf::LeafStore::Indexed { blocks, .. } => (blocks.as_ptr() as usize, std::mem::size_of::<leaf::Idx4>()),
-            },
+            leaf_base: leaves.base(),
             leaves,
             spheres: scene.spheres.iter().map(|s| (s.center, s.radius)).collect(),
             tri_count: tri_count as u32,
@@ -190,18 +188,15 @@ impl Bvh {
     /// Leaf block `i` as the SIMD filter reads it: in place, or gathered into `scratch`.
     #[inline(always)]
     fn block<'a>(&'a self, i: usize, scratch: &'a mut leaf::Tri4) -> &'a leaf::Tri4 {
-        match &self.leaves {
-            leaf::LeafStore::Corners(blocks) => &blocks[i],
-            leaf::LeafStore::Indexed { blocks, verts } => {
-                blocks[i].gather(verts, self.tri_count, scratch);
-                scratch
-            }
-        }
+        self.leaves.block(i, scratch)
     }
 
-    /// Whether the leaves index their corners (see [`LeafLayout`]).
-    pub fn indexed(&self) -> bool {
-        matches!(self.leaves, leaf::LeafStore::Indexed { .. })
+    /// The leaf layout the tree was built with (see [`LeafLayout`]).
+    pub fn layout(&self) -> &'static str {
+        match self.leaves {
+            leaf::LeafStore::Corners(_) => "corners",
+            leaf::LeafStore::Packed { .. } => "packed",
+        }
     }
 
     #[inline(always)]
@@ -215,9 +210,9 @@ fn tokens_of(isa: Isa) -> (Option<Sse>, Option<Avx2>) {
     (isa.sse(), isa.avx2())
 }
 
-/// Primitives from which [`LeafLayout::Auto`] indexes the corners (chosen by measurement:
-/// see docs/decisions.md).
-const INDEXED_FROM: usize = 4_000_000;
+/// Primitives from which [`LeafLayout::Auto`] packs the leaves (chosen by measurement: see
+/// docs/decisions.md).
+const PACKED_FROM: usize = 4_000_000;
 
 /// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
 /// in the mask of rays that may enter the tree).

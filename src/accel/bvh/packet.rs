@@ -19,7 +19,6 @@
 //! the shadow stage from 779 to 640 instructions per ray (docs/decisions.md, "Shadow packets").
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
-use super::leaf::LANES;
 use super::leaf::Tri4;
 use super::traverse::{self, lane_hit, prefetch_child};
 use super::wide::{LEAF_BIT, Node8, WIDTH, leaf_range};
@@ -353,7 +352,7 @@ fn packet_any<B: PacketTest>(
                     continue;
                 }
                 let (first, count) = leaf_range(child);
-                let blk = bvh.block(first / LANES, &mut stack.leaf);
+                let blk = bvh.block(first, &mut stack.leaf);
                 // As `leaf_any`: the filter's triangle lanes and every other lane, then the
                 // exact test in lane order up to the first hit.
                 let others = ((1u32 << count) - 1) & !blk.tri_lanes;

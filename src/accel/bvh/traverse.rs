@@ -2,7 +2,7 @@
 //! the scalar and SIMD paths share every other line (and therefore every decision).
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
-use super::leaf::{LANES, Tri4};
+use super::leaf::Tri4;
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
 use crate::accel::{TraceCounters, sphere};
@@ -195,7 +195,7 @@ pub(super) fn prefetch_child<B: BoxTest>(bvh: &Bvh, isa: B, r: u32) {
     let leaf = 0usize.wrapping_sub((r >> 31) as usize);
     let node = bvh.nodes.as_ptr().wrapping_add(r as usize) as usize;
     let (base, size) = bvh.leaf_base;
-    let block = base.wrapping_add(leaf_range(r).0 / LANES * size);
+    let block = base.wrapping_add(leaf_range(r).0 * size);
     isa.prefetch_at((block & leaf | node & !leaf) as *const u8);
 }
 
@@ -213,7 +213,7 @@ fn leaf_candidates<'a, B: BoxTest>(
 ) -> (u32, &'a Tri4) {
     let (first, count) = leaf_range(r);
     let all = (1u32 << count) - 1;
-    let blk = bvh.block(first / LANES, scratch);
+    let blk = bvh.block(first, scratch);
     (isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes), blk)
 }
 

@@ -5,8 +5,9 @@ use rayon::prelude::*;
 
 pub const WIDTH: usize = 8;
 
-/// Child reference: an inner node index, or (top bit set) a leaf of `count` primitives
-/// starting at `first` in the leaf-ordered primitive arrays.
+/// Child reference: an inner node index, or (top bit set) a leaf of `count` primitives at
+/// `first`: the builder's position of its first primitive until the leaves are stored, then
+/// the leaf's place in the leaf store.
 pub const LEAF_BIT: u32 = 1 << 31;
 const COUNT_SHIFT: u32 = 27;
 /// Leaf-order primitive positions must fit below the count field.

@@ -1,8 +1,9 @@
 //! Ray traversal: the BVH against brute force, every instruction set against the scalar
-//! path (single rays, batches, packets), watertightness, and ray files.
+//! path (single rays, batches, packets), both leaf layouts, watertightness, and ray files.
 
 mod batch_closest;
 mod bvh;
+mod layouts;
 mod packets;
 mod rays;
 mod watertight;
