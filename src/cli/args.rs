@@ -184,7 +184,7 @@ pub struct RenderArgs {
     pub no_bvh: bool,
     /// How the BVH's leaves hold their triangles: corners (three cache lines a leaf), packed
     /// (each distinct vertex once: two thirds of the memory, a gather per leaf test) or auto
-    /// (packed from 4 million primitives). Same image either way.
+    /// (packed from 16 million primitives). Same image either way.
     #[arg(long, value_enum, default_value = "auto")]
     pub bvh_leaves: Leaves,
     /// Widest SIMD instruction set the kernels may use: scalar, sse, avx2, avx512 (capped by

@@ -48,7 +48,7 @@ choice! {
 choice! {
     /// How the BVH's leaves hold their triangles (same hits either way).
     Leaves => wavepath::settings::LeafLayout {
-        /// Packed from 4 million primitives, corners below.
+        /// Packed from 16 million primitives, corners below.
         Auto,
         /// Triangle corners copied into the leaves: no lookup, 192 bytes a leaf.
         Corners,

@@ -212,7 +212,7 @@ fn tokens_of(isa: Isa) -> (Option<Sse>, Option<Avx2>) {
 
 /// Primitives from which [`LeafLayout::Auto`] packs the leaves (chosen by measurement: see
 /// docs/decisions.md).
-const PACKED_FROM: usize = 4_000_000;
+const PACKED_FROM: usize = 16_000_000;
 
 /// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
 /// in the mask of rays that may enter the tree).
