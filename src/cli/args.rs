@@ -221,6 +221,11 @@ pub struct RenderArgs {
     /// front face, the side the winding points to).
     #[arg(long)]
     pub two_sided_emission: bool,
+    /// Subdivide the scene's mesh N times after loading (each triangle into four at its
+    /// edges' midpoints: the same surface, 4^N times the triangles), e.g. `CBlucy.dae
+    /// --subdivide 4` for a Cornell box around a 25.6-million-triangle Lucy.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub subdivide: u32,
     /// Force every effect (stage and kernel feature) on, even those the scene does not need;
     /// the image is the same, only slower: for measuring what specialisation saves.
     #[arg(long)]

@@ -33,7 +33,8 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
     let scene = super::with_spinner("loading", || super::load_scene(&args.mesh, &LoadOptions::default()))?;
-    let bvh = super::with_spinner("building the BVH", || Bvh::build_with(&scene, args.bvh_leaves.into())).with_isa(args.isa);
+    let bvh =
+        super::with_spinner("building the BVH", || Bvh::build_with(&scene, args.bvh_leaves.into())).with_isa(args.isa);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];
     for _ in 0..args.warmup {

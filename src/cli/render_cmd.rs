@@ -19,6 +19,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
             &LoadOptions {
                 camera: a.camera.into(),
                 two_sided_emission: a.two_sided_emission,
+                subdivide: a.subdivide,
                 ..LoadOptions::default()
             },
         )?,
@@ -67,8 +68,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     let (film, build) = wavepath::render::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
-        let (accel, build) =
-            super::with_spinner("building the BVH", || wavepath::accel::build(&scene, &s));
+        let (accel, build) = super::with_spinner("building the BVH", || wavepath::accel::build(&scene, &s));
         let mb = |b: usize| b as f64 / 1e6;
         eprintln!(
             "[wavepath] Built {} in {:.4} s ({} nodes, {} leaves, depth {}); resident: mesh {:.1} MB, nodes {:.1} MB, leaves {:.1} MB",

@@ -34,11 +34,14 @@ pub struct LoadOptions {
     /// Every emitter emits from both faces, whatever its format says (for comparisons with
     /// renderers and scenes that treat all emitters so).
     pub two_sided_emission: bool,
+    /// Rounds of midpoint subdivision applied to the loaded mesh (`--subdivide`): the same
+    /// surface in 4^n times the triangles, to render scenes at the size of real scans.
+    pub subdivide: u32,
 }
 
 impl Default for LoadOptions {
     fn default() -> Self {
-        LoadOptions { camera: CameraMode::Cs184, smooth_normals: true, two_sided_emission: false }
+        LoadOptions { camera: CameraMode::Cs184, smooth_normals: true, two_sided_emission: false, subdivide: 0 }
     }
 }
 
@@ -70,6 +73,18 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene> {
     }
     if scene.mesh.triangles.is_empty() && scene.spheres.is_empty() {
         bail!("{shown}: the scene has no triangles and no spheres");
+    }
+    if opts.subdivide > 0 {
+        let n = scene.mesh.triangle_count();
+        scene.mesh = scene.mesh.subdivided(opts.subdivide).ok_or_else(|| {
+            let out = crate::scene::subdivide::subdivided_count(n, opts.subdivide)
+                .map_or("more than 2^64".to_string(), |c| c.to_string());
+            anyhow::anyhow!(
+                "{shown}: {n} triangles subdivided {} times would be {out}, more than the {} a subdivision makes",
+                opts.subdivide,
+                crate::scene::subdivide::MAX_TRIANGLES
+            )
+        })?;
     }
     scene.validate().map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
     Ok(scene)

@@ -3,6 +3,7 @@
 //! (every new vertex lies on an old triangle) and a closed mesh stays closed, so test meshes
 //! of any size come from any mesh without a download.
 
+use super::Mesh;
 use glam::Vec3;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -41,33 +42,68 @@ pub fn subdivided_count(triangles: usize, levels: u32) -> Option<usize> {
 /// triangle's four children replace it, winding kept: corner a, corner b, corner c, middle),
 /// the old vertices first. `None` when the result would have more than [`MAX_TRIANGLES`].
 pub fn subdivide(positions: &[Vec3], triangles: &[[u32; 3]], levels: u32) -> Option<(Vec<Vec3>, Vec<[u32; 3]>)> {
-    // Refused before anything is allocated.
-    if subdivided_count(triangles.len(), levels)? > MAX_TRIANGLES {
-        return None;
+    let mesh = Mesh { positions: positions.to_vec(), triangles: triangles.to_vec(), ..Mesh::default() };
+    let out = mesh.subdivided(levels)?;
+    Some((out.positions, out.triangles))
+}
+
+/// Appends one value per new vertex, made from the values at its edge's ends.
+fn extend_at_midpoints<T: Copy>(v: &mut Vec<T>, ends: &[[u32; 2]], mix: impl Fn(T, T) -> T) {
+    v.reserve(ends.len());
+    for &[i, j] in ends {
+        v.push(mix(v[i as usize], v[j as usize]));
     }
-    let mut p = positions.to_vec();
-    let mut t = triangles.to_vec();
-    for _ in 0..levels {
-        let next_tris = t.len().checked_mul(4).filter(|&n| n <= u32::MAX as usize)?;
-        // A closed mesh has 3/2 edges per triangle; an open one at most 3.
-        if p.len() + 3 * t.len() > u32::MAX as usize {
+}
+
+impl Mesh {
+    /// This mesh after `levels` rounds of [`subdivide`]: each triangle's children keep its
+    /// material, and a new vertex's normal, uv and colour are the means of its edge's two
+    /// (normals renormalised), so shading is continuous where it was. `None` as
+    /// [`subdivide`].
+    pub fn subdivided(&self, levels: u32) -> Option<Mesh> {
+        // Refused before anything is allocated.
+        let total = subdivided_count(self.triangles.len(), levels)?;
+        if total > MAX_TRIANGLES {
             return None;
         }
-        let mut mid: HashMap<u64, u32, BuildHasherDefault<EdgeHasher>> =
-            HashMap::with_capacity_and_hasher(t.len() * 3 / 2 + 16, Default::default());
-        let mut out = Vec::with_capacity(next_tris);
-        for &[a, b, c] in &t {
-            let mut m = |i: u32, j: u32| -> u32 {
-                let key = (i.min(j) as u64) << 32 | i.max(j) as u64;
-                *mid.entry(key).or_insert_with(|| {
-                    p.push(0.5 * (p[i as usize] + p[j as usize]));
-                    (p.len() - 1) as u32
-                })
-            };
-            let (ab, bc, ca) = (m(a, b), m(b, c), m(c, a));
-            out.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        let mut m = self.clone();
+        for _ in 0..levels {
+            let next_tris = m.triangles.len().checked_mul(4).filter(|&n| n <= u32::MAX as usize)?;
+            // A closed mesh has 3/2 edges per triangle; an open one at most 3.
+            if m.positions.len() + 3 * m.triangles.len() > u32::MAX as usize {
+                return None;
+            }
+            let mut mid: HashMap<u64, u32, BuildHasherDefault<EdgeHasher>> =
+                HashMap::with_capacity_and_hasher(m.triangles.len() * 3 / 2 + 16, Default::default());
+            let mut ends: Vec<[u32; 2]> = Vec::new();
+            let first_new = m.positions.len();
+            let mut out = Vec::with_capacity(next_tris);
+            let p = &mut m.positions;
+            for &[a, b, c] in &m.triangles {
+                let mut mid_of = |i: u32, j: u32| -> u32 {
+                    let key = (i.min(j) as u64) << 32 | i.max(j) as u64;
+                    *mid.entry(key).or_insert_with(|| {
+                        p.push(0.5 * (p[i as usize] + p[j as usize]));
+                        ends.push([i, j]);
+                        (p.len() - 1) as u32
+                    })
+                };
+                let (ab, bc, ca) = (mid_of(a, b), mid_of(b, c), mid_of(c, a));
+                out.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+            }
+            debug_assert_eq!(first_new + ends.len(), m.positions.len());
+            if let Some(n) = &mut m.normals {
+                extend_at_midpoints(n, &ends, |a, b| (a + b).normalize_or_zero());
+            }
+            if let Some(uv) = &mut m.uvs {
+                extend_at_midpoints(uv, &ends, |a, b| 0.5 * (a + b));
+            }
+            if let Some(c) = &mut m.colors {
+                extend_at_midpoints(c, &ends, |a, b| 0.5 * (a + b));
+            }
+            m.material_ids = m.material_ids.iter().flat_map(|&id| [id; 4]).collect();
+            m.triangles = out;
         }
-        t = out;
+        Some(m)
     }
-    Some((p, t))
 }

@@ -134,7 +134,9 @@ pub fn pad_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Layou
         out
     };
     let corners = |ids: &[u32; LANES]| -> [[u32; 3]; LANES] {
-        std::array::from_fn(|lane| if ids[lane] < tri_count { scene.mesh.triangles[ids[lane] as usize] } else { [0; 3] })
+        std::array::from_fn(
+            |lane| if ids[lane] < tri_count { scene.mesh.triangles[ids[lane] as usize] } else { [0; 3] },
+        )
     };
     // Where each leaf goes in the store.
     let mut place: Vec<u32> = (0..leaves.len() as u32).collect();

@@ -322,4 +322,3 @@ impl Bvh {
         on_isa!(self, |isa| run!(isa))
     }
 }
-

@@ -66,7 +66,8 @@ impl PacketTest for super::boxtest::Scalar {}
 /// Any-hit for `rays`, traced as packets of consecutive runs of rays with the same origin
 /// (bit for bit, see [`run_len`]); a ray alone is traced as a single ray. `occluded[i]` as [`crate::accel::Intersector::any_hits`].
 pub fn any_hits(bvh: &Bvh, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
-    let mut stack = Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need], leaf: Tri4::default() };
+    let mut stack =
+        Stack { nodes: vec![0u32; bvh.stack_need], masks: vec![0u32; bvh.stack_need], leaf: Tri4::default() };
     let mut single = traverse::BigStack::boxed();
     // The loop is spelled out in the macro and every closure is `#[inline(always)]`: anything
     // left out of line would be compiled outside the AVX2 context (see `Bvh::closest_hits`).

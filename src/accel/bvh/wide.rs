@@ -213,7 +213,9 @@ fn plan_subtree(bin: &[Node2], n: usize, left: &mut [[u8; WIDTH]], open: &mut [u
     };
     // Best spread of the two children over `k` slots (k >= 2).
     let spread = |k: usize| -> (f64, u8) {
-        (1..k).map(|j| (cl[j - 1] + cr[k - j - 1], j as u8)).fold((f64::INFINITY, 0), |b, c| if c.0 < b.0 { c } else { b })
+        (1..k)
+            .map(|j| (cl[j - 1] + cr[k - j - 1], j as u8))
+            .fold((f64::INFINITY, 0), |b, c| if c.0 < b.0 { c } else { b })
     };
     let (full, j8) = spread(WIDTH);
     let one = C_NODE * a + full;

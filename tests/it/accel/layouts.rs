@@ -75,10 +75,8 @@ fn rays(scene: &Scene) -> Vec<Ray> {
     }
     let brute = BruteForce::new(scene);
     let mut c = TraceCounters::default();
-    let shadows: Vec<Ray> = rays
-        .iter()
-        .filter_map(|r| brute.closest_hit(r, &mut c).map(|h| Ray { tmax: h.t * 0.999, ..*r }))
-        .collect();
+    let shadows: Vec<Ray> =
+        rays.iter().filter_map(|r| brute.closest_hit(r, &mut c).map(|h| Ray { tmax: h.t * 0.999, ..*r })).collect();
     rays.extend(shadows);
     rays
 }

@@ -302,3 +302,47 @@ fn subdivide_command_writes_meshes_that_read_back_exactly() {
         assert!(!o.status.success() && err.contains(needle) && err.trim().lines().count() == 1, "{err}");
     }
 }
+
+/// `Mesh::subdivided` (behind `--subdivide`): children keep their parent's material, and
+/// attributes that are linear over the surface stay exactly so (uv and colour set to
+/// functions of the position); a constant normal stays that normal.
+#[test]
+fn subdivided_meshes_carry_materials_and_attributes() {
+    let mut m = Mesh::default();
+    let corners =
+        [Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 1.0), Vec3::new(0.0, 0.0, 1.0)];
+    m.positions = corners.to_vec();
+    m.triangles = vec![[0, 1, 2], [0, 2, 3]];
+    m.material_ids = vec![3, 5];
+    m.normals = Some(vec![Vec3::Y; 4]);
+    m.uvs = Some(corners.iter().map(|p| glam::Vec2::new(p.x / 2.0, p.z)).collect());
+    m.colors = Some(corners.iter().map(|p| Vec3::new(p.x, p.z, 0.25)).collect());
+    let s = m.subdivided(3).unwrap();
+    assert_eq!(s.triangles.len(), 2 * 64);
+    assert_eq!(s.material_ids, [[3u32; 64], [5u32; 64]].concat());
+    let (n, uv, c) = (s.normals.as_ref().unwrap(), s.uvs.as_ref().unwrap(), s.colors.as_ref().unwrap());
+    assert!(n.len() == s.positions.len() && uv.len() == s.positions.len() && c.len() == s.positions.len());
+    for (i, p) in s.positions.iter().enumerate() {
+        assert_eq!(n[i], Vec3::Y, "vertex {i}");
+        assert_eq!(uv[i], glam::Vec2::new(p.x / 2.0, p.z), "vertex {i}");
+        assert_eq!(c[i], Vec3::new(p.x, p.z, 0.25), "vertex {i}");
+    }
+    assert_eq!(m.subdivided(0).unwrap(), m);
+    assert!(m.subdivided(15).is_none(), "2 x 4^15 triangles is past the limit");
+
+    // Through the command line: the stats count the subdivided triangles; too many levels is
+    // one line naming the file.
+    let d = temp_dir("subdivide-render");
+    let obj = d.join("quad.obj");
+    std::fs::write(&obj, "v 0 0 0\nv 2 0 0\nv 2 0 1\nv 0 0 1\nf 1 2 3\nf 1 3 4\n").unwrap();
+    let stats = d.join("stats.json");
+    let (o, s) = (obj.to_str().unwrap(), stats.to_str().unwrap());
+    let out =
+        run_wavepath([o, "--subdivide", "2", "-r", "8", "6", "-f", d.join("q.png").to_str().unwrap(), "--stats", s]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    assert_eq!(json["triangles"], 32);
+    let out = run_wavepath([o, "--subdivide", "15", "-r", "8", "6", "-f", d.join("q.png").to_str().unwrap()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("quad.obj") && err.trim().lines().count() == 1, "{err}");
+}
