@@ -48,7 +48,9 @@ RENDERS = [
      "-s 4 -l 4 -m 5 -r 480 360"),
 ]
 PEER_MESHES = ["meshes/lucy_100k.obj", "meshes/dragon_100k.obj"]
-PEERS = ["embree:robust", "embree:single", "tinybvh:bvh8", "obvhs:cwbvh"]
+PEERS = ["embree:robust", "embree:single", "embree:packet16", "tinybvh:bvh8", "obvhs:cwbvh"]
+# The Cornell box around the largest subdivided Lucy, rendered as the issue of large meshes asks.
+LARGE_RENDER = ("cs184/reconstructed/sky/CBlucy.dae", "-s 16 -l 4 -m 5 -r 800 600")
 STAGES = ["generate", "traverse", "shade", "shadow", "compact"]
 LARGE_SOURCE = "meshes/lucy_100k.obj"
 E2E_QUICK = "--scenes cornell-flush -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
@@ -202,9 +204,46 @@ def part_large(args, scenes_dir, peers_dir):
                                                      f"{run['embree_high_s']:.2f} s" if embree else ""))
             row["runs"].append(run)
         part["rows"].append(row)
+    part["renders"] = large_renders(args, scenes_dir, work)
     part["load_after"] = loadavg()
     part["busy_mean"] = part["busy_max"] = 0.0
+    if peers_dir and os.path.isfile(os.path.join(peers_dir, "run.sh")):
+        plys = [r["ply"] for r in part["rows"]]
+        part["peers"] = run_harness(args, peers_dir, plys, 1, 5, "peers-large.log")
     return part
+
+
+def large_renders(args, scenes_dir, work):
+    """The Cornell box around the largest subdivided Lucy (`--subdivide`), in both BVH leaf
+    layouts, alternating fresh processes: seconds to the first pixel (load, subdivision and
+    build: the wall time before rendering starts), total seconds, peak memory, Mrays/s."""
+    scene, flags = LARGE_RENDER
+    path = os.path.join(scenes_dir, scene)
+    level = max(args.large_levels)
+    if not os.path.exists(path):
+        log(f"large: no {scene}; render skipped")
+        return []
+    runs = []
+    for rnd in range(args.rounds):
+        for layout in ("auto", "corners"):
+            wait_quiet(args.wait_quiet)
+            stats = os.path.join(work, f"render-{layout}.json")
+            cmd = [args.bin, path, "--subdivide", str(level), *flags.split(), "-t", str(args.threads),
+                   "--bvh-leaves", layout, "-f", os.path.join(work, f"cblucy-{layout}.png"), "--stats", stats]
+            t0 = time.monotonic()
+            _, rss = peak_rss(cmd)
+            wall = time.monotonic() - t0
+            with open(stats) as f:
+                st = json.load(f)
+            run = {"round": rnd, "layout": layout, "wall": wall, "rss": rss, "render_s": st["render_s"],
+                   "first_pixel": wall - st["render_s"], "build_s": st["bvh"]["build_s"],
+                   "mrays": st["mrays_per_s"], "triangles": st["triangles"], "rays": st["rays"]["total"],
+                   "mesh_bytes": st["mesh_bytes"], "node_bytes": st["bvh"]["node_bytes"],
+                   "leaf_bytes": st["bvh"]["leaf_bytes"]}
+            log(f"large render {layout} round {rnd}: first pixel {run['first_pixel']:.1f} s, total {wall:.1f} s, "
+                f"peak {rss / 2 ** 30:.2f} GiB, {run['mrays']:.2f} Mrays/s")
+            runs.append(run)
+    return [{"scene": scene, "flags": flags, "level": level, "runs": runs}]
 
 
 def md_large(args, part):
@@ -214,7 +253,8 @@ def md_large(args, part):
                f"surface) into binary PLY. Load: `wavepath info --json` `load_s` (read, parse, validate, "
                f"from the page cache). Build: `wavepath rays trace MESH RAYS {args.threads} 1` `build_s` "
                f"(8-wide BVH, {args.threads} threads) and the Embree peer's `build_s` on the same triangles "
-               f"(OBJ), `--quality medium` and `high`. Peak: the whole process's resident memory (the Embree "
+               f"(OBJ), `--quality medium` and `high`; wavepath's leaves in the default layout (corners below 16M "
+               f"primitives, packed from there). Peak: the whole process's resident memory (the Embree "
                f"peer's includes its own OBJ arrays). Medians of {args.rounds} rounds of fresh processes, run "
                f"in turn; the ratio is Embree medium's build time over wavepath's per round (> 1: wavepath "
                f"builds faster).\n")
@@ -237,6 +277,28 @@ def md_large(args, part):
     out.append(f"Command: `tools/benchmarks.sh --parts large` (levels {','.join(map(str, args.large_levels))}).  ")
     out.append(f"Machine: {MACHINE['cpu']}, {NCPU} cores; load average {part['load_before']:.2f} before, "
                f"{part['load_after']:.2f} after; {part['date']}.\n")
+    for r in part.get("renders", []):
+        runs = r["runs"]
+        tris = runs[0]["triangles"]
+        out.append(f"### A Cornell box around the {tris / 1e6:.1f}M-triangle Lucy\n")
+        out.append(f"`wavepath {args.scenes_shown}/{r['scene']} --subdivide {r['level']} {r['flags']} -t {args.threads} "
+                   f"--bvh-leaves LAYOUT --stats` (glass Lucy, global illumination), alternating fresh processes, "
+                   f"medians of {args.rounds}. First pixel: the wall time before rendering starts (load, "
+                   f"subdivision, BVH build). Resident: the mesh, the tree's nodes and its leaves as the stats "
+                   f"report them; peak: the whole process.\n")
+        out.append("| leaves | first pixel s | of it BVH build s | render s | total s | Mrays/s | peak GiB | B/tri | mesh / nodes / leaves B/tri |")
+        out.append("|---|--:|--:|--:|--:|--:|--:|--:|---|")
+        for layout in ("auto", "corners"):
+            sel = [x for x in runs if x["layout"] == layout]
+            if not sel:
+                continue
+            m = lambda k: statistics.median([x[k] for x in sel])
+            out.append(f"| {layout} | {m('first_pixel'):.1f} | {m('build_s'):.1f} | {m('render_s'):.1f} | {m('wall'):.1f} | "
+                       f"{m('mrays'):.2f} | {m('rss') / 2 ** 30:.2f} | {m('rss') / tris:.0f} | "
+                       f"{sel[0]['mesh_bytes'] / tris:.1f} / {sel[0]['node_bytes'] / tris:.1f} / {sel[0]['leaf_bytes'] / tris:.1f} |")
+        out.append("")
+    if part.get("peers"):
+        out += md_peers(args, part["peers"], None, title="### Ray throughput on the large meshes\n")
     return out
 
 
@@ -367,26 +429,32 @@ def copy_tree(src, dst):
 
 
 def part_peers(args, scenes_dir, peers_dir):
-    work = args.peers_work
-    copy_tree(peers_dir, work)
     meshes = [os.path.join(scenes_dir, m) for m in PEER_MESHES]
     meshes = [m for m in meshes if os.path.exists(m)]
     if not meshes:
         raise SystemExit(f"no peer meshes found under {scenes_dir}")
+    return run_harness(args, peers_dir, meshes, args.peer_passes, args.reps, "peers.log")
+
+
+def run_harness(args, peers_dir, meshes, passes, reps, log_name):
+    """The peers harness on `meshes`, `passes` times: its result lines, tagged by pass."""
+    work = args.peers_work
+    copy_tree(peers_dir, work)
     threads = "1" if args.threads == 1 else f"1 {args.threads}"
     env_common = {
         "PEERS": " ".join(PEERS),
         "EXTRA_PEERS": f"wavepath={os.path.abspath(args.bin)} rays trace",
-        "REPS": str(args.reps), "WARMUP": "1", "THREADS_LIST": threads,
+        "REPS": str(reps), "WARMUP": "1", "THREADS_LIST": threads,
         "WAIT_QUIET": str(int(args.wait_quiet)), "RERUN_NOISY": "0",
         "PEERS_BUILD": os.path.join(work, "build"),
     }
-    part = {"load_before": loadavg(), "date": now_utc(), "rows": [], "meshes": meshes, "env": env_common}
-    logf = os.path.join(args.work, "peers.log")
-    for p in range(args.peer_passes):
+    part = {"load_before": loadavg(), "date": now_utc(), "rows": [], "meshes": meshes, "env": env_common,
+            "passes": passes}
+    logf = os.path.join(args.work, log_name)
+    for p in range(passes):
         env = dict(os.environ, **env_common)
         env["SKIP_BUILD"] = "1" if (p > 0 or args.skip_build) else "0"
-        log(f"peers pass {p + 1}/{args.peer_passes} (log: {logf})")
+        log(f"peers harness pass {p + 1}/{passes} on {len(meshes)} meshes (log: {logf})")
         with open(logf, "a") as lf:
             r = subprocess.run([os.path.join(work, "run.sh")] + meshes, env=env, stdout=lf, stderr=lf,
                                cwd=work)
@@ -406,23 +474,24 @@ def part_peers(args, scenes_dir, peers_dir):
     return part
 
 
-def md_peers(args, part, scenes_dir):
+def md_peers(args, part, scenes_dir, title="## Ray throughput against the peers\n"):
     rows = [r for r in part["rows"] if not r.get("failed")]
     cols = PEERS + ["wavepath:-"]
+    passes = part.get("passes", args.peer_passes)
 
     def label(c):
         return "wavepath" if c == "wavepath:-" else c.replace(":", " ")
 
-    out = ["## Ray throughput against the peers\n"]
+    out = [title]
     out.append(f"Closest-hit rays of `wavepath rays trace` beside the peers in `../shared/peers/run.sh`, "
                f"same meshes and ray sets (primary: 800x600 camera rays; diffuse: one cosine bounce per "
-               f"primary hit). Mrays/s, best of {args.reps} timed passes per run and best of "
-               f"{args.peer_passes} harness pass{'es' if args.peer_passes > 1 else ''}; the ratios are wavepath over the peer within one "
+               f"primary hit). Mrays/s, best of {part['env']['REPS']} timed passes per run and best of "
+               f"{passes} harness pass{'es' if passes > 1 else ''}; the ratios are wavepath over the peer within one "
                f"pass (fresh processes run back to back), their median over passes with the range in "
                f"brackets. `hits`: wavepath's verdict against Embree's watertight `robust` variant.\n")
     out.append("| mesh, rays, threads | " + " | ".join(label(c) for c in cols) +
-               " | / embree single | / obvhs cwbvh | / tinybvh bvh8 | hits |")
-    out.append("|---|" + "--:|" * len(cols) + "--:|--:|--:|---|")
+               " | / embree single | / embree packet16 | / obvhs cwbvh | / tinybvh bvh8 | hits |")
+    out.append("|---|" + "--:|" * len(cols) + "--:|--:|--:|--:|---|")
     keys = []
     for r in rows:
         k = (r["mesh"], r["set"], r["threads"])
@@ -456,14 +525,15 @@ def md_peers(args, part, scenes_dir):
             b = best(c)
             cells.append("-" if b is None else (f"**{b:.2f}**" if c == "wavepath:-" else f"{b:.2f}"))
         out.append(f"| {mesh} {set_} {thr}T{' !' if busy > 0.10 else ''} | " + " | ".join(cells) +
-                   f" | {ratio('embree:single')} | {ratio('obvhs:cwbvh')} | {ratio('tinybvh:bvh8')} | "
+                   f" | {ratio('embree:single')} | {ratio('embree:packet16')} | {ratio('obvhs:cwbvh')} | {ratio('tinybvh:bvh8')} | "
                    f"{', '.join(verdicts)} |")
     out.append("")
     out.append("`!`: other processes used more than 10% of the CPUs during some run of that row "
                "(treat it as a lower bound).  ")
     e = part["env"]
-    meshes = " ".join(f"{args.scenes_shown}/{os.path.relpath(m, scenes_dir)}" for m in part["meshes"])
-    times = "once" if args.peer_passes == 1 else f"{args.peer_passes} times"
+    meshes = " ".join(f"{args.scenes_shown}/{os.path.relpath(m, scenes_dir)}" if scenes_dir and m.startswith(scenes_dir)
+                      else os.path.basename(m) for m in part["meshes"])
+    times = "once" if passes == 1 else f"{passes} times"
     out.append(f"Command ({times}, in a scratch copy of `../shared/peers`): "
                f"`PEERS=\"{e['PEERS']}\" EXTRA_PEERS=\"wavepath={args.bin_shown} rays trace\" "
                f"REPS={e['REPS']} WARMUP={e['WARMUP']} THREADS_LIST=\"{e['THREADS_LIST']}\" "
