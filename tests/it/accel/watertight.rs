@@ -173,3 +173,58 @@ mod slow {
         assert!(total >= 1_000_000, "only {total} rays");
     }
 }
+
+/// Small triangles far from the ray origin, seen nearly edge-on (the ray 0.2 to 3 degrees
+/// off their plane): a ray through a point that an f64 test puts clearly inside (every
+/// weight at least 0.1) must hit near the f64 distance, one clearly outside (a weight below
+/// -0.1) must miss. The rounding bound on t grows as the projected area shrinks, and it used
+/// to exceed t itself and reject such hits (a 25.6M-triangle Lucy leaked a primary ray).
+#[test]
+fn far_triangles_seen_edge_on_are_hit_where_they_are() {
+    let mut s = Sampler::for_sample(41, 3, 0);
+    let mut unit = || s.next_f32();
+    let (mut inside, mut outside) = (0, 0);
+    for k in 0..4000 {
+        // A triangle of size 0.05-1 around a point 500-5000 units from the origin.
+        let dist = 500.0 + 4500.0 * unit();
+        let size = 0.05 + 0.95 * unit();
+        let d = Vec3::new(unit() - 0.5, unit() - 0.5, unit() - 0.5).normalize_or(Vec3::X);
+        let centre = Vec3::new(37.0, -12.0, 5.0) + d * dist;
+        // Its plane holds the ray direction tilted by a small angle.
+        let side = d.any_orthonormal_vector();
+        let up = d.cross(side);
+        let tilt = (0.2 + 2.8 * unit()).to_radians();
+        let normal = (up * tilt.cos() + d * tilt.sin()).normalize();
+        let (t1, t2) = (normal.any_orthonormal_pair().0, normal.any_orthonormal_pair().1);
+        let corner = |a: f32| centre + (t1 * a.cos() + t2 * a.sin()) * size;
+        let phase = unit() * std::f32::consts::TAU;
+        let tri = [corner(phase), corner(phase + 2.1 + 0.3 * unit()), corner(phase + 4.2 + 0.3 * unit())];
+        // Aim at a point given by weights; inside or outside alternately.
+        let want_inside = k % 2 == 0;
+        let (w1, w2) = if want_inside {
+            let (a, b) = (0.1 + 0.35 * unit(), 0.1 + 0.35 * unit());
+            (a, b)
+        } else {
+            (-0.1 - 0.5 * unit(), 0.3 + 0.5 * unit())
+        };
+        let target = tri[0] * (1.0 - w1 - w2) + tri[1] * w1 + tri[2] * w2;
+        let origin = Vec3::new(37.0, -12.0, 5.0);
+        let ray = Ray::new(origin, target - origin);
+        let f64_hit = common::triangle_f64(origin.as_dvec3(), ray.dir.as_dvec3(), tri.map(Vec3::as_dvec3));
+        let Some((t64, u64, v64)) = f64_hit else { continue };
+        let w64 = 1.0 - u64 - v64;
+        let clearly_in = u64 >= 0.05 && v64 >= 0.05 && w64 >= 0.05;
+        let clearly_out = u64 < -0.05 || v64 < -0.05 || w64 < -0.05;
+        let got = wavepath::accel::triangle::intersect(&ray, tri[0], tri[1], tri[2]);
+        if clearly_in {
+            inside += 1;
+            let (t, _, _) =
+                got.unwrap_or_else(|| panic!("case {k}: missed a hit at weights {u64:.3} {v64:.3} {w64:.3}, t {t64}"));
+            assert!(((t as f64) - t64).abs() <= 1e-3 * t64, "case {k}: t {t} against {t64}");
+        } else if clearly_out {
+            outside += 1;
+            assert!(got.is_none(), "case {k}: hit {got:?} at weights {u64:.3} {v64:.3} {w64:.3}");
+        }
+    }
+    assert!(inside > 1500 && outside > 1500, "{inside} inside, {outside} outside");
+}
