@@ -226,6 +226,10 @@ pub struct RenderArgs {
     /// --subdivide 4` for a Cornell box around a 25.6-million-triangle Lucy.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub subdivide: u32,
+    /// Refuse, before reading or building, a scene whose mesh or BVH would need more than
+    /// this (bytes, or with K, M, G, T). Default: the memory the system has available.
+    #[arg(long, value_name = "BYTES", value_parser = super::parse_bytes)]
+    pub max_memory: Option<u64>,
     /// Force every effect (stage and kernel feature) on, even those the scene does not need;
     /// the image is the same, only slower: for measuring what specialisation saves.
     #[arg(long)]

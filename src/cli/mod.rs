@@ -57,12 +57,91 @@ pub fn main() -> i32 {
 }
 
 /// Loads a scene file and prints the loader's notes, which only a scene that loaded has.
+/// A file whose mesh cannot fit in the memory left (about its size for binary meshes, times
+/// four per `--subdivide` level) is refused before it is read.
 fn load_scene(path: &std::path::Path, opts: &wavepath::load::LoadOptions) -> anyhow::Result<wavepath::scene::Scene> {
+    load_scene_within(path, opts, None)
+}
+
+fn load_scene_within(
+    path: &std::path::Path,
+    opts: &wavepath::load::LoadOptions,
+    limit: Option<u64>,
+) -> anyhow::Result<wavepath::scene::Scene> {
+    if let Ok(meta) = std::fs::metadata(path) {
+        let need = (meta.len() as u128) << (2 * opts.subdivide.min(32));
+        check_memory(path, need, "loading it", limit)?;
+    }
     let scene = wavepath::load::load(path, opts)?;
     for n in &scene.notes {
         eprintln!("{n}");
     }
     Ok(scene)
+}
+
+/// Refuses, before the allocations, a BVH that cannot fit in the memory left.
+fn check_build_memory(
+    scene: &wavepath::scene::Scene,
+    layout: wavepath::accel::LeafLayout,
+    limit: Option<u64>,
+) -> anyhow::Result<()> {
+    let need = wavepath::accel::Bvh::build_bytes(scene.primitive_count(), layout);
+    check_memory(std::path::Path::new(&scene.name), need as u128, "building its BVH", limit)
+}
+
+/// An error naming `what` when `need` bytes exceed `limit` (`--max-memory`) or, without
+/// one, the memory the system says is available.
+fn check_memory(what: &std::path::Path, need: u128, doing: &str, limit: Option<u64>) -> anyhow::Result<()> {
+    let Some((have, source)) =
+        limit.map(|l| (l, "--max-memory")).or_else(|| available_memory().map(|a| (a, "available")))
+    else {
+        return Ok(());
+    };
+    if need > have as u128 {
+        let size = |b: u128| match b {
+            b if b >= 1_000_000_000 => format!("{:.2} GB", b as f64 / 1e9),
+            b if b >= 1_000_000 => format!("{:.1} MB", b as f64 / 1e6),
+            b => format!("{b} bytes"),
+        };
+        anyhow::bail!(
+            "{}: {doing} needs about {} of memory, more than the {} {source}",
+            what.display(),
+            size(need),
+            size(have as u128)
+        );
+    }
+    Ok(())
+}
+
+/// The memory the system can still give (Linux `MemAvailable`), when it says.
+fn available_memory() -> Option<u64> {
+    let info = std::fs::read_to_string("/proc/meminfo").ok()?;
+    let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+/// `--max-memory`: bytes, or a number with K, M, G or T (powers of 1000).
+fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (num, mul) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => {
+            let m = match c.to_ascii_uppercase() {
+                'K' => 1e3,
+                'M' => 1e6,
+                'G' => 1e9,
+                'T' => 1e12,
+                _ => return Err(format!("'{s}': expected bytes, or a number with K, M, G or T")),
+            };
+            (&t[..i], m)
+        }
+        _ => (t, 1.0),
+    };
+    let x: f64 = num.parse().map_err(|_| format!("'{s}': expected bytes, or a number with K, M, G or T"))?;
+    if !(x.is_finite() && x > 0.0 && x * mul < 1e18) {
+        return Err(format!("'{s}': expected a positive size below 1e18 bytes"));
+    }
+    Ok((x * mul) as u64)
 }
 
 /// Runs `work`; on a terminal, a spinner with `label` appears if it takes more than a second

@@ -20,6 +20,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         None => bail!("--part needs -f PART.exr (where the part file goes)"),
     };
     let scene = prepare_scene(a, &s)?;
+    if s.use_bvh {
+        super::check_build_memory(&scene, s.leaves, a.max_memory)?;
+    }
     let scene_hash = identity::scene_hash(&scene);
     let (acc, mut stats) = wavepath::render::with_threads(s.threads, || -> Result<_> {
         let (accel, build) = wavepath::accel::build(&scene, &s);

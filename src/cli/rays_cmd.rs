@@ -33,6 +33,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
     let scene = super::with_spinner("loading", || super::load_scene(&args.mesh, &LoadOptions::default()))?;
+    super::check_build_memory(&scene, args.bvh_leaves.into(), None)?;
     let bvh =
         super::with_spinner("building the BVH", || Bvh::build_with(&scene, args.bvh_leaves.into())).with_isa(args.isa);
     let info = bvh.info();

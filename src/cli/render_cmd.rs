@@ -14,7 +14,7 @@ use wavepath::stats::RenderStats;
 /// Loads the scene the arguments name (or the default) with the camera adjustments applied.
 pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     let mut scene = match &a.scene {
-        Some(p) => super::load_scene(
+        Some(p) => super::load_scene_within(
             p,
             &LoadOptions {
                 camera: a.camera.into(),
@@ -22,9 +22,11 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
                 subdivide: a.subdivide,
                 ..LoadOptions::default()
             },
+            a.max_memory,
         )?,
         None => default_scene(),
     };
+    scene.drop_unused_uvs();
     if let Some(c) = &a.camera_file {
         scene.camera = read_camera_file(c)?;
     }
@@ -56,6 +58,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         scene.spheres.len(),
         scene.lights.len()
     );
+    if s.use_bvh {
+        super::check_build_memory(&scene, s.leaves, a.max_memory)?;
+    }
     let effects = Effects::of(&scene, &s);
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);

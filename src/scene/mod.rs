@@ -92,6 +92,18 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// Frees the mesh's texture coordinates when no material has a texture to look up (they
+    /// are read for nothing else): 8 bytes a vertex of a scanned mesh that came with uvs.
+    pub fn drop_unused_uvs(&mut self) {
+        let textured = |t: &Option<texture::Texture>| t.as_ref().is_some_and(|t| t.image.is_some());
+        let any = self.materials.iter().any(|m| {
+            textured(&m.albedo_texture) || textured(&m.emission_texture) || textured(&m.metallic_roughness_texture)
+        });
+        if !any {
+            self.mesh.uvs = None;
+        }
+    }
+
     /// Axis-aligned bounds of all geometry (triangles and spheres); `None` when there is none.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         use rayon::prelude::*;

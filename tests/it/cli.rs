@@ -268,3 +268,61 @@ fn help_lists_every_cs184_flag() {
         assert!(listed, "--help lacks {flag}");
     }
 }
+
+/// A scene whose mesh or BVH would not fit is refused before the allocations, with one line
+/// naming the file: `--max-memory` below the file's size stops the load, a limit between the
+/// file's size and the BVH's estimate (72 bytes a triangle with corner leaves) stops the build.
+#[test]
+fn scenes_that_would_not_fit_in_memory_are_refused_before_the_work() {
+    let d = common::temp_dir("max-memory");
+    let obj = d.join("quad.obj");
+    let text = "v 0 0 0\nv 2 0 0\nv 2 0 1\nv 0 0 1\nf 1 2 3\nf 1 3 4\n";
+    std::fs::write(&obj, text).unwrap();
+    let img = d.join("q.png");
+    let run = |limit: &str| {
+        common::run_wavepath([
+            obj.to_str().unwrap(),
+            "-r",
+            "8",
+            "6",
+            "-f",
+            img.to_str().unwrap(),
+            "--max-memory",
+            limit,
+        ])
+    };
+    let refused = |limit: &str, doing: &str| {
+        let o = run(limit);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success(), "--max-memory {limit} should refuse");
+        let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+        assert!(errors.len() == 1 && errors[0].contains("quad.obj") && errors[0].contains(doing), "{err}");
+    };
+    // The file is 48 bytes; subdivided twice its mesh needs 16 times that.
+    assert_eq!(text.len(), 48);
+    refused("47", "loading it");
+    // 2 triangles: a BVH estimate of 144 bytes; 4^2 x 2 = 32 triangles: 2304.
+    refused("100", "building its BVH");
+    let o = run("144");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = common::run_wavepath([
+        obj.to_str().unwrap(),
+        "--subdivide",
+        "2",
+        "-r",
+        "8",
+        "6",
+        "-f",
+        img.to_str().unwrap(),
+        "--max-memory",
+        "2303",
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(!o.status.success() && err.contains("building its BVH"), "{err}");
+    for bad in ["0", "5Q", "G", "1e30"] {
+        let o = run(bad);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.trim().lines().count() == 1 && err.contains(bad), "{bad}: {err}");
+    }
+    assert!(run("1K").status.success());
+}

@@ -1,5 +1,6 @@
-//! Leaf storage for the SIMD triangle filter: every leaf is one block of at most four
-//! primitives stored lane by lane, so leaf `first / 4` is block `first / 4`.
+//! Leaf storage for the SIMD triangle filter: a leaf of at most four primitives is either one
+//! block of their corners lane by lane, or a packed record of its distinct vertices that
+//! traversal gathers into such a block; a leaf reference's `first` is its place in the store.
 //!
 //! The SIMD kernels only *reject* triangles, with exactly the operations (same operands, same
 //! order, no fused multiply-add) of the scalar watertight test; any lane they cannot reject
@@ -104,7 +105,7 @@ impl LeafStore {
     }
 }
 
-/// The leaf layouts [`pad_leaves`] makes.
+/// The leaf layouts [`store_leaves`] makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Layout {
     Corners,
@@ -114,7 +115,7 @@ pub enum Layout {
 /// Stores every leaf of `nodes` in `layout`, rewriting each leaf reference's `first` to the
 /// leaf's place in the store. `ids` are the primitive ids in the builder's leaf order. A
 /// leaf holds at most [`LANES`] primitives; leaves are filled independently, in parallel.
-pub fn pad_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Layout) -> LeafStore {
+pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Layout) -> LeafStore {
     use rayon::prelude::*;
     let tri_count = scene.mesh.triangle_count() as u32;
     // (node, slot, first, count) of every leaf child, in node order.

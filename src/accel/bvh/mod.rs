@@ -104,7 +104,7 @@ impl Bvh {
             LeafLayout::Auto if total >= PACKED_FROM => leaf::Layout::Packed,
             LeafLayout::Auto => leaf::Layout::Corners,
         };
-        let leaves = leaf::pad_leaves(&mut nodes, &ids, scene, layout);
+        let leaves = leaf::store_leaves(&mut nodes, &ids, scene, layout);
         drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
         let info = BuildInfo {
@@ -135,6 +135,20 @@ impl Bvh {
             tokens: tokens_of(Isa::detect()),
             info,
         }
+    }
+
+    /// About how many bytes building a tree over `primitives` needs on top of the scene
+    /// (references and binary nodes while it builds, then the nodes and leaves it keeps),
+    /// from the peaks measured on subdivided Lucy (docs/decisions.md, "What a large mesh
+    /// costs in memory"): 72 bytes a primitive with corner leaves, 56 with packed ones. For
+    /// refusing, before anything is allocated, a build that cannot fit.
+    pub fn build_bytes(primitives: usize, layout: LeafLayout) -> u64 {
+        let packed = match layout {
+            LeafLayout::Corners => false,
+            LeafLayout::Packed => true,
+            LeafLayout::Auto => primitives >= PACKED_FROM,
+        };
+        primitives as u64 * if packed { 56 } else { 72 }
     }
 
     /// The same tree with another box-test path (falls back to what the CPU has).
