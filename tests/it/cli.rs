@@ -279,18 +279,12 @@ fn scenes_that_would_not_fit_in_memory_are_refused_before_the_work() {
     let text = "v 0 0 0\nv 2 0 0\nv 2 0 1\nv 0 0 1\nf 1 2 3\nf 1 3 4\n";
     std::fs::write(&obj, text).unwrap();
     let img = d.join("q.png");
-    let run = |limit: &str| {
-        common::run_wavepath([
-            obj.to_str().unwrap(),
-            "-r",
-            "8",
-            "6",
-            "-f",
-            img.to_str().unwrap(),
-            "--max-memory",
-            limit,
-        ])
+    let run_with = |limit: &str, extra: &[&str]| {
+        let mut args = vec![obj.to_str().unwrap(), "-r", "8", "6", "-f", img.to_str().unwrap(), "--max-memory", limit];
+        args.extend(extra);
+        common::run_wavepath(args)
     };
+    let run = |limit: &str| run_with(limit, &[]);
     let refused = |limit: &str, doing: &str| {
         let o = run(limit);
         let err = String::from_utf8_lossy(&o.stderr);
@@ -305,18 +299,7 @@ fn scenes_that_would_not_fit_in_memory_are_refused_before_the_work() {
     refused("100", "building its BVH");
     let o = run("144");
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let o = common::run_wavepath([
-        obj.to_str().unwrap(),
-        "--subdivide",
-        "2",
-        "-r",
-        "8",
-        "6",
-        "-f",
-        img.to_str().unwrap(),
-        "--max-memory",
-        "2303",
-    ]);
+    let o = run_with("2303", &["--subdivide", "2"]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(!o.status.success() && err.contains("building its BVH"), "{err}");
     for bad in ["0", "5Q", "G", "1e30"] {

@@ -98,12 +98,7 @@ impl Bvh {
             let w = wide::collapse(&bin);
             (w.nodes, w.depth, w.sah_cost, ids)
         };
-        let layout = match layout {
-            LeafLayout::Corners => leaf::Layout::Corners,
-            LeafLayout::Packed => leaf::Layout::Packed,
-            LeafLayout::Auto if total >= PACKED_FROM => leaf::Layout::Packed,
-            LeafLayout::Auto => leaf::Layout::Corners,
-        };
+        let layout = if packs(layout, total) { leaf::Layout::Packed } else { leaf::Layout::Corners };
         let leaves = leaf::store_leaves(&mut nodes, &ids, scene, layout);
         drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
@@ -143,12 +138,7 @@ impl Bvh {
     /// costs in memory"): 72 bytes a primitive with corner leaves, 56 with packed ones. For
     /// refusing, before anything is allocated, a build that cannot fit.
     pub fn build_bytes(primitives: usize, layout: LeafLayout) -> u64 {
-        let packed = match layout {
-            LeafLayout::Corners => false,
-            LeafLayout::Packed => true,
-            LeafLayout::Auto => primitives >= PACKED_FROM,
-        };
-        primitives as u64 * if packed { 56 } else { 72 }
+        primitives as u64 * if packs(layout, primitives) { 56 } else { 72 }
     }
 
     /// The same tree with another box-test path (falls back to what the CPU has).
@@ -225,8 +215,17 @@ fn tokens_of(isa: Isa) -> (Option<Sse>, Option<Avx2>) {
 }
 
 /// Primitives from which [`LeafLayout::Auto`] packs the leaves (chosen by measurement: see
-/// docs/decisions.md).
+/// docs/decisions.md, "Leaf layouts").
 const PACKED_FROM: usize = 16_000_000;
+
+/// Whether a tree of `primitives` in `layout` packs its leaves.
+fn packs(layout: LeafLayout, primitives: usize) -> bool {
+    match layout {
+        LeafLayout::Corners => false,
+        LeafLayout::Packed => true,
+        LeafLayout::Auto => primitives >= PACKED_FROM,
+    }
+}
 
 /// Rays set up at a time ahead of their traversal in a batch (at most 32: one bit each
 /// in the mask of rays that may enter the tree).
