@@ -76,7 +76,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene> {
     }
     if opts.subdivide > 0 {
         let n = scene.mesh.triangle_count();
-        scene.mesh = scene.mesh.subdivided(opts.subdivide).ok_or_else(|| {
+        scene.mesh = std::mem::take(&mut scene.mesh).subdivided(opts.subdivide).ok_or_else(|| {
             let out = crate::scene::subdivide::subdivided_count(n, opts.subdivide)
                 .map_or("more than 2^64".to_string(), |c| c.to_string());
             anyhow::anyhow!(

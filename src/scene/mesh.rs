@@ -29,14 +29,15 @@ pub struct Sphere {
 impl Mesh {
     /// Bytes its arrays hold (lengths, not capacities: what a load should leave resident).
     pub fn bytes(&self) -> usize {
-        use std::mem::size_of_val;
-        let opt = |v: &Option<Vec<_>>| v.as_ref().map_or(0, |v| size_of_val(&v[..]));
-        size_of_val(&self.positions[..])
-            + opt(&self.normals)
-            + self.uvs.as_ref().map_or(0, |v| size_of_val(&v[..]))
-            + opt(&self.colors)
-            + size_of_val(&self.triangles[..])
-            + size_of_val(&self.material_ids[..])
+        fn of<T>(v: &[T]) -> usize {
+            std::mem::size_of_val(v)
+        }
+        of(&self.positions)
+            + self.normals.as_deref().map_or(0, of)
+            + self.uvs.as_deref().map_or(0, of)
+            + self.colors.as_deref().map_or(0, of)
+            + of(&self.triangles)
+            + of(&self.material_ids)
     }
 
     /// Appends another mesh (already in world space), shifting its indices; attributes that

@@ -59,14 +59,14 @@ impl Mesh {
     /// This mesh after `levels` rounds of [`subdivide`]: each triangle's children keep its
     /// material, and a new vertex's normal, uv and colour are the means of its edge's two
     /// (normals renormalised), so shading is continuous where it was. `None` as
-    /// [`subdivide`].
-    pub fn subdivided(&self, levels: u32) -> Option<Mesh> {
+    /// [`subdivide`]. Takes the mesh so that no copy of it is held beside the result.
+    pub fn subdivided(self, levels: u32) -> Option<Mesh> {
         // Refused before anything is allocated.
         let total = subdivided_count(self.triangles.len(), levels)?;
         if total > MAX_TRIANGLES {
             return None;
         }
-        let mut m = self.clone();
+        let mut m = self;
         for _ in 0..levels {
             let next_tris = m.triangles.len().checked_mul(4).filter(|&n| n <= u32::MAX as usize)?;
             // A closed mesh has 3/2 edges per triangle; an open one at most 3.

@@ -105,17 +105,11 @@ impl LeafStore {
     }
 }
 
-/// The leaf layouts [`store_leaves`] makes.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Layout {
-    Corners,
-    Packed,
-}
-
-/// Stores every leaf of `nodes` in `layout`, rewriting each leaf reference's `first` to the
-/// leaf's place in the store. `ids` are the primitive ids in the builder's leaf order. A
-/// leaf holds at most [`LANES`] primitives; leaves are filled independently, in parallel.
-pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Layout) -> LeafStore {
+/// Stores every leaf of `nodes`, packed or as corners, rewriting each leaf reference's
+/// `first` to the leaf's place in the store. `ids` are the primitive ids in the builder's
+/// leaf order. A leaf holds at most [`LANES`] primitives; leaves are filled independently,
+/// in parallel.
+pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, packed: bool) -> LeafStore {
     use rayon::prelude::*;
     let tri_count = scene.mesh.triangle_count() as u32;
     // (node, slot, first, count) of every leaf child, in node order.
@@ -129,6 +123,7 @@ pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Lay
             }
         }
     }
+    assert!(leaves.len() < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} leaves");
     let lane_ids = |first: u32, count: u8| {
         let mut out = [u32::MAX; LANES];
         out[..count as usize].copy_from_slice(&ids[first as usize..first as usize + count as usize]);
@@ -139,47 +134,52 @@ pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Lay
             |lane| if ids[lane] < tri_count { scene.mesh.triangles[ids[lane] as usize] } else { [0; 3] },
         )
     };
-    // Where each leaf goes in the store.
-    let mut place: Vec<u32> = (0..leaves.len() as u32).collect();
-    let store = match layout {
-        Layout::Packed => {
-            let records: Vec<u8> = leaves
-                .par_iter()
-                .map(|&(_, _, first, count)| {
-                    let ids = lane_ids(first, count);
-                    Packed::of(&ids, &corners(&ids), tri_count).lines() as u8
+    // Where each packed leaf goes in the store (a corner leaf `i` is block `i`).
+    let mut place: Option<Vec<u32>> = None;
+    let store = if packed {
+        // Each record is made twice, to count its lines and to write it: keeping them between
+        // the passes would hold as much memory again as the store itself.
+        let records: Vec<u8> = leaves
+            .par_iter()
+            .map(|&(_, _, first, count)| {
+                let ids = lane_ids(first, count);
+                Packed::of(&ids, &corners(&ids), tri_count).lines() as u8
+            })
+            .collect();
+        let mut at = 0u32;
+        place = Some(
+            records
+                .iter()
+                .map(|&n| {
+                    at += n as u32;
+                    at - n as u32
                 })
-                .collect();
-            let mut at = 0u32;
-            for (p, &n) in place.iter_mut().zip(&records) {
-                *p = at;
-                at += n as u32;
-            }
-            assert!((at as usize) < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} leaf lines");
-            let mut lines = vec![Line::default(); at as usize + SPARE_LINES];
-            // Leaves in chunks, each chunk writing its own run of lines.
-            const CHUNK: usize = 4096;
-            let mut runs = Vec::with_capacity(leaves.len() / CHUNK + 1);
-            let mut rest = &mut lines[..];
-            for (k, chunk) in leaves.chunks(CHUNK).enumerate() {
-                let n: usize = records[k * CHUNK..k * CHUNK + chunk.len()].iter().map(|&n| n as usize).sum();
-                let (run, tail) = rest.split_at_mut(n);
-                runs.push((chunk, run));
-                rest = tail;
-            }
-            runs.into_par_iter().for_each(|(chunk, run)| {
-                let mut at = 0;
-                for &(_, _, first, count) in chunk {
-                    let ids = lane_ids(first, count);
-                    let rec = Packed::of(&ids, &corners(&ids), tri_count);
-                    let n = rec.lines();
-                    rec.write(bytemuck::cast_slice_mut(&mut run[at..at + n]), &scene.mesh.positions);
-                    at += n;
-                }
-            });
-            LeafStore::Packed { lines, leaves: leaves.len() }
+                .collect(),
+        );
+        assert!((at as usize) < MAX_PRIMS, "a BVH holds at most {MAX_PRIMS} leaf lines");
+        let mut lines = vec![Line::default(); at as usize + SPARE_LINES];
+        // Leaves in chunks, each chunk writing its own run of lines.
+        const CHUNK: usize = 4096;
+        let mut runs = Vec::with_capacity(leaves.len() / CHUNK + 1);
+        let mut rest = &mut lines[..];
+        for (chunk, sizes) in leaves.chunks(CHUNK).zip(records.chunks(CHUNK)) {
+            let (run, tail) = rest.split_at_mut(sizes.iter().map(|&n| n as usize).sum());
+            runs.push((chunk, run));
+            rest = tail;
         }
-        Layout::Corners => LeafStore::Corners(
+        runs.into_par_iter().for_each(|(chunk, run)| {
+            let mut at = 0;
+            for &(_, _, first, count) in chunk {
+                let ids = lane_ids(first, count);
+                let rec = Packed::of(&ids, &corners(&ids), tri_count);
+                let n = rec.lines();
+                rec.write(bytemuck::cast_slice_mut(&mut run[at..at + n]), &scene.mesh.positions);
+                at += n;
+            }
+        });
+        LeafStore::Packed { lines, leaves: leaves.len() }
+    } else {
+        LeafStore::Corners(
             leaves
                 .par_iter()
                 .map(|&(_, _, first, count)| {
@@ -198,11 +198,11 @@ pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, layout: Lay
                     block
                 })
                 .collect(),
-        ),
+        )
     };
-    assert!(place.last().is_none_or(|&p| (p as usize) < MAX_PRIMS), "a BVH holds at most {MAX_PRIMS} leaves");
-    for (&p, &(n, slot, _, count)) in place.iter().zip(&leaves) {
-        nodes[n as usize].child[slot as usize] = leaf_ref(p, count as u32);
+    for (i, &(n, slot, _, count)) in leaves.iter().enumerate() {
+        let at = place.as_ref().map_or(i as u32, |p| p[i]);
+        nodes[n as usize].child[slot as usize] = leaf_ref(at, count as u32);
     }
     store
 }

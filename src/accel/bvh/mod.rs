@@ -98,8 +98,7 @@ impl Bvh {
             let w = wide::collapse(&bin);
             (w.nodes, w.depth, w.sah_cost, ids)
         };
-        let layout = if packs(layout, total) { leaf::Layout::Packed } else { leaf::Layout::Corners };
-        let leaves = leaf::store_leaves(&mut nodes, &ids, scene, layout);
+        let leaves = leaf::store_leaves(&mut nodes, &ids, scene, packs(layout, total));
         drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
         let info = BuildInfo {

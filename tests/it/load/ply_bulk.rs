@@ -317,7 +317,7 @@ fn subdivided_meshes_carry_materials_and_attributes() {
     m.normals = Some(vec![Vec3::Y; 4]);
     m.uvs = Some(corners.iter().map(|p| glam::Vec2::new(p.x / 2.0, p.z)).collect());
     m.colors = Some(corners.iter().map(|p| Vec3::new(p.x, p.z, 0.25)).collect());
-    let s = m.subdivided(3).unwrap();
+    let s = m.clone().subdivided(3).unwrap();
     assert_eq!(s.triangles.len(), 2 * 64);
     assert_eq!(s.material_ids, [[3u32; 64], [5u32; 64]].concat());
     let (n, uv, c) = (s.normals.as_ref().unwrap(), s.uvs.as_ref().unwrap(), s.colors.as_ref().unwrap());
@@ -327,7 +327,7 @@ fn subdivided_meshes_carry_materials_and_attributes() {
         assert_eq!(uv[i], glam::Vec2::new(p.x / 2.0, p.z), "vertex {i}");
         assert_eq!(c[i], Vec3::new(p.x, p.z, 0.25), "vertex {i}");
     }
-    assert_eq!(m.subdivided(0).unwrap(), m);
+    assert_eq!(m.clone().subdivided(0).unwrap(), m);
     assert!(m.subdivided(15).is_none(), "2 x 4^15 triangles is past the limit");
 
     // Through the command line: the stats count the subdivided triangles; too many levels is
