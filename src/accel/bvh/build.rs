@@ -58,6 +58,11 @@ impl PrimRef {
     fn centroid(&self) -> Vec3 {
         0.5 * (self.lo + self.hi)
     }
+
+    #[inline]
+    fn centroid_a(&self) -> Vec3A {
+        0.5 * (Vec3A::from(self.lo) + Vec3A::from(self.hi))
+    }
 }
 
 /// A binary node: leaf when `count > 0` (prims `a .. a + count` of the reordered refs),
@@ -156,52 +161,137 @@ fn build_seq(refs: &mut [PrimRef], bnd: Bounds, base: usize, depth: usize, out: 
     me
 }
 
-/// Per axis and bin: primitive count, box and centroid box, gathered in one pass over the
-/// primitives (SIMD boxes: one min and one max per box per primitive).
-struct Bins {
-    cnt: [[u32; BINS]; 3],
-    lo: [[Vec3A; BINS]; 3],
-    hi: [[Vec3A; BINS]; 3],
-    clo: [[Vec3A; BINS]; 3],
-    chi: [[Vec3A; BINS]; 3],
+/// One bin's box (lo and hi side by side: one cache line holds a bin of one axis).
+#[derive(Clone, Copy)]
+struct Bin {
+    lo: Vec3A,
+    hi: Vec3A,
 }
 
+/// Per axis and bin: primitive count and box, gathered in one pass over the primitives (SIMD
+/// boxes: one min and one max per axis per primitive). The centroid bounds of the two sides
+/// are not binned: the partition sees every centroid anyway and takes them exactly there.
+struct Bins {
+    cnt: [[u32; BINS]; 3],
+    bin: [[Bin; BINS]; 3],
+}
+
+/// Sets of bins at least this large are gathered into two interleaved sets (even and odd
+/// primitives), merged at the end: neighbours in a mesh mostly fall into the same bin, and
+/// one set would make every primitive wait for the previous one's min/max to be stored.
+const TWO_SETS_MIN: usize = 64;
+
 impl Bins {
-    fn gather(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> Bins {
-        let (inf, ninf) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
-        let mut b = Bins {
-            cnt: [[0; BINS]; 3],
-            lo: [[inf; BINS]; 3],
-            hi: [[ninf; BINS]; 3],
-            clo: [[inf; BINS]; 3],
-            chi: [[ninf; BINS]; 3],
-        };
-        for r in refs {
-            let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
-            let c = 0.5 * (lo + hi);
-            for ax in 0..3 {
-                let k = bin_of(c[ax], clo[ax], scale[ax]);
-                b.cnt[ax][k] += 1;
-                b.lo[ax][k] = b.lo[ax][k].min(lo);
-                b.hi[ax][k] = b.hi[ax][k].max(hi);
-                b.clo[ax][k] = b.clo[ax][k].min(c);
-                b.chi[ax][k] = b.chi[ax][k].max(c);
-            }
-        }
-        b
+    fn empty() -> Bins {
+        let none = Bin { lo: Vec3A::splat(f32::INFINITY), hi: Vec3A::splat(f32::NEG_INFINITY) };
+        Bins { cnt: [[0; BINS]; 3], bin: [[none; BINS]; 3] }
     }
 
-    /// Bounds of the primitives in bins `range` of axis `ax`.
-    fn union(&self, ax: usize, range: std::ops::Range<usize>) -> Bounds {
-        let (inf, ninf) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
-        let (mut lo, mut hi, mut clo, mut chi) = (inf, ninf, inf, ninf);
-        for k in range {
-            lo = lo.min(self.lo[ax][k]);
-            hi = hi.max(self.hi[ax][k]);
-            clo = clo.min(self.clo[ax][k]);
-            chi = chi.max(self.chi[ax][k]);
+    #[inline]
+    fn add(&mut self, r: &PrimRef, clo: Vec3A, scale: Vec3A) {
+        let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
+        let k = bins_of(0.5 * (lo + hi), clo, scale);
+        for (ax, &k) in k.iter().enumerate() {
+            self.cnt[ax][k] += 1;
+            let b = &mut self.bin[ax][k];
+            b.lo = b.lo.min(lo);
+            b.hi = b.hi.max(hi);
         }
-        (lo.into(), hi.into(), clo.into(), chi.into())
+    }
+
+    fn merge(&mut self, o: &Bins) {
+        for ax in 0..3 {
+            for k in 0..BINS {
+                self.cnt[ax][k] += o.cnt[ax][k];
+                let (b, c) = (&mut self.bin[ax][k], &o.bin[ax][k]);
+                b.lo = b.lo.min(c.lo);
+                b.hi = b.hi.max(c.hi);
+            }
+        }
+    }
+
+    fn gather(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> Bins {
+        let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
+        let mut even = Bins::empty();
+        if refs.len() < TWO_SETS_MIN {
+            refs.iter().for_each(|r| even.add(r, clo, scale));
+            return even;
+        }
+        let mut odd = Bins::empty();
+        let mut pairs = refs.chunks_exact(2);
+        for p in &mut pairs {
+            even.add(&p[0], clo, scale);
+            odd.add(&p[1], clo, scale);
+        }
+        pairs.remainder().iter().for_each(|r| even.add(r, clo, scale));
+        even.merge(&odd);
+        even
+    }
+
+    /// Box of the primitives in bins `range` of axis `ax`.
+    fn union(&self, ax: usize, range: std::ops::Range<usize>) -> (Vec3, Vec3) {
+        let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+        for b in &self.bin[ax][range] {
+            lo = lo.min(b.lo);
+            hi = hi.max(b.hi);
+        }
+        (lo.into(), hi.into())
+    }
+}
+
+/// A running box of centroids.
+#[derive(Clone, Copy)]
+struct CentroidBox {
+    lo: Vec3A,
+    hi: Vec3A,
+}
+
+impl CentroidBox {
+    fn empty() -> CentroidBox {
+        CentroidBox { lo: Vec3A::splat(f32::INFINITY), hi: Vec3A::splat(f32::NEG_INFINITY) }
+    }
+
+    #[inline]
+    fn grow(&mut self, c: Vec3A) {
+        self.lo = self.lo.min(c);
+        self.hi = self.hi.max(c);
+    }
+}
+
+/// Moves the primitives whose centroid falls in a bin below `bin` on axis `ax` to the front
+/// (Hoare's scheme: only misplaced pairs are swapped); returns how many they are and the
+/// centroid boxes of both sides.
+fn partition(refs: &mut [PrimRef], ax: usize, bin: usize, clo: Vec3, scale: Vec3) -> (usize, CentroidBox, CentroidBox) {
+    let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
+    let left = |c: Vec3A| bins_of(c, clo, scale)[ax] < bin;
+    let (mut lc, mut rc) = (CentroidBox::empty(), CentroidBox::empty());
+    let (mut i, mut j) = (0, refs.len());
+    loop {
+        while i < j {
+            let c = refs[i].centroid_a();
+            if !left(c) {
+                break;
+            }
+            lc.grow(c);
+            i += 1;
+        }
+        while i < j {
+            let c = refs[j - 1].centroid_a();
+            if left(c) {
+                break;
+            }
+            rc.grow(c);
+            j -= 1;
+        }
+        if i == j {
+            return (i, lc, rc);
+        }
+        // refs[i] belongs right and refs[j - 1] left.
+        refs.swap(i, j - 1);
+        lc.grow(refs[i].centroid_a());
+        rc.grow(refs[j - 1].centroid_a());
+        i += 1;
+        j -= 1;
     }
 }
 
@@ -241,20 +331,20 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
         if ext[ax] <= 0.0 {
             continue;
         }
-        let (cnt, blo, bhi) = (&bins.cnt[ax], &bins.lo[ax], &bins.hi[ax]);
+        let (cnt, bin) = (&bins.cnt[ax], &bins.bin[ax]);
         // Right-to-left sweep: cost of the right side for each split position.
         let mut right_cost = [0f32; BINS];
         let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
         for i in (1..BINS).rev() {
-            l = l.min(blo[i]);
-            h = h.max(bhi[i]);
+            l = l.min(bin[i].lo);
+            h = h.max(bin[i].hi);
             c += cnt[i];
             right_cost[i] = if c == 0 { 0.0 } else { area(l.into(), h.into()) * blocks(c) };
         }
         let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
         for i in 0..BINS - 1 {
-            l = l.min(blo[i]);
-            h = h.max(bhi[i]);
+            l = l.min(bin[i].lo);
+            h = h.max(bin[i].hi);
             c += cnt[i];
             if c == 0 || c as usize == n {
                 continue;
@@ -283,17 +373,9 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
         return median(refs);
     }
     let (ax, bin) = (best.1, best.2);
-    let mut i = 0;
-    let mut j = n;
-    while i < j {
-        if bin_of(refs[i].centroid()[ax], clo[ax], scale[ax]) < bin {
-            i += 1;
-        } else {
-            j -= 1;
-            refs.swap(i, j);
-        }
-    }
-    Some((i, bins.union(ax, 0..bin), bins.union(ax, bin..BINS)))
+    let (mid, lc, rc) = partition(refs, ax, bin, clo, scale);
+    let ((llo, lhi), (rlo, rhi)) = (bins.union(ax, 0..bin), bins.union(ax, bin..BINS));
+    Some((mid, (llo, lhi, lc.lo.into(), lc.hi.into()), (rlo, rhi, rc.lo.into(), rc.hi.into())))
 }
 
 /// SAH weight of `c` primitives: the leaf blocks of [`MAX_LEAF`] they fill (the SIMD filter
@@ -303,9 +385,12 @@ fn blocks(c: u32) -> f32 {
     c.div_ceil(MAX_LEAF as u32) as f32
 }
 
+/// The bins of centroid `c` on the three axes (the same arithmetic for gathering and
+/// partitioning, so both put every primitive in the same bin).
 #[inline]
-fn bin_of(c: f32, lo: f32, scale: f32) -> usize {
-    (((c - lo) * scale) as usize).min(BINS - 1)
+fn bins_of(c: Vec3A, clo: Vec3A, scale: Vec3A) -> [usize; 3] {
+    let k = ((c - clo) * scale).as_uvec3().min(glam::UVec3::splat(BINS as u32 - 1));
+    [k.x as usize, k.y as usize, k.z as usize]
 }
 
 #[cfg(test)]
