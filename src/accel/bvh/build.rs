@@ -389,8 +389,16 @@ fn blocks(c: u32) -> f32 {
 /// partitioning, so both put every primitive in the same bin).
 #[inline]
 fn bins_of(c: Vec3A, clo: Vec3A, scale: Vec3A) -> [usize; 3] {
-    let k = ((c - clo) * scale).as_uvec3().min(glam::UVec3::splat(BINS as u32 - 1));
-    [k.x as usize, k.y as usize, k.z as usize]
+    // Clamped in SIMD, then truncated by one SSE2 conversion of all lanes (glam's casts go
+    // lane by lane with saturation checks, a tenth of the build). A NaN (0 x inf on a flat
+    // axis) is clamped to bin 0.
+    let x = ((c - clo) * scale).max(Vec3A::ZERO).min(Vec3A::splat(BINS as f32 - 1.0));
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: SSE2 is part of every x86-64 target.
+    let k: [i32; 4] = bytemuck::cast(unsafe { std::arch::x86_64::_mm_cvttps_epi32(x.into()) });
+    #[cfg(not(target_arch = "x86_64"))]
+    let k = [x.x as i32, x.y as i32, x.z as i32];
+    [k[0] as usize, k[1] as usize, k[2] as usize]
 }
 
 #[cfg(test)]
