@@ -1,8 +1,9 @@
 //! Binned SAH build of a binary BVH into one flat node array.
 //!
-//! The top levels split in parallel (`rayon::join`); each right subtree builds into its own
-//! array, which the parent appends to its own with the child indices shifted, so the result
-//! is still one flat preorder array with the root at 0 and no pointer per node.
+//! The top levels split in parallel (`rayon::join`) into disjoint ranges of one array: a
+//! subtree over `n` primitives has at most `2n - 1` nodes, so the right child's range starts
+//! where the left child's bound ends. The ranges' unused tails are closed up by one
+//! preorder pass at the end, so the result is one dense preorder array with the root at 0.
 use glam::{Vec3, Vec3A};
 
 /// Most primitives in one leaf (the wide leaves keep this bound).
@@ -67,7 +68,8 @@ impl PrimRef {
 
 /// A binary node: leaf when `count > 0` (prims `a .. a + count` of the reordered refs),
 /// else inner with children `a` and `b`.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct Node2 {
     pub lo: Vec3,
     pub hi: Vec3,
@@ -100,65 +102,81 @@ fn bounds(refs: &[PrimRef]) -> Bounds {
 /// Builds the tree over `refs`, reordering them into leaf order.
 pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
     let b = bounds(refs);
-    let mut out = Vec::with_capacity(node_bound(refs.len()));
-    build_into(refs, b, 0, 0, &mut out);
-    out
+    // Zeroed memory is mapped lazily: only the pages the build writes become resident, and
+    // the bound is about three times the nodes a tree of small leaves has.
+    let mut nodes: Vec<Node2> = bytemuck::zeroed_vec(node_bound(refs.len()));
+    build_into(refs, b, 0, 0, &mut nodes, 0);
+    let mut used = 0;
+    close_up(&mut nodes, 0, &mut used);
+    nodes.truncate(used);
+    nodes.shrink_to_fit();
+    nodes
 }
 
-/// Most binary nodes over `n` primitives (every leaf holds one or more). Arrays are
-/// reserved this large and written densely from the front, so what is never written is
-/// never made resident: the reservation costs address space, not memory.
+/// Most binary nodes over `n` primitives (every leaf holds one or more).
 fn node_bound(n: usize) -> usize {
     2 * n.max(1) - 1
 }
 
-/// Appends the subtree over `refs` to `out` in preorder, child indices absolute in `out`;
-/// returns its root's index. `b`: the bounds of `refs` (known from the parent's bins, so no
-/// pass computes them). The left child is built straight into `out` while the right one
-/// builds into its own array in parallel, appended afterwards with its indices shifted: a
-/// node is copied once per parallel level at which it lies right, never held twice.
-fn build_into(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
-    if refs.len() < PARALLEL_MIN {
-        return build_seq(refs, b, base, depth, out);
-    }
-    let (lo, hi, _, _) = b;
-    let Some((mid, lb, rb)) = split(refs, b, depth) else {
-        return build_seq(refs, b, base, depth, out);
+/// Builds the subtree over `refs` into `nodes` (its root in `nodes[0]`, at index `at` of the
+/// whole array; child indices are absolute). `b`: the bounds of `refs` (known from the
+/// parent's split, so no pass computes them). Below [`PARALLEL_MIN`] primitives the subtree
+/// is written densely from the front of its range.
+fn build_into(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize, nodes: &mut [Node2], at: usize) {
+    let split = if refs.len() < PARALLEL_MIN { None } else { split(refs, b, depth) };
+    let Some((mid, lb, rb)) = split else {
+        build_seq(refs, b, base, depth, nodes, at, &mut 0);
+        return;
     };
-    let me = out.len();
-    out.push(Node2 { lo, hi, a: 0, b: 0, count: 0 });
+    let (lo, hi, _, _) = b;
+    let right_at = at + 1 + node_bound(mid);
+    let (me, rest) = nodes.split_first_mut().expect("a subtree has a node");
+    let (left_nodes, right_nodes) = rest.split_at_mut(node_bound(mid));
     let (l, r) = refs.split_at_mut(mid);
-    let (_, right) = rayon::join(
-        || build_into(l, lb, base, depth + 1, out),
-        || {
-            let mut own = Vec::with_capacity(node_bound(r.len()));
-            build_into(r, rb, base + mid, depth + 1, &mut own);
-            own
-        },
+    rayon::join(
+        || build_into(l, lb, base, depth + 1, left_nodes, at + 1),
+        || build_into(r, rb, base + mid, depth + 1, right_nodes, right_at),
     );
-    let ofs = out.len() as u32;
-    out.extend(right.into_iter().map(|mut n| {
-        if n.count == 0 {
-            n.a += ofs;
-            n.b += ofs;
-        }
-        n
-    }));
-    out[me] = Node2 { lo, hi, a: me as u32 + 1, b: ofs, count: 0 };
-    me as u32
+    *me = Node2 { lo, hi, a: at as u32 + 1, b: right_at as u32, count: 0 };
 }
 
-fn build_seq(refs: &mut [PrimRef], bnd: Bounds, base: usize, depth: usize, out: &mut Vec<Node2>) -> u32 {
+/// Writes the subtree at `nodes[*next]` onwards; returns its root's absolute index.
+fn build_seq(
+    refs: &mut [PrimRef],
+    bnd: Bounds,
+    base: usize,
+    depth: usize,
+    nodes: &mut [Node2],
+    at: usize,
+    next: &mut usize,
+) -> u32 {
     let (lo, hi, _, _) = bnd;
-    let me = out.len() as u32;
-    out.push(Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 });
+    let me = *next;
+    *next += 1;
+    nodes[me] = Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 };
     if let Some((mid, lb, rb)) = split(refs, bnd, depth) {
         let (l, r) = refs.split_at_mut(mid);
-        let a = build_seq(l, lb, base, depth + 1, out);
-        let b = build_seq(r, rb, base + mid, depth + 1, out);
-        out[me as usize] = Node2 { lo, hi, a, b, count: 0 };
+        let a = build_seq(l, lb, base, depth + 1, nodes, at, next);
+        let b = build_seq(r, rb, base + mid, depth + 1, nodes, at, next);
+        nodes[me] = Node2 { lo, hi, a, b, count: 0 };
     }
-    me
+    (at + me) as u32
+}
+
+/// Moves the subtree at `old` (in preorder with gaps) to `*next` onwards, densely; returns
+/// its new index. In place: preorder visits nodes in increasing index, and a node never
+/// moves up, so every slot written already holds a node that was read or a gap.
+fn close_up(nodes: &mut [Node2], old: usize, next: &mut usize) -> u32 {
+    let me = *next;
+    *next += 1;
+    let node = nodes[old];
+    nodes[me] = node;
+    if node.count == 0 {
+        let a = close_up(nodes, node.a as usize, next);
+        let b = close_up(nodes, node.b as usize, next);
+        (nodes[me].a, nodes[me].b) = (a, b);
+    }
+    me as u32
 }
 
 /// One bin's box (lo and hi side by side: one cache line holds a bin of one axis).
@@ -422,6 +440,59 @@ mod tests {
             .collect();
         ids.sort();
         ids
+    }
+
+    /// Boxes scattered in clusters (so the splits are uneven and the parallel ranges'
+    /// bounds leave gaps of every size).
+    fn scattered(n: usize) -> Vec<PrimRef> {
+        let mut x = 0x9E37_79B9_7F4A_7C15u64;
+        let mut next = move || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        (0..n)
+            .map(|i| {
+                let cluster = Vec3::splat((i % 7) as f32 * 30.0);
+                let at = cluster + Vec3::new(next(), next(), next()) * 10.0 * (1.0 + (i % 3) as f32);
+                let size = Vec3::new(next(), next(), next()) * 0.5;
+                PrimRef::new(at - size, at + size, i as u32, false)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_parallel_build_lays_out_the_tree_the_sequential_one_does() {
+        let n = 20 * PARALLEL_MIN + 123;
+        let (mut par, mut seq) = (scattered(n), scattered(n));
+        let nodes = build(&mut par);
+        // The reference: the whole tree built on one thread, densely from the front.
+        let mut reference: Vec<Node2> = bytemuck::zeroed_vec(node_bound(n));
+        let mut used = 0;
+        let b = bounds(&seq);
+        build_seq(&mut seq, b, 0, 0, &mut reference, 0, &mut used);
+        reference.truncate(used);
+        assert!(nodes.len() > n / MAX_LEAF && nodes.len() < node_bound(n), "{} nodes", nodes.len());
+        assert_eq!(bytemuck::cast_slice::<Node2, u8>(&nodes), bytemuck::cast_slice::<Node2, u8>(&reference));
+        assert!(par.iter().zip(&seq).all(|(a, b)| a.id() == b.id()));
+        // Dense preorder: a left child follows its parent; the leaves cover the references
+        // once, in order; every node's box holds its children's.
+        let mut covered = 0;
+        for (i, node) in nodes.iter().enumerate() {
+            if node.count > 0 {
+                assert_eq!(node.a, covered);
+                covered += node.count;
+                for r in &par[node.a as usize..(node.a + node.count) as usize] {
+                    assert!(r.lo.cmpge(node.lo).all() && r.hi.cmple(node.hi).all());
+                }
+            } else {
+                assert_eq!(node.a as usize, i + 1);
+                assert!(node.b as usize > i + 1 && (node.b as usize) < nodes.len());
+                for c in [node.a, node.b].map(|c| nodes[c as usize]) {
+                    assert!(c.lo.cmpge(node.lo).all() && c.hi.cmple(node.hi).all());
+                }
+            }
+        }
+        assert_eq!(covered as usize, n);
     }
 
     #[test]

@@ -74,10 +74,16 @@ impl Node8 {
                     })
                     .sum()
             });
-            let mut slots: [usize; WIDTH] = std::array::from_fn(|i| i);
-            slots.sort_unstable_by(|&a, &b| key[b].total_cmp(&key[a]).then(b.cmp(&a)));
-            for (k, &slot) in slots.iter().enumerate() {
-                self.perm[k] |= (slot as u32) << (3 * q);
+            // Each slot's place is how many slots come before it (farther, or as far and
+            // later): 64 branch-free comparisons instead of a sort per octant, which was a
+            // twentieth of the build. The keys as integers ordered as `f32::total_cmp`.
+            let key = key.map(|f| {
+                let bits = f.to_bits() as i32;
+                bits ^ (((bits >> 31) as u32) >> 1) as i32
+            });
+            for a in 0..WIDTH {
+                let place: usize = (0..WIDTH).map(|b| (key[b] > key[a] || (key[b] == key[a] && b > a)) as usize).sum();
+                self.perm[place] |= (a as u32) << (3 * q);
             }
         }
     }
