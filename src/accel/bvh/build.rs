@@ -246,6 +246,39 @@ impl Bins {
         even
     }
 
+    /// The cheapest split of `n` primitives: (SAH cost, axis, first bin on the right), the
+    /// first minimum in axis then bin order; infinite when every split leaves a side empty
+    /// (a flat axis has all its primitives in bin 0, so it offers none).
+    fn cheapest(&self, n: usize) -> (f32, usize, usize) {
+        let mut best = (f32::INFINITY, 0usize, 0usize);
+        for ax in 0..3 {
+            let (cnt, bin) = (&self.cnt[ax], &self.bin[ax]);
+            // Right-to-left sweep: cost of the right side for each split position.
+            let mut right_cost = [0f32; BINS];
+            let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
+            for i in (1..BINS).rev() {
+                l = l.min(bin[i].lo);
+                h = h.max(bin[i].hi);
+                c += cnt[i];
+                right_cost[i] = if c == 0 { 0.0 } else { area(l.into(), h.into()) * blocks(c) };
+            }
+            let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
+            for i in 0..BINS - 1 {
+                l = l.min(bin[i].lo);
+                h = h.max(bin[i].hi);
+                c += cnt[i];
+                if c == 0 || c as usize == n {
+                    continue;
+                }
+                let cost = area(l.into(), h.into()) * blocks(c) + right_cost[i + 1];
+                if cost < best.0 {
+                    best = (cost, ax, i + 1);
+                }
+            }
+        }
+        best
+    }
+
     /// Box of the primitives in bins `range` of axis `ax`.
     fn union(&self, ax: usize, range: std::ops::Range<usize>) -> (Vec3, Vec3) {
         let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
@@ -343,36 +376,11 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
         return median(refs);
     }
     let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-    let bins = Bins::gather(refs, clo, scale);
-    let mut best = (f32::INFINITY, 0usize, 0usize); // cost, axis, bin
-    for ax in 0..3 {
-        if ext[ax] <= 0.0 {
-            continue;
-        }
-        let (cnt, bin) = (&bins.cnt[ax], &bins.bin[ax]);
-        // Right-to-left sweep: cost of the right side for each split position.
-        let mut right_cost = [0f32; BINS];
-        let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
-        for i in (1..BINS).rev() {
-            l = l.min(bin[i].lo);
-            h = h.max(bin[i].hi);
-            c += cnt[i];
-            right_cost[i] = if c == 0 { 0.0 } else { area(l.into(), h.into()) * blocks(c) };
-        }
-        let (mut l, mut h, mut c) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY), 0u32);
-        for i in 0..BINS - 1 {
-            l = l.min(bin[i].lo);
-            h = h.max(bin[i].hi);
-            c += cnt[i];
-            if c == 0 || c as usize == n {
-                continue;
-            }
-            let cost = area(l.into(), h.into()) * blocks(c) + right_cost[i + 1];
-            if cost < best.0 {
-                best = (cost, ax, i + 1);
-            }
-        }
-    }
+    let bins = (n >= FEW).then(|| Bins::gather(refs, clo, scale));
+    let best = match &bins {
+        Some(bins) => bins.cheapest(n),
+        None => cheapest_of_few(refs, clo, scale),
+    };
     let parent = area(lo, hi).max(f32::MIN_POSITIVE);
     let split_cost = C_TRAV + best.0 / parent;
     let leaf_cost = n as f32;
@@ -392,8 +400,56 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
     }
     let (ax, bin) = (best.1, best.2);
     let (mid, lc, rc) = partition(refs, ax, bin, clo, scale);
+    let Some(bins) = bins else {
+        let (l, r) = refs.split_at(mid);
+        return Some((mid, bounds(l), bounds(r)));
+    };
     let ((llo, lhi), (rlo, rhi)) = (bins.union(ax, 0..bin), bins.union(ax, bin..BINS));
     Some((mid, (llo, lhi, lc.lo.into(), lc.hi.into()), (rlo, rhi, rc.lo.into(), rc.hi.into())))
+}
+
+/// Sets of fewer primitives choose their split without bins (see [`cheapest_of_few`]).
+const FEW: usize = 5;
+
+/// [`Bins::cheapest`] for fewer than [`FEW`] primitives, with the same result. Each
+/// primitive's bin, plus one, is a candidate position; its two sides' boxes are unions of
+/// the primitives' (exact in any order, so the costs are the same numbers the bins give),
+/// and among equal costs the first axis and then the lowest position wins, as in the
+/// sweep. Every leaf is such a set (whether a block of large spread triangles is split is
+/// decided by its best split), and clearing and sweeping 3 x 16 bins cost far more than
+/// its few primitives: a tenth of the whole build.
+fn cheapest_of_few(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> (f32, usize, usize) {
+    let n = refs.len();
+    debug_assert!(n < FEW);
+    let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
+    let (inf, ninf) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
+    let (mut lo, mut hi, mut k) = ([inf; FEW], [ninf; FEW], [[0usize; 3]; FEW]);
+    for (i, r) in refs.iter().enumerate() {
+        (lo[i], hi[i]) = (r.lo.into(), r.hi.into());
+        k[i] = bins_of(r.centroid_a(), clo, scale);
+    }
+    let mut best = (f32::INFINITY, 0usize, 0usize);
+    for ax in 0..3 {
+        for p in 0..n {
+            let at = k[p][ax] + 1;
+            let (mut l, mut h, mut rl, mut rh, mut c) = (inf, ninf, inf, ninf, 0u32);
+            for q in 0..n {
+                if k[q][ax] < at {
+                    (l, h, c) = (l.min(lo[q]), h.max(hi[q]), c + 1);
+                } else {
+                    (rl, rh) = (rl.min(lo[q]), rh.max(hi[q]));
+                }
+            }
+            if c as usize == n {
+                continue;
+            }
+            let cost = area(l.into(), h.into()) * blocks(c) + area(rl.into(), rh.into()) * blocks(n as u32 - c);
+            if cost < best.0 || (cost == best.0 && cost.is_finite() && (ax, at) < (best.1, best.2)) {
+                best = (cost, ax, at);
+            }
+        }
+    }
+    best
 }
 
 /// SAH weight of `c` primitives: the leaf blocks of [`MAX_LEAF`] they fill (the SIMD filter
@@ -493,6 +549,40 @@ mod tests {
             }
         }
         assert_eq!(covered as usize, n);
+    }
+
+    #[test]
+    fn few_primitives_choose_the_split_the_bins_choose() {
+        let mut x = 7u64;
+        let mut next = move || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut splits = 0;
+        for case in 0..20_000 {
+            let n = 2 + case % (FEW - 2);
+            // Coordinates on a coarse grid half the time: equal centroids, flat axes, ties.
+            let grid = case % 2 == 0;
+            let refs: Vec<PrimRef> = (0..n)
+                .map(|i| {
+                    let at = Vec3::new(next(), next(), next()) * 10.0;
+                    let at = if grid { (at * 0.4).floor() } else { at };
+                    let size = Vec3::new(next(), next(), next()) * if case % 3 == 0 { 0.0 } else { 2.0 };
+                    PrimRef::new(at - size, at + size, i as u32, false)
+                })
+                .collect();
+            let (_, _, clo, chi) = bounds(&refs);
+            let ext = chi - clo;
+            let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
+            let binned = Bins::gather(&refs, clo, scale).cheapest(n);
+            let few = cheapest_of_few(&refs, clo, scale);
+            assert_eq!(few.0.to_bits(), binned.0.to_bits(), "case {case}: {few:?} vs {binned:?}");
+            if binned.0.is_finite() {
+                assert_eq!((few.1, few.2), (binned.1, binned.2), "case {case}");
+                splits += 1;
+            }
+        }
+        assert!(splits > 10_000, "{splits}");
     }
 
     #[test]
