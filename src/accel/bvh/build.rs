@@ -430,14 +430,14 @@ fn cheapest_of_few(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> (f32, usize, usi
     }
     let mut best = (f32::INFINITY, 0usize, 0usize);
     for ax in 0..3 {
-        for p in 0..n {
-            let at = k[p][ax] + 1;
+        for kp in &k[..n] {
+            let at = kp[ax] + 1;
             let (mut l, mut h, mut rl, mut rh, mut c) = (inf, ninf, inf, ninf, 0u32);
-            for q in 0..n {
-                if k[q][ax] < at {
-                    (l, h, c) = (l.min(lo[q]), h.max(hi[q]), c + 1);
+            for ((kq, &plo), &phi) in k[..n].iter().zip(&lo).zip(&hi) {
+                if kq[ax] < at {
+                    (l, h, c) = (l.min(plo), h.max(phi), c + 1);
                 } else {
-                    (rl, rh) = (rl.min(lo[q]), rh.max(hi[q]));
+                    (rl, rh) = (rl.min(plo), rh.max(phi));
                 }
             }
             if c as usize == n {
