@@ -64,25 +64,24 @@ impl Node8 {
     pub fn set_order(&mut self) {
         self.perm = [0; WIDTH];
         for q in 0..8u32 {
-            // Keys once per slot, not per comparison.
-            let key: [f32; WIDTH] = std::array::from_fn(|slot| {
-                (0..3)
-                    .map(|axis| {
-                        let neg = q >> axis & 1 == 1;
-                        let near = self.b[2 * axis + neg as usize][slot];
-                        if neg { -near } else { near }
-                    })
-                    .sum()
-            });
+            // Keys once per slot, not per comparison: the signed near rows added lane-wise.
+            let row = |axis: usize| {
+                let neg = q >> axis & 1 == 1;
+                let near = self.b[2 * axis + neg as usize];
+                if neg { near.map(|v| -v) } else { near }
+            };
+            let (x, y, z) = (row(0), row(1), row(2));
             // Each slot's place is how many slots come before it (farther, or as far and
             // later): 64 branch-free comparisons instead of a sort per octant, which was a
             // twentieth of the build. The keys as integers ordered as `f32::total_cmp`.
-            let key = key.map(|f| {
-                let bits = f.to_bits() as i32;
+            let key: [i32; WIDTH] = std::array::from_fn(|slot| {
+                let bits = (x[slot] + y[slot] + z[slot]).to_bits() as i32;
                 bits ^ (((bits >> 31) as u32) >> 1) as i32
             });
             for a in 0..WIDTH {
-                let place: usize = (0..WIDTH).map(|b| (key[b] > key[a] || (key[b] == key[a] && b > a)) as usize).sum();
+                let ka = key[a];
+                let place: usize =
+                    key.iter().enumerate().map(|(b, &kb)| ((kb > ka) | ((kb == ka) & (b > a))) as usize).sum();
                 self.perm[place] |= (a as u32) << (3 * q);
             }
         }
@@ -167,19 +166,21 @@ impl Plan {
         Plan { root_cost: cost[0], left, open }
     }
 
-    /// The binary nodes that fill the slots of the wide node made from inner node `n`.
-    fn children(&self, bin: &[Node2], n: usize) -> Vec<u32> {
+    /// The binary nodes that fill the slots of the wide node made from inner node `n` (the
+    /// first `.1` of the array).
+    fn children(&self, bin: &[Node2], n: usize) -> ([u32; WIDTH], usize) {
         let (l, r, j) = (bin[n].a as usize, bin[n].b as usize, self.open[n] as usize);
-        let mut out = Vec::with_capacity(WIDTH);
+        let mut out = ([0; WIDTH], 0);
         self.fill(bin, l, j, &mut out);
         self.fill(bin, r, WIDTH - j, &mut out);
         out
     }
 
-    fn fill(&self, bin: &[Node2], n: usize, k: usize, out: &mut Vec<u32>) {
+    fn fill(&self, bin: &[Node2], n: usize, k: usize, out: &mut ([u32; WIDTH], usize)) {
         let j = if bin[n].count > 0 || k < 2 { 0 } else { self.left[n][k - 1] as usize };
         if j == 0 {
-            out.push(n as u32);
+            out.0[out.1] = n as u32;
+            out.1 += 1;
         } else {
             self.fill(bin, bin[n].a as usize, j, out);
             self.fill(bin, bin[n].b as usize, k - j, out);
@@ -239,12 +240,12 @@ fn plan_subtree(bin: &[Node2], n: usize, left: &mut [[u8; WIDTH]], open: &mut [u
 
 /// Emits the wide node for binary inner node `i`; returns the depth of its subtree.
 fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut Vec<Node8>, root_area: f64, cost: &mut f64) -> usize {
-    let kids = plan.children(bin, i);
+    let (kids, count) = plan.children(bin, i);
     *cost += C_TRAV as f64 * area(bin[i].lo, bin[i].hi) as f64 / root_area;
     let me = nodes.len();
     nodes.push(Node8::empty());
     let mut depth = 1;
-    for (slot, &k) in kids.iter().enumerate() {
+    for (slot, &k) in kids[..count].iter().enumerate() {
         let c = &bin[k as usize];
         let r = if c.count > 0 {
             debug_assert!(c.count as usize <= MAX_LEAF);
@@ -255,9 +256,7 @@ fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut Vec<Node8>, root_area:
             depth = depth.max(1 + emit(bin, plan, k as usize, nodes, root_area, cost));
             idx
         };
-        let mut n = nodes[me];
-        set_child(&mut n, slot, c, r);
-        nodes[me] = n;
+        set_child(&mut nodes[me], slot, c, r);
     }
     depth
 }
@@ -322,7 +321,8 @@ mod tests {
 
     /// The planned wide nodes, depth first.
     fn planned(bin: &[Node2], plan: &Plan, i: usize, out: &mut Vec<Vec<u32>>) {
-        let kids = plan.children(bin, i);
+        let (kids, count) = plan.children(bin, i);
+        let kids = kids[..count].to_vec();
         out.push(kids.clone());
         for k in kids {
             if bin[k as usize].count == 0 {
