@@ -279,6 +279,19 @@ impl Bins {
         best
     }
 
+    /// [`Bins::gather`] over chunks in parallel when there are many primitives: the top
+    /// splits would otherwise run on one thread while the others wait for their halves.
+    fn gather_par(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> Bins {
+        use rayon::prelude::*;
+        if refs.len() < SPLIT_PAR_MIN {
+            return Bins::gather(refs, clo, scale);
+        }
+        refs.par_chunks(SPLIT_PAR_MIN / 2).map(|c| Bins::gather(c, clo, scale)).reduce(Bins::empty, |mut a, b| {
+            a.merge(&b);
+            a
+        })
+    }
+
     /// Box of the primitives in bins `range` of axis `ax`.
     fn union(&self, ax: usize, range: std::ops::Range<usize>) -> (Vec3, Vec3) {
         let (mut lo, mut hi) = (Vec3A::splat(f32::INFINITY), Vec3A::splat(f32::NEG_INFINITY));
@@ -376,7 +389,7 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
         return median(refs);
     }
     let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-    let bins = (n >= FEW).then(|| Bins::gather(refs, clo, scale));
+    let bins = (n >= FEW).then(|| Bins::gather_par(refs, clo, scale));
     let best = match &bins {
         Some(bins) => bins.cheapest(n),
         None => cheapest_of_few(refs, clo, scale),
@@ -399,13 +412,47 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
         return median(refs);
     }
     let (ax, bin) = (best.1, best.2);
-    let (mid, lc, rc) = partition(refs, ax, bin, clo, scale);
+    let (mid, lc, rc) = partition_par(refs, ax, bin, clo, scale);
     let Some(bins) = bins else {
         let (l, r) = refs.split_at(mid);
         return Some((mid, bounds(l), bounds(r)));
     };
     let ((llo, lhi), (rlo, rhi)) = (bins.union(ax, 0..bin), bins.union(ax, bin..BINS));
     Some((mid, (llo, lhi, lc.lo.into(), lc.hi.into()), (rlo, rhi, rc.lo.into(), rc.hi.into())))
+}
+
+/// Sets of at least this many primitives are binned and partitioned by several threads.
+const SPLIT_PAR_MIN: usize = 1 << 18;
+
+/// [`partition`] of halves in parallel, then the misplaced middle swapped into place: the
+/// shorter of the first half's right part and the second half's left part trades places
+/// with the far end of the other (the order within a side does not matter). The sides are
+/// the same sets as one pass would give.
+fn partition_par(
+    refs: &mut [PrimRef],
+    ax: usize,
+    bin: usize,
+    clo: Vec3,
+    scale: Vec3,
+) -> (usize, CentroidBox, CentroidBox) {
+    let n = refs.len();
+    if n < SPLIT_PAR_MIN {
+        return partition(refs, ax, bin, clo, scale);
+    }
+    let half = n / 2;
+    let (a, b) = refs.split_at_mut(half);
+    let ((ma, la, ra), (mb, lb, rb)) =
+        rayon::join(|| partition_par(a, ax, bin, clo, scale), || partition_par(b, ax, bin, clo, scale));
+    // refs: [left of a: ma | right of a: half - ma | left of b: mb | right of b].
+    let moved = (half - ma).min(mb);
+    let (a, b) = refs.split_at_mut(half);
+    if half - ma <= mb {
+        a[ma..].swap_with_slice(&mut b[mb - moved..mb]);
+    } else {
+        a[ma..ma + moved].swap_with_slice(&mut b[..mb]);
+    }
+    let union = |x: CentroidBox, y: CentroidBox| CentroidBox { lo: x.lo.min(y.lo), hi: x.hi.max(y.hi) };
+    (ma + mb, union(la, lb), union(ra, rb))
 }
 
 /// Sets of fewer primitives choose their split without bins (see [`cheapest_of_few`]).
@@ -518,7 +565,8 @@ mod tests {
 
     #[test]
     fn the_parallel_build_lays_out_the_tree_the_sequential_one_does() {
-        let n = 20 * PARALLEL_MIN + 123;
+        // Large enough for the top splits to bin and partition in parallel too.
+        let n = 2 * SPLIT_PAR_MIN + 20 * PARALLEL_MIN + 123;
         let (mut par, mut seq) = (scattered(n), scattered(n));
         let nodes = build(&mut par);
         // The reference: the whole tree built on one thread, densely from the front.
@@ -529,7 +577,16 @@ mod tests {
         reference.truncate(used);
         assert!(nodes.len() > n / MAX_LEAF && nodes.len() < node_bound(n), "{} nodes", nodes.len());
         assert_eq!(bytemuck::cast_slice::<Node2, u8>(&nodes), bytemuck::cast_slice::<Node2, u8>(&reference));
-        assert!(par.iter().zip(&seq).all(|(a, b)| a.id() == b.id()));
+        // The same primitives in every leaf (a parallel partition orders each side its own way).
+        for node in nodes.iter().filter(|n| n.count > 0) {
+            let ids = |refs: &[PrimRef]| {
+                let mut v: Vec<u32> =
+                    refs[node.a as usize..(node.a + node.count) as usize].iter().map(PrimRef::id).collect();
+                v.sort();
+                v
+            };
+            assert_eq!(ids(&par), ids(&seq));
+        }
         // Dense preorder: a left child follows its parent; the leaves cover the references
         // once, in order; every node's box holds its children's.
         let mut covered = 0;
