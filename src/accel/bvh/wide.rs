@@ -97,7 +97,7 @@ pub struct Wide {
 /// Collapses `bin` (root at 0) into 8-wide nodes: each wide node takes the descendants of a
 /// binary node that fill its eight slots at least SAH cost ([`Plan`]).
 pub fn collapse(bin: &[Node2]) -> Wide {
-    let mut nodes = Vec::with_capacity(bin.len() / 4 + 1);
+    let mut nodes = Vec::new();
     let root_area = area(bin[0].lo, bin[0].hi).max(f32::MIN_POSITIVE) as f64;
     let mut cost = 0.0;
     let depth = if bin[0].count > 0 {
@@ -149,7 +149,9 @@ struct Plan {
     /// `left[n][k - 1]`: slots given to the left child in that best spread (0: one slot).
     left: Vec<[u8; WIDTH]>,
     /// Slots given to the left child when inner node `n` becomes a wide node (its children
-    /// spread over all eight slots).
+    /// spread over all eight slots; at least one, so the 0 of a node never planned reads as 1).
+    /// Both tables start as zeroed memory, mapped lazily: the binary array's unused ranges
+    /// (see the builder) cost them nothing either.
     open: Vec<u8>,
 }
 
@@ -161,7 +163,7 @@ const C_NODE: f64 = 1.0;
 impl Plan {
     fn new(bin: &[Node2], root_area: f64) -> Plan {
         let mut left = vec![[0u8; WIDTH]; bin.len()];
-        let mut open = vec![1u8; bin.len()];
+        let mut open = vec![0u8; bin.len()];
         let cost = plan_subtree(bin, 0, &mut left, &mut open, root_area);
         Plan { root_cost: cost[0], left, open }
     }
@@ -169,7 +171,7 @@ impl Plan {
     /// The binary nodes that fill the slots of the wide node made from inner node `n` (the
     /// first `.1` of the array).
     fn children(&self, bin: &[Node2], n: usize) -> ([u32; WIDTH], usize) {
-        let (l, r, j) = (bin[n].a as usize, bin[n].b as usize, self.open[n] as usize);
+        let (l, r, j) = (bin[n].a as usize, bin[n].b as usize, self.open[n].max(1) as usize);
         let mut out = ([0; WIDTH], 0);
         self.fill(bin, l, j, &mut out);
         self.fill(bin, r, WIDTH - j, &mut out);
