@@ -107,9 +107,10 @@ impl<'a> Facts<'a> {
             emissive_triangles: scene
                 .mesh
                 .material_ids
-                .iter()
-                .filter(|&&m| scene.materials[m as usize].is_emissive())
-                .count(),
+                .runs()
+                .filter(|&(_, _, m)| scene.materials[m as usize].is_emissive())
+                .map(|(start, end, _)| end - start)
+                .sum(),
             emissive_spheres: scene
                 .spheres
                 .iter()

@@ -52,7 +52,7 @@ impl EmissiveTriangles {
         let mut prims = Vec::new();
         let mut total = 0.0f32;
         let mut max_error = Vec3::ZERO;
-        for (i, &m) in scene.mesh.material_ids.iter().enumerate() {
+        for (i, m) in scene.mesh.material_ids.iter().enumerate() {
             let mat = &scene.materials[m as usize];
             if !mat.is_emissive() {
                 continue;

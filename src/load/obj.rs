@@ -228,7 +228,7 @@ fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Materia
                 materials.len() as u32 - 1
             }),
         };
-        let material_ids = vec![id; triangles.len()];
+        let material_ids = crate::scene::MaterialIds::uniform(id, triangles.len());
         // `v x y z r g b`: colours as written (0..1, taken as linear).
         let colors = (m.vertex_color.len() == m.positions.len())
             .then(|| m.vertex_color.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect());

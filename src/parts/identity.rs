@@ -52,7 +52,7 @@ pub fn scene_hash(scene: &Scene) -> String {
     let m = &scene.mesh;
     h.tagged("positions", bytemuck::cast_slice(&m.positions));
     h.tagged("triangles", bytemuck::cast_slice(&m.triangles));
-    h.tagged("material_ids", bytemuck::cast_slice(&m.material_ids));
+    h.tagged("material_runs", bytemuck::cast_slice(&m.material_ids.words().collect::<Vec<u32>>()));
     if let Some(n) = &m.normals {
         h.tagged("normals", bytemuck::cast_slice(n));
     }

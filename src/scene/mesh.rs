@@ -1,3 +1,4 @@
+use super::MaterialIds;
 use glam::{Vec2, Vec3};
 
 /// All triangles of a scene in world space, as parallel arrays (structure of arrays).
@@ -15,7 +16,7 @@ pub struct Mesh {
     /// multiplies the material's base colour.
     pub colors: Option<Vec<Vec3>>,
     pub triangles: Vec<[u32; 3]>,
-    pub material_ids: Vec<u32>,
+    pub material_ids: MaterialIds,
 }
 
 /// An analytic sphere (CS184 spheres stay exact, never tessellated).
@@ -37,7 +38,7 @@ impl Mesh {
             + self.uvs.as_deref().map_or(0, of)
             + self.colors.as_deref().map_or(0, of)
             + of(&self.triangles)
-            + of(&self.material_ids)
+            + self.material_ids.bytes()
     }
 
     /// Appends another mesh (already in world space), shifting its indices; attributes that
@@ -52,7 +53,9 @@ impl Mesh {
         merge_attr(&mut self.colors, other.colors, had, add, Vec3::ONE);
         self.positions.extend(other.positions);
         self.triangles.extend(other.triangles.into_iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
-        self.material_ids.extend(other.material_ids);
+        for (start, end, id) in other.material_ids.runs() {
+            self.material_ids.push_run(id, end - start);
+        }
     }
 
     pub fn triangle_count(&self) -> usize {
@@ -103,8 +106,7 @@ impl Mesh {
             let bad = self.triangles[i].iter().find(|&&v| v as usize >= n).copied().unwrap_or_default();
             return Err(format!("triangle {i} uses vertex {bad}, but there are only {n}"));
         }
-        if let Some(m) = first_bad(&self.material_ids, |&m| m as usize >= material_count).map(|i| self.material_ids[i])
-        {
+        if let Some((_, _, m)) = self.material_ids.runs().find(|&(_, _, m)| m as usize >= material_count) {
             return Err(format!("a triangle uses material {m}, but there are only {material_count}"));
         }
         Ok(())

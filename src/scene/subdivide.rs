@@ -101,7 +101,7 @@ impl Mesh {
             if let Some(c) = &mut m.colors {
                 extend_at_midpoints(c, &ends, |a, b| 0.5 * (a + b));
             }
-            m.material_ids = m.material_ids.iter().flat_map(|&id| [id; 4]).collect();
+            m.material_ids = m.material_ids.repeated(4);
             m.triangles = out;
         }
         Some(m)

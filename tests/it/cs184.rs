@@ -336,7 +336,7 @@ fn files_without_a_camera_see_their_largest_face() {
                 m.triangles.extend([[a, a + 1, b + 1], [a, b + 1, b]]);
             }
         }
-        m.material_ids = vec![0; m.triangles.len()];
+        m.material_ids = wavepath::scene::MaterialIds::uniform(0, m.triangles.len());
         m
     };
     let cases: [(&str, Mesh, Vec3); 3] = [

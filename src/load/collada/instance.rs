@@ -23,9 +23,9 @@ pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[
         .then(|| cs184_vertex_normals(&positions, &pos_tris))
         .flatten()
         .unwrap_or_else(|| area_weighted_vertex_normals(&positions, &pos_tris));
-    let mut material_ids = Vec::with_capacity(pos_tris.len());
+    let mut material_ids = crate::scene::MaterialIds::default();
     for (g, &m) in local.groups.iter().zip(material_of_group) {
-        material_ids.extend(std::iter::repeat_n(m, g.triangles));
+        material_ids.push_run(m, g.triangles);
     }
 
     if !file_normals && !has_uvs {

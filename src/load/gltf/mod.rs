@@ -397,7 +397,7 @@ fn primitive(
         return Err(format!("index {bad} is out of range for {n} vertices"));
     }
     let triangles = triangles_of(mode, &raw.indices)?;
-    let material_ids = vec![mat; triangles.len()];
+    let material_ids = crate::scene::MaterialIds::uniform(mat, triangles.len());
     Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
 }
 

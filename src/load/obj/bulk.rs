@@ -129,6 +129,6 @@ pub fn parse(text: &str) -> Option<Mesh> {
     if triangles.is_empty() {
         return None;
     }
-    let material_ids = vec![0; triangles.len()];
+    let material_ids = crate::scene::MaterialIds::uniform(0, triangles.len());
     Some(Mesh { positions, normals: None, uvs: None, colors: None, triangles, material_ids })
 }

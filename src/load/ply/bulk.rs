@@ -267,6 +267,6 @@ fn convert(
     if triangles.is_empty() {
         return Err("no faces".into());
     }
-    let material_ids = vec![0; triangles.len()];
+    let material_ids = crate::scene::MaterialIds::uniform(0, triangles.len());
     Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
 }

@@ -126,7 +126,7 @@ fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, 
     let uvs = with_uvs.then(|| verts.iter().map(|v| Vec2::from(v.uv)).collect());
     let colors = with_colors.then(|| verts.iter().map(|v| Vec3::from(v.c)).collect());
     let positions = verts.iter().map(|v| Vec3::from(v.p)).collect();
-    let material_ids = vec![0; triangles.len()];
+    let material_ids = crate::scene::MaterialIds::uniform(0, triangles.len());
     Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
 }
 

@@ -147,7 +147,7 @@ fn tiny_and_empty_scenes() {
     let mesh = Mesh {
         positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
         triangles: vec![[0, 1, 2]],
-        material_ids: vec![0],
+        material_ids: vec![0].into(),
         ..Mesh::default()
     };
     let bvh = Bvh::build(&scene_of(mesh, vec![]));

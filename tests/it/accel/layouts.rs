@@ -140,8 +140,10 @@ fn leaf_layouts_take_the_memory_they_report() {
             assert!(ratio < 0.72, "{name}: packed leaves take {ratio:.3} of the corners'");
         }
     }
-    // The mesh's own arrays: 12 bytes a position, 12 a triangle, 4 a material id.
+    // The mesh's own arrays: 12 bytes a position, 12 a triangle, 8 a run of one material
+    // (the soup has one).
     let scene = soup();
     let m = &scene.mesh;
-    assert_eq!(m.bytes(), 12 * m.positions.len() + 16 * m.triangles.len());
+    assert_eq!(m.material_ids.runs().count(), 1);
+    assert_eq!(m.bytes(), 12 * m.positions.len() + 12 * m.triangles.len() + 8);
 }

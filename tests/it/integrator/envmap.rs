@@ -132,7 +132,7 @@ fn white_plane() -> Scene {
         uvs: None,
         colors: None,
         triangles: vec![[0, 2, 1], [0, 3, 2]],
-        material_ids: vec![0, 0],
+        material_ids: vec![0, 0].into(),
     };
     Scene {
         name: "white plane".into(),

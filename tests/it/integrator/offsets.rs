@@ -101,7 +101,7 @@ fn assert_no_plane_rehits(o: Vec3, e1: Vec3, e2: Vec3, what: &str) {
     let mesh = Mesh {
         positions: vec![o, o + e1, o + e2],
         triangles: vec![[0, 1, 2]],
-        material_ids: vec![0],
+        material_ids: vec![0].into(),
         ..Mesh::default()
     };
     let s = scene(mesh, vec![]);

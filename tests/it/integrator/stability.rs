@@ -129,7 +129,7 @@ fn thin_triangle_cube() -> Mesh {
             }
         }
     }
-    m.material_ids = vec![0; m.triangles.len()];
+    m.material_ids = wavepath::scene::MaterialIds::uniform(0, m.triangles.len());
     m
 }
 
@@ -489,7 +489,7 @@ mod slow {
                     }
                 }
             }
-            m.material_ids = vec![0; m.triangles.len()];
+            m.material_ids = wavepath::scene::MaterialIds::uniform(0, m.triangles.len());
             let mut scene = meshgen::scene_of(m, vec![]);
             scene.name = format!("slab of {cells} cells");
             scene.lights = vec![Light::Hemisphere { radiance: Vec3::ONE }];

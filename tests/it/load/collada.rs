@@ -350,7 +350,7 @@ fn polygons_and_polylists_are_fan_triangulated_in_order() {
     let want = vec![[0, 1, 2], [0, 2, 3], [0, 3, 4], [5, 4, 3], [5, 4, 3], [5, 3, 2], [2, 1, 0]];
     assert_eq!(got, want);
     // The triangles without a material symbol take the instance's first bound material.
-    assert!(s.mesh.material_ids.iter().all(|&m| s.materials[m as usize].name == "red"));
+    assert!(s.mesh.material_ids.iter().all(|m| s.materials[m as usize].name == "red"));
 }
 
 #[test]

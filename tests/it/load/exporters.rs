@@ -20,7 +20,7 @@ fn load_ok(path: &Path) -> Scene {
 
 /// The diffuse albedo of each triangle, in file order.
 fn albedos(s: &Scene) -> Vec<Vec3> {
-    s.mesh.material_ids.iter().map(|&m| s.materials[m as usize].bsdf.diffuse_albedo()).collect()
+    s.mesh.material_ids.iter().map(|m| s.materials[m as usize].bsdf.diffuse_albedo()).collect()
 }
 
 const QUAD: &str = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n";

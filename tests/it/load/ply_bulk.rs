@@ -313,13 +313,13 @@ fn subdivided_meshes_carry_materials_and_attributes() {
         [Vec3::new(0.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 0.0), Vec3::new(2.0, 0.0, 1.0), Vec3::new(0.0, 0.0, 1.0)];
     m.positions = corners.to_vec();
     m.triangles = vec![[0, 1, 2], [0, 2, 3]];
-    m.material_ids = vec![3, 5];
+    m.material_ids = vec![3, 5].into();
     m.normals = Some(vec![Vec3::Y; 4]);
     m.uvs = Some(corners.iter().map(|p| glam::Vec2::new(p.x / 2.0, p.z)).collect());
     m.colors = Some(corners.iter().map(|p| Vec3::new(p.x, p.z, 0.25)).collect());
     let s = m.clone().subdivided(3).unwrap();
     assert_eq!(s.triangles.len(), 2 * 64);
-    assert_eq!(s.material_ids, [[3u32; 64], [5u32; 64]].concat());
+    assert_eq!(s.material_ids.iter().collect::<Vec<_>>(), [[3u32; 64], [5u32; 64]].concat());
     let (n, uv, c) = (s.normals.as_ref().unwrap(), s.uvs.as_ref().unwrap(), s.colors.as_ref().unwrap());
     assert!(n.len() == s.positions.len() && uv.len() == s.positions.len() && c.len() == s.positions.len());
     for (i, p) in s.positions.iter().enumerate() {
