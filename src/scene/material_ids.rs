@@ -31,12 +31,6 @@ impl MaterialIds {
         self.ends.is_empty()
     }
 
-    /// The material of triangle `tri` (below `len`).
-    #[inline]
-    pub fn get(&self, tri: usize) -> u32 {
-        self.ids[self.run_of(tri)]
-    }
-
     #[inline]
     fn run_of(&self, tri: usize) -> usize {
         debug_assert!(tri < self.len());
@@ -140,12 +134,6 @@ impl From<Vec<u32>> for MaterialIds {
     }
 }
 
-impl<const N: usize> From<[u32; N]> for MaterialIds {
-    fn from(v: [u32; N]) -> MaterialIds {
-        v.into_iter().collect()
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -174,7 +162,7 @@ mod tests {
             plain.extend([1, 1, 2]);
             assert_eq!(runs.len(), plain.len());
             assert_eq!(runs.iter().collect::<Vec<_>>(), plain);
-            assert!((0..plain.len()).all(|i| runs[i] == plain[i] && runs.get(i) == plain[i]));
+            assert!((0..plain.len()).all(|i| runs[i] == plain[i]));
             assert!(runs.ids.windows(2).all(|w| w[0] != w[1]), "{runs:?}");
             let four: Vec<u32> = plain.iter().flat_map(|&id| [id; 4]).collect();
             assert_eq!(runs.repeated(4).iter().collect::<Vec<_>>(), four);
