@@ -171,6 +171,73 @@ impl RootBox {
     }
 }
 
+/// The box-test bounds of a packet of rays that leave one point with directions in one
+/// octant ([`crate::accel::bvh::coherent`]): each axis's reciprocal direction as an interval.
+/// A ray's unfused slab distance is `fl(fl(plane - origin) * inv)`; with the origin shared,
+/// `plane - origin` is one value for the whole packet, and a rounded product is monotone in
+/// each factor, so the distances at the interval's ends bound every ray's own, exactly. The
+/// packet therefore enters every box any of its rays' unfused tests enters (tested against
+/// per-ray tests in `coherent`).
+#[derive(Clone, Copy, Debug)]
+pub struct Frustum {
+    pub(super) org: [f32; 3],
+    pub(super) inv_lo: [f32; 3],
+    pub(super) inv_hi: [f32; 3],
+    /// The smallest `tmin` of the packet.
+    pub(super) tmin: f32,
+    pub(super) octant: u32,
+    /// [`BoxRay::planes`] of the octant.
+    pub(super) planes: [u8; 6],
+}
+
+impl Frustum {
+    /// The bounds of `rays` (live, at least one, one origin and one octant: see
+    /// [`Frustum::joins`]).
+    pub fn of(rays: &[BoxRay]) -> Frustum {
+        let first = &rays[0];
+        let mut f = Frustum {
+            org: first.org,
+            inv_lo: first.inv,
+            inv_hi: first.inv,
+            tmin: first.tmin,
+            octant: first.octant,
+            planes: first.planes,
+        };
+        for r in &rays[1..] {
+            debug_assert!(Frustum::joins(first, r));
+            for axis in 0..3 {
+                f.inv_lo[axis] = f.inv_lo[axis].min(r.inv[axis]);
+                f.inv_hi[axis] = f.inv_hi[axis].max(r.inv[axis]);
+            }
+            f.tmin = f.tmin.min(r.tmin);
+        }
+        f
+    }
+
+    /// Whether `r` may share a packet with `lead`: both live, the same origin bit for bit and
+    /// the same octant.
+    #[inline(always)]
+    pub fn joins(lead: &BoxRay, r: &BoxRay) -> bool {
+        let same = |a: [f32; 3], b: [f32; 3]| a.iter().zip(&b).all(|(x, y)| x.to_bits() == y.to_bits());
+        lead.live && r.live && lead.octant == r.octant && same(lead.org, r.org)
+    }
+
+    /// The entry distance (at most any ray's) and the exit distance (at least any ray's) of
+    /// child `i` of `node`, by the operations of [`Scalar`]'s test at the interval's ends.
+    #[inline(always)]
+    pub fn span(&self, node: &Node8, i: usize) -> (f32, f32) {
+        let oct = self.octant;
+        let (mut enter, mut exit) = (self.tmin, f32::INFINITY);
+        for axis in 0..3 {
+            let dn = node.b[near(oct, axis)][i] - self.org[axis];
+            let df = node.b[far(oct, axis)][i] - self.org[axis];
+            enter = enter.max((dn * self.inv_lo[axis]).min(dn * self.inv_hi[axis]));
+            exit = exit.min((df * self.inv_lo[axis]).max(df * self.inv_hi[axis]));
+        }
+        (enter, exit * EXIT_SCALE)
+    }
+}
+
 /// [`BoxTest::admit_mask`], one ray at a time.
 #[inline(always)]
 pub fn admit_mask_scalar(root: &RootBox, rays: &[Ray]) -> u32 {
@@ -229,6 +296,32 @@ pub trait BoxTest: Copy {
             return (n, nodes[top - 1]);
         }
         (n, 0)
+    }
+
+    /// [`BoxTest::visit`] for a packet's [`Frustum`], with `tmax` the largest closest-hit
+    /// distance of its rays: the children some ray of the packet may enter, pushed in the
+    /// octant's order with the packet's entry distances, all of them (also a single one, so
+    /// the caller always finds the nearest's distance on the stack). Returns the number.
+    #[inline(always)]
+    fn visit_frustum(
+        self,
+        node: &Node8,
+        f: &Frustum,
+        tmax: f32,
+        nodes: &mut [u32; WIDTH],
+        dists: &mut [f32; WIDTH],
+    ) -> u32 {
+        let mut top = 0;
+        for k in node.perm {
+            let slot = (k >> (3 * f.octant) & 7) as usize;
+            let (enter, exit) = f.span(node, slot);
+            if enter <= exit && enter <= tmax * TIE_SCALE {
+                nodes[top] = node.child[slot];
+                dists[top] = enter;
+                top += 1;
+            }
+        }
+        top as u32
     }
 
     /// Bit `i` set when ray `i` of `rays` (at most 32) may enter `root`: [`RootBox::admits`]

@@ -24,6 +24,7 @@ macro_rules! on_isa {
 
 mod boxtest;
 mod build;
+mod coherent;
 mod leaf;
 mod packet;
 mod simd;
@@ -36,7 +37,7 @@ use crate::scene::Scene;
 pub use crate::settings::LeafLayout;
 
 use crate::cpu::{Avx2, Isa, Sse};
-use boxtest::{BoxRay, BoxTest, RootBox};
+use boxtest::{BoxRay, BoxTest, Frustum, RootBox};
 use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -324,9 +325,36 @@ impl Bvh {
                     }
                     counters.rays += (rs.len() - n) as u64;
                     hs.fill(None);
-                    for (&i, br) in slot[..n].iter().zip(&prep[..n]) {
-                        let i = i as usize;
-                        hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, counters, &mut stack);
+                    // Runs of coherent rays (camera rays) as packets, the others one by one.
+                    let mut k = 0;
+                    while k < n {
+                        let len = coherent::packet_len(rs, &slot[k..n], &prep[k..n]);
+                        if len >= coherent::MIN_RAYS {
+                            let mut rays = [rs[slot[k] as usize]; coherent::COHERENT];
+                            for (r, &i) in rays.iter_mut().zip(&slot[k..k + len]) {
+                                *r = rs[i as usize];
+                            }
+                            let mut out = [None; coherent::COHERENT];
+                            let f = Frustum::of(&prep[k..k + len]);
+                            coherent::closest_packet(
+                                self,
+                                $isa,
+                                &rays[..len],
+                                &f,
+                                &mut out[..len],
+                                counters,
+                                &mut stack,
+                            );
+                            for (&i, h) in slot[k..k + len].iter().zip(out) {
+                                hs[i as usize] = h;
+                            }
+                        } else {
+                            for (&i, br) in slot[k..k + len].iter().zip(&prep[k..k + len]) {
+                                let i = i as usize;
+                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, counters, &mut stack);
+                            }
+                        }
+                        k += len;
                     }
                 }
             }};

@@ -1,7 +1,7 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a [`crate::cpu`] token whose constructor checked the CPU at run time.
 use super::boxtest::{
-    BoxRay, BoxTest, EXIT_SCALE, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, admit_mask_scalar, far, near,
+    BoxRay, BoxTest, EXIT_SCALE, Frustum, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, admit_mask_scalar, far, near,
 };
 use super::leaf::Tri4;
 use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest};
@@ -120,22 +120,30 @@ impl BoxTest for Avx2 {
                 return (1, node.child[mask.trailing_zeros() as usize]);
             }
             if n > 1 {
-                // Slots in the octant's order (far to near); `permutevar8x32` reads only the
-                // low three bits of each index, so the other octants' bits need no masking.
-                let order =
-                    _mm256_srl_epi32(_mm256_loadu_si256(node.perm.as_ptr().cast()), _mm_cvtsi32_si128(3 * oct as i32));
-                let sorted_hit = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, order)) as usize;
-                // Then the hit ones packed to the front, keeping that order.
-                let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
-                let idx = _mm256_permutevar8x32_epi32(order, pack);
-                let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
-                _mm256_storeu_si256(nodes.as_mut_ptr().cast(), child);
-                _mm256_storeu_ps(dists.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
-                // The nearest (the last pushed) from the register, not back from the stack.
-                let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
-                return (n, _mm256_cvtsi256_si32(top) as u32);
+                return (n, push_ordered(node, oct, enter, hit, n, nodes, dists));
             }
             (n, 0)
+        }
+    }
+
+    #[inline(always)]
+    fn visit_frustum(
+        self,
+        node: &Node8,
+        f: &Frustum,
+        tmax: f32,
+        nodes: &mut [u32; WIDTH],
+        dists: &mut [f32; WIDTH],
+    ) -> u32 {
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; `push_ordered` stores to
+        // arrays of exactly 8 entries.
+        unsafe {
+            let (enter, hit) = frustum8(node, f, tmax);
+            let n = _mm256_movemask_ps(hit).count_ones();
+            if n > 0 {
+                push_ordered(node, f.octant, enter, hit, n, nodes, dists);
+            }
+            n
         }
     }
 
@@ -420,6 +428,75 @@ unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32, fma: bool) -> (__m256, __m2
         // TIE_SCALE)` as two compares, so fewer dependent steps per node with the same answer.
         let enter = _mm256_max_ps(_mm256_max_ps(t0, t1), _mm256_max_ps(t2, _mm256_set1_ps(r.tmin)));
         let exit = _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u0, u1), u2), _mm256_set1_ps(EXIT_SCALE));
+        let hit = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit),
+            _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(tmax * TIE_SCALE)),
+        );
+        (enter, hit)
+    }
+}
+
+/// Pushes the `n` (> 0) children of `node` hit per `hit`, in the node's order for octant
+/// `oct` (far to near), with their `enter` distances; returns the nearest (the last pushed).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn push_ordered(
+    node: &Node8,
+    oct: u32,
+    enter: __m256,
+    hit: __m256,
+    n: u32,
+    nodes: &mut [u32; WIDTH],
+    dists: &mut [f32; WIDTH],
+) -> u32 {
+    // SAFETY: the caller guarantees AVX2; the loads are unaligned ones of 8 u32 inside
+    // `node`, the stores go to arrays of exactly 8 entries; `COMPRESS` is indexed by an 8-bit
+    // mask.
+    unsafe {
+        // Slots in the octant's order (far to near); `permutevar8x32` reads only the low
+        // three bits of each index, so the other octants' bits need no masking.
+        let order = _mm256_srl_epi32(_mm256_loadu_si256(node.perm.as_ptr().cast()), _mm_cvtsi32_si128(3 * oct as i32));
+        let sorted_hit = _mm256_movemask_ps(_mm256_permutevar8x32_ps(hit, order)) as usize;
+        // Then the hit ones packed to the front, keeping that order.
+        let pack = _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(COMPRESS[sorted_hit] as i64));
+        let idx = _mm256_permutevar8x32_epi32(order, pack);
+        let child = _mm256_permutevar8x32_epi32(_mm256_loadu_si256(node.child.as_ptr().cast()), idx);
+        _mm256_storeu_si256(nodes.as_mut_ptr().cast(), child);
+        _mm256_storeu_ps(dists.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
+        // The nearest (the last pushed) from the register, not back from the stack.
+        let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
+        _mm256_cvtsi256_si32(top) as u32
+    }
+}
+
+/// [`Frustum::span`] of the eight children of `node` at once (the same operations per lane),
+/// and the lanes the packet may enter within `tmax`.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn frustum8(node: &Node8, f: &Frustum, tmax: f32) -> (__m256, __m256) {
+    // SAFETY: the caller guarantees AVX2; each load reads 8 f32 of `node.b` at a byte offset
+    // `32 * plane` with plane < 6 (`Frustum::planes` is `PLANES[octant]`), unaligned loads.
+    unsafe {
+        let base = node.b.as_ptr().cast::<u8>();
+        let plane = |k: usize| _mm256_loadu_ps(base.add(f.planes[k] as usize).cast::<f32>());
+        let (lo, hi) = (|a: usize| _mm256_set1_ps(f.inv_lo[a]), |a: usize| _mm256_set1_ps(f.inv_hi[a]));
+        let d = |k: usize, axis: usize| _mm256_sub_ps(plane(k), _mm256_set1_ps(f.org[axis]));
+        let near = |axis: usize| {
+            let d = d(axis, axis);
+            _mm256_min_ps(_mm256_mul_ps(d, lo(axis)), _mm256_mul_ps(d, hi(axis)))
+        };
+        let far = |axis: usize| {
+            let d = d(axis + 3, axis);
+            _mm256_max_ps(_mm256_mul_ps(d, lo(axis)), _mm256_mul_ps(d, hi(axis)))
+        };
+        let enter = _mm256_max_ps(_mm256_max_ps(near(0), near(1)), _mm256_max_ps(near(2), _mm256_set1_ps(f.tmin)));
+        let exit = _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(far(0), far(1)), far(2)), _mm256_set1_ps(EXIT_SCALE));
         let hit = _mm256_and_ps(
             _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit),
             _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(tmax * TIE_SCALE)),

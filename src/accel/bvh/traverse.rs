@@ -33,7 +33,7 @@ impl<const N: usize> Stack<N> {
     /// traversal only uses a stack that [`Stack::holds`] its tree's `stack_need`) but lets the
     /// compiler drop every bounds check in the loop: the eight entries above any position
     /// are inside the arrays.
-    const MASK: usize = {
+    pub(super) const MASK: usize = {
         assert!(N > WIDTH && (N - WIDTH).is_power_of_two());
         N - WIDTH - 1
     };
@@ -53,7 +53,7 @@ impl<const N: usize> Stack<N> {
 
     /// The eight entries from position `sp` on.
     #[inline(always)]
-    fn above(&mut self, sp: usize) -> (&mut [u32; WIDTH], &mut [f32; WIDTH]) {
+    pub(super) fn above(&mut self, sp: usize) -> (&mut [u32; WIDTH], &mut [f32; WIDTH]) {
         let at = sp & Self::MASK;
         let n = (&mut self.nodes[at..at + WIDTH]).try_into().expect("eight entries");
         let d = (&mut self.dists[at..at + WIDTH]).try_into().expect("eight entries");
@@ -84,8 +84,13 @@ pub(super) struct Best {
 impl Best {
     /// Nothing found yet within `[tmin, tmax]`.
     #[inline(always)]
-    fn new(tmax: f32) -> Best {
+    pub(super) fn new(tmax: f32) -> Best {
         Best { t: tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false }
+    }
+
+    #[inline(always)]
+    pub(super) fn hit(&self) -> Option<Hit> {
+        self.found.then_some(Hit { t: self.t, prim: self.prim, u: self.u, v: self.v })
     }
 }
 
@@ -174,7 +179,7 @@ fn walk<B: BoxTest, const N: usize>(
         loop {
             if sp == 0 {
                 counters.nodes += visited;
-                return best.found.then_some(Hit { t: best.t, prim: best.prim, u: best.u, v: best.v });
+                return best.hit();
             }
             sp -= 1;
             let at = sp & Stack::<N>::MASK;
@@ -212,9 +217,15 @@ fn leaf_candidates<'a, B: BoxTest>(
     scratch: &'a mut Tri4,
 ) -> (u32, &'a Tri4) {
     let (first, count) = leaf_range(r);
-    let all = (1u32 << count) - 1;
     let blk = bvh.block(first, scratch);
-    (isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes), blk)
+    (block_candidates(isa, blk, count, sr, tmin, tmax), blk)
+}
+
+/// Lanes of a leaf's block of `count` primitives that need the scalar test.
+#[inline(always)]
+fn block_candidates<B: BoxTest>(isa: B, blk: &Tri4, count: usize, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 {
+    let all = (1u32 << count) - 1;
+    isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes)
 }
 
 /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the filter
@@ -248,7 +259,22 @@ pub(super) fn leaf_closest<B: BoxTest>(
     best: &mut Best,
     scratch: &mut Tri4,
 ) {
-    let (mut cand, blk) = leaf_candidates(bvh, isa, r, sr, ray.tmin, best.t, scratch);
+    let (first, count) = leaf_range(r);
+    closest_in_block(bvh, isa, bvh.block(first, scratch), count, sr, ray, best);
+}
+
+/// [`leaf_closest`] in a leaf's block of `count` primitives, already at hand.
+#[inline(always)]
+pub(super) fn closest_in_block<B: BoxTest>(
+    bvh: &Bvh,
+    isa: B,
+    blk: &Tri4,
+    count: usize,
+    sr: &ShearedRay,
+    ray: &Ray,
+    best: &mut Best,
+) {
+    let mut cand = block_candidates(isa, blk, count, sr, ray.tmin, best.t);
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;

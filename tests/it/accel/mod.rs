@@ -3,6 +3,7 @@
 
 mod batch_closest;
 mod bvh;
+mod coherent;
 mod layouts;
 mod packets;
 mod rays;
