@@ -300,8 +300,9 @@ pub trait BoxTest: Copy {
 
     /// [`BoxTest::visit`] for a packet's [`Frustum`], with `tmax` the largest closest-hit
     /// distance of its rays: the children some ray of the packet may enter, pushed in the
-    /// octant's order with the packet's entry distances, all of them (also a single one, so
-    /// the caller always finds the nearest's distance on the stack). Returns the number.
+    /// octant's order with the packet's entry distances and their slots in the node, all of
+    /// them (also a single one, so the caller always finds the nearest's distance on the
+    /// stack). Returns the number.
     #[inline(always)]
     fn visit_frustum(
         self,
@@ -310,6 +311,7 @@ pub trait BoxTest: Copy {
         tmax: f32,
         nodes: &mut [u32; WIDTH],
         dists: &mut [f32; WIDTH],
+        slots: &mut [u32; WIDTH],
     ) -> u32 {
         let mut top = 0;
         for k in node.perm {
@@ -318,6 +320,7 @@ pub trait BoxTest: Copy {
             if enter <= exit && enter <= tmax * TIE_SCALE {
                 nodes[top] = node.child[slot];
                 dists[top] = enter;
+                slots[top] = slot as u32;
                 top += 1;
             }
         }

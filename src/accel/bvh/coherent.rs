@@ -12,8 +12,9 @@
 //! primitive id at any order), so each ray's hit is its single-ray hit, bit for bit.
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest, Frustum, TIE_SCALE};
-use super::traverse::{Best, Stack, closest_in_block, prefetch_child};
-use super::wide::{LEAF_BIT, leaf_range};
+use super::leaf::Tri4;
+use super::traverse::{Best, closest_in_block, prefetch_child};
+use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::TraceCounters;
 use crate::accel::triangle::ShearedRay;
 use crate::geometry::{Hit, Ray};
@@ -53,20 +54,44 @@ pub(super) fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
     n
 }
 
+/// The stack of packets: node references, the packet's entry distances and the rays that
+/// may enter each (bit `k`: ray `k`).
+pub(super) struct PacketStack {
+    nodes: Vec<u32>,
+    dists: Vec<f32>,
+    rays: Vec<u16>,
+    /// The block of the leaf being tested, when the tree's leaves index their corners.
+    leaf: Tri4,
+}
+
+impl PacketStack {
+    pub(super) fn new(bvh: &Bvh) -> PacketStack {
+        let n = bvh.stack_need + WIDTH;
+        PacketStack { nodes: vec![0; n], dists: vec![0.0; n], rays: vec![0; n], leaf: Tri4::default() }
+    }
+}
+
 /// Closest hits of a packet: `out[k]` for `rays[k]` (at most [`COHERENT`], all joined by
-/// [`packet_len`]), whose bounds are `f`, with a stack that [`Stack::holds`] the tree.
+/// [`packet_len`]), whose box-test values are `brs` and bounds `f`.
+///
+/// At a node with a leaf among the children the packet enters, each ray also takes its own
+/// box test of the node (with its own closest hit), so a leaf is tested only by the rays
+/// that enter it; their children inherit those sets.
 #[inline(always)]
-pub(super) fn closest_packet<B: BoxTest, const N: usize>(
+#[allow(clippy::too_many_arguments)]
+pub(super) fn closest_packet<B: BoxTest>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
+    brs: &[BoxRay],
     f: &Frustum,
     out: &mut [Option<Hit>],
     counters: &mut TraceCounters,
-    stack: &mut Stack<N>,
+    stack: &mut PacketStack,
 ) {
     let m = rays.len();
-    debug_assert!((1..=COHERENT).contains(&m) && out.len() == m && Stack::<N>::holds(bvh.stack_need));
+    debug_assert!((1..=COHERENT).contains(&m) && out.len() == m && brs.len() == m);
+    debug_assert!(stack.nodes.len() >= bvh.stack_need + WIDTH);
     counters.rays += m as u64;
     let mut best: [Best; COHERENT] =
         std::array::from_fn(|k| Best::new(rays.get(k).map_or(f32::NEG_INFINITY, |r| r.tmax)));
@@ -74,31 +99,55 @@ pub(super) fn closest_packet<B: BoxTest, const N: usize>(
     let mut sheared: [Option<ShearedRay>; COHERENT] = [None; COHERENT];
     // The largest closest-hit distance of the packet: what a box must be entered within.
     let mut reach = best[..m].iter().fold(f32::NEG_INFINITY, |r, b| r.max(b.t));
-    let (mut sp, mut cur, mut entry) = (0usize, 0u32, f.tmin);
+    let all = (u32::MAX >> (32 - m)) as u16;
+    let (mut sp, mut cur, mut entry, mut act) = (0usize, 0u32, f.tmin, all);
     let (mut visited, mut tests) = (0u64, 0u64);
+    let mut slots = [0u32; WIDTH];
     loop {
         if cur & LEAF_BIT == 0 {
             visited += 1;
             let node = &bvh.nodes[cur as usize];
-            let (pushed, dists) = stack.above(sp);
-            let n = isa.visit_frustum(node, f, reach, pushed, dists) as usize;
+            let top: &mut [u32; WIDTH] = (&mut stack.nodes[sp..sp + WIDTH]).try_into().expect("eight entries");
+            let dists: &mut [f32; WIDTH] = (&mut stack.dists[sp..sp + WIDTH]).try_into().expect("eight entries");
+            let n = isa.visit_frustum(node, f, reach, &mut *top, &mut *dists, &mut slots) as usize;
             if n > 0 {
-                // The nearest is on top: take it, the others wait.
-                cur = pushed[n - 1];
-                entry = dists[n - 1];
-                if n > 1 {
-                    for &r in pushed.iter().take(n) {
-                        prefetch_child(bvh, isa, r);
+                let sets = &mut stack.rays[sp..sp + n];
+                if top[..n].iter().any(|&c| c & LEAF_BIT != 0) {
+                    // Rays per slot, from each ray's own test.
+                    let mut by_slot = [0u16; WIDTH];
+                    let mut todo = act;
+                    while todo != 0 {
+                        let k = todo.trailing_zeros() as usize;
+                        todo &= todo - 1;
+                        let mut tn = [0f32; WIDTH];
+                        let mut hit = isa.test(node, &brs[k], brs[k].octant, best[k].t, &mut tn);
+                        while hit != 0 {
+                            by_slot[hit.trailing_zeros() as usize] |= 1 << k;
+                            hit &= hit - 1;
+                        }
                     }
+                    for (set, &slot) in sets.iter_mut().zip(&slots) {
+                        *set = by_slot[slot as usize];
+                    }
+                } else {
+                    sets.fill(act);
                 }
+                for &r in top.iter().take(n) {
+                    prefetch_child(bvh, isa, r);
+                }
+                // The pending children go on the stack, the nearest is taken now.
                 sp += n - 1;
-                continue;
+                (cur, entry, act) = (top[n - 1], dists[n - 1], stack.rays[sp]);
+                if act != 0 {
+                    continue;
+                }
             }
         } else {
             let (first, count) = leaf_range(cur);
             let blk = bvh.block(first, &mut stack.leaf);
-            let mut r = f32::NEG_INFINITY;
-            for k in 0..m {
+            while act != 0 {
+                let k = act.trailing_zeros() as usize;
+                act &= act - 1;
                 // `entry` is at most this ray's own entry distance: past its closest hit,
                 // its own test would not enter the leaf.
                 if entry <= best[k].t * TIE_SCALE {
@@ -107,9 +156,8 @@ pub(super) fn closest_packet<B: BoxTest, const N: usize>(
                     tests += count as u64;
                     closest_in_block(bvh, isa, blk, count, sr, ray, &mut best[k]);
                 }
-                r = r.max(best[k].t);
             }
-            reach = r;
+            reach = best[..m].iter().fold(f32::NEG_INFINITY, |r, b| r.max(b.t));
         }
         // Pop the nearest pending child that some ray may still find something closer in.
         loop {
@@ -122,10 +170,8 @@ pub(super) fn closest_packet<B: BoxTest, const N: usize>(
                 return;
             }
             sp -= 1;
-            let at = sp & Stack::<N>::MASK;
-            if stack.dists[at] <= reach * TIE_SCALE {
-                cur = stack.nodes[at];
-                entry = stack.dists[at];
+            if stack.rays[sp] != 0 && stack.dists[sp] <= reach * TIE_SCALE {
+                (cur, entry, act) = (stack.nodes[sp], stack.dists[sp], stack.rays[sp]);
                 break;
             }
         }

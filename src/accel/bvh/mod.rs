@@ -302,6 +302,7 @@ impl Bvh {
         // larger body (set-up of the shear added to this loop) was left out of line by the
         // inliner, outside the AVX2 context, and ran six times slower.
         let mut stack = traverse::BigStack::boxed();
+        let mut packets = None;
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
@@ -336,14 +337,17 @@ impl Bvh {
                             }
                             let mut out = [None; coherent::COHERENT];
                             let f = Frustum::of(&prep[k..k + len]);
+                            let packets = packets.get_or_insert_with(|| coherent::PacketStack::new(self));
+                            let brs = &prep[k..k + len];
                             coherent::closest_packet(
                                 self,
                                 $isa,
                                 &rays[..len],
+                                brs,
                                 &f,
                                 &mut out[..len],
                                 counters,
-                                &mut stack,
+                                packets,
                             );
                             for (&i, h) in slot[k..k + len].iter().zip(out) {
                                 hs[i as usize] = h;

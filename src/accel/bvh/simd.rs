@@ -120,7 +120,7 @@ impl BoxTest for Avx2 {
                 return (1, node.child[mask.trailing_zeros() as usize]);
             }
             if n > 1 {
-                return (n, push_ordered(node, oct, enter, hit, n, nodes, dists));
+                return (n, push_ordered(node, oct, enter, hit, n, nodes, dists).0);
             }
             (n, 0)
         }
@@ -134,14 +134,17 @@ impl BoxTest for Avx2 {
         tmax: f32,
         nodes: &mut [u32; WIDTH],
         dists: &mut [f32; WIDTH],
+        slots: &mut [u32; WIDTH],
     ) -> u32 {
-        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; `push_ordered` stores to
-        // arrays of exactly 8 entries.
+        // SAFETY: `Avx2` exists only if AVX2 and FMA were detected; `push_ordered` and the
+        // store write arrays of exactly 8 entries.
         unsafe {
             let (enter, hit) = frustum8(node, f, tmax);
             let n = _mm256_movemask_ps(hit).count_ones();
             if n > 0 {
-                push_ordered(node, f.octant, enter, hit, n, nodes, dists);
+                let idx = push_ordered(node, f.octant, enter, hit, n, nodes, dists).1;
+                // The permutation's indices carry other octants' bits above the low three.
+                _mm256_storeu_si256(slots.as_mut_ptr().cast(), _mm256_and_si256(idx, _mm256_set1_epi32(7)));
             }
             n
         }
@@ -437,7 +440,8 @@ unsafe fn slab8(node: &Node8, r: &BoxRay, tmax: f32, fma: bool) -> (__m256, __m2
 }
 
 /// Pushes the `n` (> 0) children of `node` hit per `hit`, in the node's order for octant
-/// `oct` (far to near), with their `enter` distances; returns the nearest (the last pushed).
+/// `oct` (far to near), with their `enter` distances; returns the nearest (the last pushed)
+/// and the slots pushed (lane `k`: the slot of the `k`-th pushed child, for `k < n`).
 ///
 /// # Safety
 /// The CPU must have AVX2.
@@ -451,7 +455,7 @@ unsafe fn push_ordered(
     n: u32,
     nodes: &mut [u32; WIDTH],
     dists: &mut [f32; WIDTH],
-) -> u32 {
+) -> (u32, __m256i) {
     // SAFETY: the caller guarantees AVX2; the loads are unaligned ones of 8 u32 inside
     // `node`, the stores go to arrays of exactly 8 entries; `COMPRESS` is indexed by an 8-bit
     // mask.
@@ -468,7 +472,7 @@ unsafe fn push_ordered(
         _mm256_storeu_ps(dists.as_mut_ptr(), _mm256_permutevar8x32_ps(enter, idx));
         // The nearest (the last pushed) from the register, not back from the stack.
         let top = _mm256_permutevar8x32_epi32(child, _mm256_set1_epi32(n as i32 - 1));
-        _mm256_cvtsi256_si32(top) as u32
+        (_mm256_cvtsi256_si32(top) as u32, idx)
     }
 }
 
