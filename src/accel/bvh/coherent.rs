@@ -11,12 +11,12 @@
 //! closest hit does not depend on the order leaves are tested in (ties go to the lower
 //! primitive id at any order), so each ray's hit is its single-ray hit, bit for bit.
 use super::Bvh;
-use super::boxtest::{BoxRay, BoxTest, Frustum, TIE_SCALE};
+use super::boxtest::{BoxRay, Frustum, TIE_SCALE};
 use super::leaf::Tri4;
-use super::traverse::{Best, closest_in_block, prefetch_child};
+use super::packet::{PACKET, PacketShear, PacketTest};
+use super::traverse::{Best, closest_in_block, lane_hit, prefetch_child};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::TraceCounters;
-use crate::accel::triangle::ShearedRay;
 use crate::geometry::{Hit, Ray};
 
 /// Rays per packet at most (a 4 x 4 block of pixels, or two pixels of eight samples).
@@ -79,7 +79,7 @@ impl PacketStack {
 /// that enter it; their children inherit those sets.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) fn closest_packet<B: BoxTest>(
+pub(super) fn closest_packet<B: PacketTest>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
@@ -95,8 +95,8 @@ pub(super) fn closest_packet<B: BoxTest>(
     counters.rays += m as u64;
     let mut best: [Best; COHERENT] =
         std::array::from_fn(|k| Best::new(rays.get(k).map_or(f32::NEG_INFINITY, |r| r.tmax)));
-    // Each ray's shear is set up at its first leaf.
-    let mut sheared: [Option<ShearedRay>; COHERENT] = [None; COHERENT];
+    // The rays' shears are set up at the first leaf, eight at a time.
+    let mut shears: Option<[PacketShear; 2]> = None;
     // The largest closest-hit distance of the packet: what a box must be entered within.
     let mut reach = best[..m].iter().fold(f32::NEG_INFINITY, |r, b| r.max(b.t));
     let all = (u32::MAX >> (32 - m)) as u16;
@@ -145,16 +145,29 @@ pub(super) fn closest_packet<B: BoxTest>(
         } else {
             let (first, count) = leaf_range(cur);
             let blk = bvh.block(first, &mut stack.leaf);
-            while act != 0 {
-                let k = act.trailing_zeros() as usize;
-                act &= act - 1;
-                // `entry` is at most this ray's own entry distance: past its closest hit,
-                // its own test would not enter the leaf.
-                if entry <= best[k].t * TIE_SCALE {
-                    let ray = &rays[k];
-                    let sr = sheared[k].get_or_insert_with(|| ShearedRay::of(ray));
-                    tests += count as u64;
-                    closest_in_block(bvh, isa, blk, count, sr, ray, &mut best[k]);
+            // `entry` is at most each ray's own entry distance: past its closest hit, a ray's
+            // own test would not enter the leaf.
+            let mut todo = act;
+            let mut cull = act;
+            while cull != 0 {
+                let k = cull.trailing_zeros() as usize;
+                cull &= cull - 1;
+                if entry > best[k].t * TIE_SCALE {
+                    todo &= !(1 << k);
+                }
+            }
+            tests += (todo.count_ones() as usize * count) as u64;
+            // (Not in a closure: one compiled out of line would leave the AVX2 context.)
+            if shears.is_none() {
+                let half = m.min(PACKET);
+                shears = Some([isa.packet_shear(&rays[..half]), isa.packet_shear(&rays[half..])]);
+            }
+            let Some(shears) = &shears else { unreachable!("set above") };
+            for (h, p) in shears.iter().enumerate() {
+                let lanes = (todo >> (PACKET * h)) as u32 & 0xff;
+                if lanes != 0 {
+                    let at = PACKET * h;
+                    leaf_rays(bvh, isa, blk, count, p, lanes, &rays[at..], &mut best[at..at + PACKET]);
                 }
             }
             reach = best[..m].iter().fold(f32::NEG_INFINITY, |r, b| r.max(b.t));
@@ -175,5 +188,67 @@ pub(super) fn closest_packet<B: BoxTest>(
                 break;
             }
         }
+    }
+}
+
+/// The leaf tests of the rays `lanes` (bit `k`: `rays[k]`, lane `k` of `p`) in `blk`, a leaf
+/// of `count` primitives, each ray with its own closest hit so far (`best[k]`). Where the
+/// instruction set has the kernel and the rays share their axes, each triangle is filtered
+/// for all the rays at once; the filter's survivors take the exact test ray by ray, in any
+/// order (the closest hit does not depend on it).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn leaf_rays<B: PacketTest>(
+    bvh: &Bvh,
+    isa: B,
+    blk: &Tri4,
+    count: usize,
+    p: &PacketShear,
+    lanes: u32,
+    rays: &[Ray],
+    best: &mut [Best],
+) {
+    let lead = lanes.trailing_zeros() as usize;
+    let mut shared = true;
+    let mut rest = lanes;
+    while rest != 0 {
+        shared &= p.rows[rest.trailing_zeros() as usize] == p.rows[lead];
+        rest &= rest - 1;
+    }
+    let mut lead_shear = *p;
+    if shared {
+        // The kernel reads the axes of lane 0.
+        lead_shear.rows[0] = p.rows[lead];
+        let mut closest = [0f32; PACKET];
+        for (c, b) in closest.iter_mut().zip(best.iter()) {
+            *c = b.t;
+        }
+        for lane in 0..count {
+            let tri = blk.tri_lanes >> lane & 1 != 0;
+            let Some(mut cand) = (if tri { isa.tri_filter_rays(blk, lane, &lead_shear, &closest) } else { Some(lanes) })
+            else {
+                break;
+            };
+            cand &= lanes;
+            while cand != 0 {
+                let k = cand.trailing_zeros() as usize;
+                cand &= cand - 1;
+                let ray = &rays[k];
+                if let Some(h) = lane_hit(bvh, blk, lane, &p.sheared(k, ray), ray, best[k].t) {
+                    best[k].offer(h, blk.ids[lane]);
+                    closest[k] = best[k].t;
+                }
+            }
+            if lane + 1 == count {
+                return;
+            }
+        }
+    }
+    // Ray by ray (no kernel, or rays of different axes).
+    let mut rest = lanes;
+    while rest != 0 {
+        let k = rest.trailing_zeros() as usize;
+        rest &= rest - 1;
+        closest_in_block(bvh, isa, blk, count, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
     }
 }

@@ -59,6 +59,17 @@ pub(super) trait PacketTest: BoxTest {
     fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
         self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
     }
+
+    /// The rays of `p` (bit `k`: lane `k`, whose closest hit so far is at `closest[k]`) that
+    /// may hit triangle `lane` of `blk`: the filter of [`BoxTest::tri_filter`] with one ray
+    /// per lane instead of one triangle per lane. Every lane's axes must be those of lane 0
+    /// (`rows`). None where the instruction set has no such kernel: the caller filters ray
+    /// by ray.
+    #[inline(always)]
+    fn tri_filter_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<u32> {
+        let _ = (blk, lane, p, closest);
+        None
+    }
 }
 
 impl PacketTest for super::boxtest::Scalar {}

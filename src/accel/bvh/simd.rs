@@ -189,6 +189,12 @@ impl PacketTest for Avx2 {
     }
 
     #[inline(always)]
+    fn tri_filter_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<u32> {
+        // SAFETY: `Avx2` exists only if AVX2 was detected; `lane` < 4 indexes the block's rows.
+        Some(unsafe { tri_filter_rays8(blk, lane % 4, p, closest) })
+    }
+
+    #[inline(always)]
     fn packet_box_rays(self, rays: &[Ray]) -> PacketBoxRays {
         match <&[Ray; 8]>::try_from(rays) {
             // SAFETY: `Avx2` exists only if AVX2 was detected.
@@ -714,6 +720,87 @@ unsafe fn shear8(rays: &[Ray; 8]) -> PacketShear {
             out.rows[k] = [16 * kx, 16 * ky, 16 * kz, 0];
         }
         out
+    }
+}
+
+/// [`tri_filter4`]'s operations for triangle `lane` of `blk` and the eight rays of `p`, one
+/// ray per lane (the corner broadcast, the ray's values in its lane, all rays with the axes
+/// of lane 0), with `tend` = `range_end(closest)` per lane: a ray it rejects, the scalar test
+/// rejects.
+///
+/// # Safety
+/// The CPU must have AVX2; `lane` < 4.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn tri_filter_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> u32 {
+    // SAFETY: the caller guarantees AVX2; the loads are unaligned ones of 8 f32 from arrays of
+    // exactly 8; `rows` are 16 * axis with axis < 3, so the corner indices are in bounds.
+    unsafe {
+        let r = &p.rows[0];
+        let (kx, ky, kz) = ((r[0] / 16) as usize % 3, (r[1] / 16) as usize % 3, (r[2] / 16) as usize % 3);
+        // No closures here: one compiled out of line would leave the AVX2 context.
+        let o = [_mm256_loadu_ps(p.org[0].as_ptr()), _mm256_loadu_ps(p.org[1].as_ptr()), _mm256_loadu_ps(p.org[2].as_ptr())];
+        let sh = [_mm256_loadu_ps(p.shear[0].as_ptr()), _mm256_loadu_ps(p.shear[1].as_ptr())];
+        let sz = _mm256_loadu_ps(p.shear[2].as_ptr());
+        let k = (kx, ky, kz);
+        let [ax, ay, az] = sheared_corner8(&blk.c[0], lane, k, o, sh);
+        let [bx, by, bz] = sheared_corner8(&blk.c[1], lane, k, o, sh);
+        let [cx, cy, cz] = sheared_corner8(&blk.c[2], lane, k, o, sh);
+        // From here `filter4_tail` lane for lane, with each ray's own range.
+        let sign = _mm256_set1_ps(-0.0);
+        let t = _mm256_loadu_ps(closest.as_ptr());
+        let tend = _mm256_add_ps(t, _mm256_mul_ps(_mm256_andnot_ps(sign, t), _mm256_set1_ps(8.0 * f32::EPSILON)));
+        let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
+        let v = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
+        let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
+        let zero = _mm256_setzero_ps();
+        let on_edge = _mm256_or_ps(
+            _mm256_or_ps(_mm256_cmp_ps::<_CMP_EQ_OQ>(u, zero), _mm256_cmp_ps::<_CMP_EQ_OQ>(v, zero)),
+            _mm256_cmp_ps::<_CMP_EQ_OQ>(w, zero),
+        );
+        let neg = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_min_ps(_mm256_min_ps(u, v), w), zero);
+        let pos = _mm256_cmp_ps::<_CMP_GT_OQ>(_mm256_max_ps(_mm256_max_ps(u, v), w), zero);
+        let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
+        let det_abs = _mm256_andnot_ps(sign, det);
+        let det_ok = _mm256_and_ps(
+            _mm256_cmp_ps::<_CMP_NEQ_OQ>(det, zero),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(det_abs, _mm256_set1_ps(f32::INFINITY)),
+        );
+        let tt = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(u, _mm256_mul_ps(sz, az)), _mm256_mul_ps(v, _mm256_mul_ps(sz, bz))),
+            _mm256_mul_ps(w, _mm256_mul_ps(sz, cz)),
+        );
+        let tt_s = _mm256_xor_ps(tt, _mm256_and_ps(det, sign));
+        let out_of_range = _mm256_or_ps(
+            _mm256_cmp_ps::<_CMP_LT_OQ>(tt_s, _mm256_mul_ps(_mm256_loadu_ps(p.tmin.as_ptr()), det_abs)),
+            _mm256_cmp_ps::<_CMP_GT_OQ>(tt_s, _mm256_mul_ps(tend, det_abs)),
+        );
+        let accept = _mm256_andnot_ps(_mm256_or_ps(_mm256_and_ps(neg, pos), out_of_range), det_ok);
+        _mm256_movemask_ps(_mm256_or_ps(on_edge, accept)) as u32
+    }
+}
+
+/// Corner `q` (lane `lane` of its rows) sheared for eight rays with axes `(kx, ky, kz)`,
+/// origins `o` (kx, ky, kz coordinates) and shears `sh` (sx, sy): the operations of
+/// [`tri_filter4`]'s corners, one ray per lane.
+///
+/// # Safety
+/// The CPU must have AVX2; `lane` < 4 and the axes < 3.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn sheared_corner8(
+    q: &[[f32; 4]; 3],
+    lane: usize,
+    (kx, ky, kz): (usize, usize, usize),
+    o: [__m256; 3],
+    sh: [__m256; 2],
+) -> [__m256; 3] {
+    // SAFETY: the caller guarantees AVX2; no memory access but the bounds-checked reads.
+    unsafe {
+        let z = _mm256_sub_ps(_mm256_set1_ps(q[kz][lane]), o[2]);
+        let x = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(q[kx][lane]), o[0]), _mm256_mul_ps(sh[0], z));
+        let y = _mm256_sub_ps(_mm256_sub_ps(_mm256_set1_ps(q[ky][lane]), o[1]), _mm256_mul_ps(sh[1], z));
+        [x, y, z]
     }
 }
 

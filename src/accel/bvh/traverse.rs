@@ -88,6 +88,15 @@ impl Best {
         Best { t: tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false }
     }
 
+    /// Takes a hit at `t` (barycentrics `u`, `v`) on primitive `id` if it is closer, or as
+    /// close with a lower id: the same closest hit whatever order the hits come in.
+    #[inline(always)]
+    pub(super) fn offer(&mut self, (t, u, v): (f32, f32, f32), id: u32) {
+        if !self.found || t < self.t || (t == self.t && id < self.prim) {
+            *self = Best { t, prim: id, u, v, found: true };
+        }
+    }
+
     #[inline(always)]
     pub(super) fn hit(&self) -> Option<Hit> {
         self.found.then_some(Hit { t: self.t, prim: self.prim, u: self.u, v: self.v })
@@ -278,11 +287,8 @@ pub(super) fn closest_in_block<B: BoxTest>(
     while cand != 0 {
         let lane = cand.trailing_zeros() as usize;
         cand &= cand - 1;
-        if let Some((t, u, v)) = lane_hit(bvh, blk, lane, sr, ray, best.t) {
-            let id = blk.ids[lane];
-            if !best.found || t < best.t || (t == best.t && id < best.prim) {
-                *best = Best { t, prim: id, u, v, found: true };
-            }
+        if let Some(h) = lane_hit(bvh, blk, lane, sr, ray, best.t) {
+            best.offer(h, blk.ids[lane]);
         }
     }
 }
