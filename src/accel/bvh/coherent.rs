@@ -13,7 +13,7 @@
 use super::Bvh;
 use super::boxtest::{BoxRay, Frustum, TIE_SCALE};
 use super::leaf::Tri4;
-use super::packet::{PACKET, PacketShear, PacketTest};
+use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest};
 use super::traverse::{Best, closest_in_block, lane_hit, prefetch_child};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::TraceCounters;
@@ -72,33 +72,34 @@ impl PacketStack {
 }
 
 /// Closest hits of a packet: `out[k]` for `rays[k]` (at most [`COHERENT`], all joined by
-/// [`packet_len`]), whose box-test values are `brs` and bounds `f`.
+/// [`packet_len`]), whose bounds are `f`.
 ///
-/// At a node with a leaf among the children the packet enters, each ray also takes its own
-/// box test of the node (with its own closest hit), so a leaf is tested only by the rays
-/// that enter it; their children inherit those sets.
+/// At a node with a leaf among the children the packet enters, each such child also takes
+/// the box test of each ray (eight rays at a time, each with its own closest hit), so a leaf
+/// is tested only by the rays that enter it; inner children pass those sets on.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(super) fn closest_packet<B: PacketTest>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
-    brs: &[BoxRay],
     f: &Frustum,
     out: &mut [Option<Hit>],
     counters: &mut TraceCounters,
     stack: &mut PacketStack,
 ) {
     let m = rays.len();
-    debug_assert!((1..=COHERENT).contains(&m) && out.len() == m && brs.len() == m);
+    debug_assert!((1..=COHERENT).contains(&m) && out.len() == m);
     debug_assert!(stack.nodes.len() >= bvh.stack_need + WIDTH);
     counters.rays += m as u64;
     let mut best: [Best; COHERENT] =
         std::array::from_fn(|k| Best::new(rays.get(k).map_or(f32::NEG_INFINITY, |r| r.tmax)));
     // The rays' shears are set up at the first leaf, eight at a time.
     let mut shears: Option<[PacketShear; 2]> = None;
+    // And their box-test values at the first node with leaf children.
+    let mut boxes: Option<[PacketBoxRays; 2]> = None;
     // The largest closest-hit distance of the packet: what a box must be entered within.
-    let mut reach = best[..m].iter().fold(f32::NEG_INFINITY, |r, b| r.max(b.t));
+    let mut reach = farthest(&best[..m]);
     let all = (u32::MAX >> (32 - m)) as u16;
     let (mut sp, mut cur, mut entry, mut act) = (0usize, 0u32, f.tmin, all);
     let (mut visited, mut tests) = (0u64, 0u64);
@@ -113,21 +114,25 @@ pub(super) fn closest_packet<B: PacketTest>(
             if n > 0 {
                 let sets = &mut stack.rays[sp..sp + n];
                 if top[..n].iter().any(|&c| c & LEAF_BIT != 0) {
-                    // Rays per slot, from each ray's own test.
-                    let mut by_slot = [0u16; WIDTH];
-                    let mut todo = act;
-                    while todo != 0 {
-                        let k = todo.trailing_zeros() as usize;
-                        todo &= todo - 1;
-                        let mut tn = [0f32; WIDTH];
-                        let mut hit = isa.test(node, &brs[k], brs[k].octant, best[k].t, &mut tn);
-                        while hit != 0 {
-                            by_slot[hit.trailing_zeros() as usize] |= 1 << k;
-                            hit &= hit - 1;
-                        }
+                    // Rays per child, from each ray's own test, eight rays at a time.
+                    if boxes.is_none() {
+                        let half = m.min(PACKET);
+                        boxes = Some([isa.packet_box_rays(&rays[..half]), isa.packet_box_rays(&rays[half..])]);
                     }
-                    for (set, &slot) in sets.iter_mut().zip(&slots) {
-                        *set = by_slot[slot as usize];
+                    let Some(boxes) = &boxes else { unreachable!("set above") };
+                    sets.fill(0);
+                    for (h, p) in boxes.iter().enumerate() {
+                        let lanes = (act >> (PACKET * h)) as u32 & 0xff;
+                        if lanes != 0 {
+                            let mut closest = [0f32; PACKET];
+                            for (c, b) in closest.iter_mut().zip(&best[PACKET * h..]) {
+                                *c = b.t;
+                            }
+                            for (set, &slot) in sets.iter_mut().zip(&slots) {
+                                let rays = isa.slot_rays(node, slot as usize, p, f.octant, &closest) & lanes;
+                                *set |= (rays << (PACKET * h)) as u16;
+                            }
+                        }
                     }
                 } else {
                     sets.fill(act);
@@ -170,7 +175,7 @@ pub(super) fn closest_packet<B: PacketTest>(
                     leaf_rays(bvh, isa, blk, count, p, lanes, &rays[at..], &mut best[at..at + PACKET]);
                 }
             }
-            reach = best[..m].iter().fold(f32::NEG_INFINITY, |r, b| r.max(b.t));
+            reach = farthest(&best[..m]);
         }
         // Pop the nearest pending child that some ray may still find something closer in.
         loop {
@@ -225,7 +230,8 @@ fn leaf_rays<B: PacketTest>(
         }
         for lane in 0..count {
             let tri = blk.tri_lanes >> lane & 1 != 0;
-            let Some(mut cand) = (if tri { isa.tri_filter_rays(blk, lane, &lead_shear, &closest) } else { Some(lanes) })
+            let Some(mut cand) =
+                (if tri { isa.tri_filter_rays(blk, lane, &lead_shear, &closest) } else { Some(lanes) })
             else {
                 break;
             };
@@ -251,4 +257,16 @@ fn leaf_rays<B: PacketTest>(
         rest &= rest - 1;
         closest_in_block(bvh, isa, blk, count, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
     }
+}
+
+/// The largest closest-hit distance of `best` (none is NaN).
+#[inline(always)]
+fn farthest(best: &[Best]) -> f32 {
+    let mut r = f32::NEG_INFINITY;
+    for b in best {
+        if b.t > r {
+            r = b.t;
+        }
+    }
+    r
 }

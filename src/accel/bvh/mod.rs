@@ -338,17 +338,7 @@ impl Bvh {
                             let mut out = [None; coherent::COHERENT];
                             let f = Frustum::of(&prep[k..k + len]);
                             let packets = packets.get_or_insert_with(|| coherent::PacketStack::new(self));
-                            let brs = &prep[k..k + len];
-                            coherent::closest_packet(
-                                self,
-                                $isa,
-                                &rays[..len],
-                                brs,
-                                &f,
-                                &mut out[..len],
-                                counters,
-                                packets,
-                            );
+                            coherent::closest_packet(self, $isa, &rays[..len], &f, &mut out[..len], counters, packets);
                             for (&i, h) in slot[k..k + len].iter().zip(out) {
                                 hs[i as usize] = h;
                             }

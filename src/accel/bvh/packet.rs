@@ -65,6 +65,23 @@ pub(super) trait PacketTest: BoxTest {
     /// per lane instead of one triangle per lane. Every lane's axes must be those of lane 0
     /// (`rows`). None where the instruction set has no such kernel: the caller filters ray
     /// by ray.
+    /// The rays of `p` (bit `k`: lane `k`, live, direction octant `oct`, closest hit so far
+    /// at `closest[k]`) whose own unfused box test (the [`super::boxtest::Scalar`] one)
+    /// enters child `slot` of `node`: one child for eight rays instead of eight children for
+    /// one ray.
+    #[inline(always)]
+    fn slot_rays(self, node: &Node8, slot: usize, p: &PacketBoxRays, oct: u32, closest: &[f32; PACKET]) -> u32 {
+        let mut rays = 0;
+        for (k, &t) in closest.iter().enumerate() {
+            let b = p.lane(k);
+            if b.live {
+                let mut tnear = [0f32; WIDTH];
+                rays |= (super::boxtest::Scalar.test(node, &b, oct, t, &mut tnear) >> slot & 1) << k;
+            }
+        }
+        rays
+    }
+
     #[inline(always)]
     fn tri_filter_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<u32> {
         let _ = (blk, lane, p, closest);

@@ -189,6 +189,12 @@ impl PacketTest for Avx2 {
     }
 
     #[inline(always)]
+    fn slot_rays(self, node: &Node8, slot: usize, p: &PacketBoxRays, oct: u32, closest: &[f32; PACKET]) -> u32 {
+        // SAFETY: `Avx2` exists only if AVX2 was detected; `slot` < 8 indexes the node's rows.
+        unsafe { slot_rays8(node, slot % WIDTH, p, oct, closest) }
+    }
+
+    #[inline(always)]
     fn tri_filter_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<u32> {
         // SAFETY: `Avx2` exists only if AVX2 was detected; `lane` < 4 indexes the block's rows.
         Some(unsafe { tri_filter_rays8(blk, lane % 4, p, closest) })
@@ -739,7 +745,11 @@ unsafe fn tri_filter_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[
         let r = &p.rows[0];
         let (kx, ky, kz) = ((r[0] / 16) as usize % 3, (r[1] / 16) as usize % 3, (r[2] / 16) as usize % 3);
         // No closures here: one compiled out of line would leave the AVX2 context.
-        let o = [_mm256_loadu_ps(p.org[0].as_ptr()), _mm256_loadu_ps(p.org[1].as_ptr()), _mm256_loadu_ps(p.org[2].as_ptr())];
+        let o = [
+            _mm256_loadu_ps(p.org[0].as_ptr()),
+            _mm256_loadu_ps(p.org[1].as_ptr()),
+            _mm256_loadu_ps(p.org[2].as_ptr()),
+        ];
         let sh = [_mm256_loadu_ps(p.shear[0].as_ptr()), _mm256_loadu_ps(p.shear[1].as_ptr())];
         let sz = _mm256_loadu_ps(p.shear[2].as_ptr());
         let k = (kx, ky, kz);
@@ -777,6 +787,43 @@ unsafe fn tri_filter_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[
         );
         let accept = _mm256_andnot_ps(_mm256_or_ps(_mm256_and_ps(neg, pos), out_of_range), det_ok);
         _mm256_movemask_ps(_mm256_or_ps(on_edge, accept)) as u32
+    }
+}
+
+/// [`PacketTest::slot_rays`]: the unfused slab test of `Scalar` for child `slot` of `node`,
+/// one ray per lane, the same operations per lane (so the same answers).
+///
+/// # Safety
+/// The CPU must have AVX2; `slot` < 8.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn slot_rays8(node: &Node8, slot: usize, p: &PacketBoxRays, oct: u32, closest: &[f32; PACKET]) -> u32 {
+    // SAFETY: the caller guarantees AVX2; the loads are unaligned ones of 8 f32 from arrays of
+    // exactly 8; the plane indices are below 6 (`near`, `far`) and `slot` < 8.
+    unsafe {
+        let org = [
+            _mm256_loadu_ps(p.org[0].as_ptr()),
+            _mm256_loadu_ps(p.org[1].as_ptr()),
+            _mm256_loadu_ps(p.org[2].as_ptr()),
+        ];
+        let inv = [
+            _mm256_loadu_ps(p.inv[0].as_ptr()),
+            _mm256_loadu_ps(p.inv[1].as_ptr()),
+            _mm256_loadu_ps(p.inv[2].as_ptr()),
+        ];
+        let mut t = [_mm256_setzero_ps(); 3];
+        let mut u = [_mm256_setzero_ps(); 3];
+        for axis in 0..3 {
+            let n = _mm256_set1_ps(node.b[near(oct, axis)][slot]);
+            let f = _mm256_set1_ps(node.b[far(oct, axis)][slot]);
+            t[axis] = _mm256_mul_ps(_mm256_sub_ps(n, org[axis]), inv[axis]);
+            u[axis] = _mm256_mul_ps(_mm256_sub_ps(f, org[axis]), inv[axis]);
+        }
+        let enter = _mm256_max_ps(_mm256_max_ps(t[0], t[1]), _mm256_max_ps(t[2], _mm256_loadu_ps(p.tmin.as_ptr())));
+        let exit = _mm256_mul_ps(_mm256_min_ps(_mm256_min_ps(u[0], u[1]), u[2]), _mm256_set1_ps(EXIT_SCALE));
+        let bound = _mm256_mul_ps(_mm256_loadu_ps(closest.as_ptr()), _mm256_set1_ps(TIE_SCALE));
+        let hit = _mm256_and_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit), _mm256_cmp_ps::<_CMP_LE_OQ>(enter, bound));
+        _mm256_movemask_ps(hit) as u32 & p.live
     }
 }
 
