@@ -22,6 +22,13 @@ use crate::geometry::{Hit, Ray};
 /// Rays per packet at most (a 4 x 4 block of pixels, or two pixels of eight samples).
 pub const COHERENT: usize = 16;
 
+/// A set of a packet's rays (bit `k`: ray `k`).
+type Rays = u32;
+const _: () = assert!(COHERENT <= Rays::BITS as usize && COHERENT.is_multiple_of(PACKET));
+
+/// Groups of [`PACKET`] rays in a packet: the SIMD kernels take one group at a time.
+const GROUPS: usize = COHERENT / PACKET;
+
 /// Rays a packet needs at least: the packet's node test costs about two single-ray tests.
 pub const MIN_RAYS: usize = 4;
 
@@ -59,7 +66,7 @@ pub(super) fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
 pub(super) struct PacketStack {
     nodes: Vec<u32>,
     dists: Vec<f32>,
-    rays: Vec<u16>,
+    rays: Vec<Rays>,
     /// The block of the leaf being tested, when the tree's leaves index their corners.
     leaf: Tri4,
 }
@@ -95,12 +102,12 @@ pub(super) fn closest_packet<B: PacketTest>(
     let mut best: [Best; COHERENT] =
         std::array::from_fn(|k| Best::new(rays.get(k).map_or(f32::NEG_INFINITY, |r| r.tmax)));
     // The rays' shears are set up at the first leaf, eight at a time.
-    let mut shears: Option<[PacketShear; 2]> = None;
+    let mut shears: Option<[PacketShear; GROUPS]> = None;
     // And their box-test values at the first node with leaf children.
-    let mut boxes: Option<[PacketBoxRays; 2]> = None;
+    let mut boxes: Option<[PacketBoxRays; GROUPS]> = None;
     // The largest closest-hit distance of the packet: what a box must be entered within.
     let mut reach = farthest(&best[..m]);
-    let all = (u32::MAX >> (32 - m)) as u16;
+    let all = Rays::MAX >> (Rays::BITS as usize - m);
     let (mut sp, mut cur, mut entry, mut act) = (0usize, 0u32, f.tmin, all);
     let (mut visited, mut tests) = (0u64, 0u64);
     let mut slots = [0u32; WIDTH];
@@ -116,13 +123,16 @@ pub(super) fn closest_packet<B: PacketTest>(
                 if top[..n].iter().any(|&c| c & LEAF_BIT != 0) {
                     // Rays per child, from each ray's own test, eight rays at a time.
                     if boxes.is_none() {
-                        let half = m.min(PACKET);
-                        boxes = Some([isa.packet_box_rays(&rays[..half]), isa.packet_box_rays(&rays[half..])]);
+                        let mut b = [PacketBoxRays::EMPTY; GROUPS];
+                        for (g, b) in b.iter_mut().enumerate() {
+                            *b = isa.packet_box_rays(eighth(rays, g));
+                        }
+                        boxes = Some(b);
                     }
                     let Some(boxes) = &boxes else { unreachable!("set above") };
                     sets.fill(0);
                     for (h, p) in boxes.iter().enumerate() {
-                        let lanes = (act >> (PACKET * h)) as u32 & 0xff;
+                        let lanes = act >> (PACKET * h) & 0xff;
                         if lanes != 0 {
                             let mut closest = [0f32; PACKET];
                             for (c, b) in closest.iter_mut().zip(&best[PACKET * h..]) {
@@ -130,7 +140,7 @@ pub(super) fn closest_packet<B: PacketTest>(
                             }
                             for (set, &slot) in sets.iter_mut().zip(&slots) {
                                 let rays = isa.slot_rays(node, slot as usize, p, f.octant, &closest) & lanes;
-                                *set |= (rays << (PACKET * h)) as u16;
+                                *set |= (rays as Rays) << (PACKET * h);
                             }
                         }
                     }
@@ -164,12 +174,15 @@ pub(super) fn closest_packet<B: PacketTest>(
             tests += (todo.count_ones() as usize * count) as u64;
             // (Not in a closure: one compiled out of line would leave the AVX2 context.)
             if shears.is_none() {
-                let half = m.min(PACKET);
-                shears = Some([isa.packet_shear(&rays[..half]), isa.packet_shear(&rays[half..])]);
+                let mut p = [PacketShear::EMPTY; GROUPS];
+                for (g, p) in p.iter_mut().enumerate() {
+                    *p = isa.packet_shear(eighth(rays, g));
+                }
+                shears = Some(p);
             }
             let Some(shears) = &shears else { unreachable!("set above") };
             for (h, p) in shears.iter().enumerate() {
-                let lanes = (todo >> (PACKET * h)) as u32 & 0xff;
+                let lanes = todo >> (PACKET * h) & 0xff;
                 if lanes != 0 {
                     let at = PACKET * h;
                     leaf_rays(bvh, isa, blk, count, p, lanes, &rays[at..], &mut best[at..at + PACKET]);
@@ -269,4 +282,11 @@ fn farthest(best: &[Best]) -> f32 {
         }
     }
     r
+}
+
+/// Rays `8 g ..` of `rays`, at most eight (empty past the end).
+#[inline(always)]
+fn eighth(rays: &[Ray], g: usize) -> &[Ray] {
+    let start = (PACKET * g).min(rays.len());
+    &rays[start..(start + PACKET).min(rays.len())]
 }
