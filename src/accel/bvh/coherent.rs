@@ -290,3 +290,182 @@ fn eighth(rays: &[Ray], g: usize) -> &[Ray] {
     let start = (PACKET * g).min(rays.len());
     &rays[start..(start + PACKET).min(rays.len())]
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::bvh::boxtest::{BoxTest, Scalar};
+    use crate::accel::bvh::wide::Node8;
+    use crate::accel::triangle::{ShearedRay, intersect_sheared};
+    use glam::Vec3;
+
+    struct Rng(u64);
+
+    impl Rng {
+        /// Uniform in [-0.5, 0.5).
+        fn next(&mut self) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            (self.0 >> 40) as f32 / (1u64 << 24) as f32 - 0.5
+        }
+
+        fn vec(&mut self) -> Vec3 {
+            Vec3::new(self.next(), self.next(), self.next())
+        }
+    }
+
+    /// Packets of up to 16 rays from one origin around a central direction, cut at the first
+    /// ray that may not join: random ones, and rays along an axis (exactly, and tilted by
+    /// 1e-30, 1e-8 and 1e-4, so reciprocals of f32::MAX and huge finite ones) from origins on
+    /// the planes of the boxes' faces; ranges of every kind.
+    fn packets(rng: &mut Rng) -> Vec<Vec<Ray>> {
+        let mut out = Vec::new();
+        for i in 0..600 {
+            let axis_parallel = i % 3 == 0;
+            let origin = if axis_parallel { (rng.vec() * 8.0).round() * 0.25 } else { rng.vec() * 6.0 };
+            let centre = if axis_parallel {
+                let mut d = [0.0; 3];
+                d[i % 4 % 3] = if i % 2 == 0 { 1.0 } else { -1.0 };
+                Vec3::from(d)
+            } else {
+                rng.vec() * 3.0 - origin
+            };
+            let spread = [0.0, 1e-30, 1e-8, 1e-4, 1e-3][i % 5];
+            let rays: Vec<Ray> = (0..16)
+                .map(|k| {
+                    let dir =
+                        centre + rng.vec() * spread * centre.length() + rng.vec().abs() * spread * centre.signum();
+                    let (tmin, tmax) = [(0.0, f32::INFINITY), (0.0, 1.0 + rng.next()), (0.5, 4.0)][k % 3];
+                    Ray { origin, dir, tmin, tmax }
+                })
+                .collect();
+            let brs: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+            let n = brs.iter().take_while(|b| Frustum::joins(&brs[0], b)).count();
+            if n >= 2 {
+                out.push(rays[..n].to_vec());
+            }
+        }
+        out
+    }
+
+    /// Eight boxes around the origin, some flat on an axis, one empty.
+    fn node(rng: &mut Rng) -> Node8 {
+        let mut b = [[0f32; WIDTH]; 6];
+        for slot in 0..WIDTH {
+            let c = (rng.vec() * 8.0).round() * 0.25;
+            for axis in 0..3 {
+                let half = if (slot + axis) % 5 == 0 { 0.0 } else { (rng.next() + 0.6) * 0.5 };
+                b[2 * axis][slot] = c[axis] - half;
+                b[2 * axis + 1][slot] = c[axis] + half;
+            }
+        }
+        for (plane, row) in b.iter_mut().enumerate() {
+            row[3] = if plane % 2 == 0 { f32::INFINITY } else { f32::NEG_INFINITY };
+        }
+        let mut node = Node8 { b, child: std::array::from_fn(|k| 100 + k as u32), perm: [0; WIDTH] };
+        node.set_order();
+        node
+    }
+
+    /// The packet's node test enters every box any of its rays' own scalar tests enters, no
+    /// later than that ray does, with the packet's largest range; and the AVX2 kernels give
+    /// the scalar ones' answers (visit, and eight rays against one child).
+    #[test]
+    fn the_frustum_enters_every_box_its_rays_enter() {
+        let mut rng = Rng(0x2545_f491_4f6c_dd1d);
+        let (mut entered, mut tried) = (0, 0);
+        for rays in packets(&mut rng) {
+            let brs: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
+            let f = Frustum::of(&brs);
+            let reach = rays.iter().fold(f32::NEG_INFINITY, |r, ray| r.max(ray.tmax));
+            tried += 1;
+            for _ in 0..8 {
+                let node = node(&mut rng);
+                let (mut nodes, mut dists, mut slots) = ([0u32; WIDTH], [0f32; WIDTH], [0u32; WIDTH]);
+                let n = Scalar.visit_frustum(&node, &f, reach, &mut nodes, &mut dists, &mut slots) as usize;
+                let mut at = [None; WIDTH];
+                for j in 0..n {
+                    assert_eq!(nodes[j], node.child[slots[j] as usize]);
+                    at[slots[j] as usize] = Some(dists[j]);
+                }
+                for (k, (ray, br)) in rays.iter().zip(&brs).enumerate() {
+                    let mut tnear = [0f32; WIDTH];
+                    let mut mask = Scalar.test(&node, br, br.octant, ray.tmax, &mut tnear);
+                    while mask != 0 {
+                        let slot = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        entered += 1;
+                        let d = at[slot]
+                            .unwrap_or_else(|| panic!("ray {k} of {rays:?} enters slot {slot}, the packet not"));
+                        assert!(d <= tnear[slot], "ray {k} enters slot {slot} at {}, the packet at {d}", tnear[slot]);
+                    }
+                }
+                #[cfg(target_arch = "x86_64")]
+                if let Some(avx) = crate::cpu::Avx2::new() {
+                    let (mut n2, mut d2, mut s2) = ([0u32; WIDTH], [0f32; WIDTH], [0u32; WIDTH]);
+                    let m =
+                        crate::cpu::with_avx2(avx, |t| t.visit_frustum(&node, &f, reach, &mut n2, &mut d2, &mut s2));
+                    assert_eq!(m as usize, n);
+                    assert_eq!((&n2[..n], &s2[..n]), (&nodes[..n], &slots[..n]));
+                    assert_eq!(d2.map(f32::to_bits)[..n], dists.map(f32::to_bits)[..n]);
+                    for group in rays.chunks(PACKET) {
+                        let p = Scalar.packet_box_rays(group);
+                        let closest: [f32; PACKET] = std::array::from_fn(|k| group.get(k).map_or(0.0, |r| r.tmax));
+                        for slot in 0..WIDTH {
+                            let want = Scalar.slot_rays(&node, slot, &p, f.octant, &closest);
+                            let got = crate::cpu::with_avx2(avx, |t| t.slot_rays(&node, slot, &p, f.octant, &closest));
+                            assert_eq!(got, want, "slot {slot} of {group:?}");
+                        }
+                    }
+                }
+            }
+        }
+        assert!(tried > 300 && entered > 10_000, "too little to compare: {tried} packets, {entered} entries");
+    }
+
+    /// The eight-ray triangle filter keeps every ray the scalar watertight test hits (each
+    /// with its own range), on triangles around the packet's rays, sharing edges and corners.
+    #[test]
+    fn the_eight_ray_filter_keeps_every_scalar_hit() {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(avx) = crate::cpu::Avx2::new() {
+            let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+            let mut hits = 0;
+            for rays in packets(&mut rng) {
+                for group in rays.chunks(PACKET) {
+                    let p = Scalar.packet_shear(group);
+                    if p.rows[..group.len()].iter().any(|r| *r != p.rows[0]) {
+                        continue;
+                    }
+                    // A fan of four triangles around a point the rays pass near.
+                    let centre = group[0].origin + group[0].dir * (1.0 + rng.next());
+                    let scale = (group[0].dir.length() * 0.05).max(1e-3);
+                    let ring: Vec<Vec3> = (0..5).map(|_| centre + rng.vec() * scale).collect();
+                    let mut blk = Tri4 { tri_lanes: 0b1111, ids: [0, 1, 2, 3], ..Tri4::default() };
+                    for lane in 0..4 {
+                        for (c, v) in [centre, ring[lane], ring[lane + 1]].into_iter().enumerate() {
+                            for axis in 0..3 {
+                                blk.c[c][axis][lane] = v[axis];
+                            }
+                        }
+                    }
+                    let closest: [f32; PACKET] = std::array::from_fn(|k| group.get(k).map_or(0.0, |r| r.tmax));
+                    for lane in 0..4 {
+                        let kept = crate::cpu::with_avx2(avx, |t| t.tri_filter_rays(&blk, lane, &p, &closest))
+                            .expect("the AVX2 kernel");
+                        for (k, ray) in group.iter().enumerate() {
+                            let corner = |c: usize| Vec3::new(blk.c[c][0][lane], blk.c[c][1][lane], blk.c[c][2][lane]);
+                            let sr = ShearedRay::of(ray);
+                            if intersect_sheared(&sr, ray.tmin, ray.tmax, corner(0), corner(1), corner(2)).is_some() {
+                                hits += 1;
+                                assert!(kept >> k & 1 != 0, "ray {k} of {group:?} hits triangle {lane}, filtered out");
+                            }
+                        }
+                    }
+                }
+            }
+            assert!(hits > 2000, "too few hits to compare: {hits}");
+        }
+    }
+}
