@@ -374,7 +374,7 @@ mod tests {
     #[test]
     fn the_frustum_enters_every_box_its_rays_enter() {
         let mut rng = Rng(0x2545_f491_4f6c_dd1d);
-        let (mut entered, mut tried) = (0, 0);
+        let (mut entered, mut tried, mut ties) = (0, 0, 0);
         for rays in packets(&mut rng) {
             let brs: Vec<BoxRay> = rays.iter().map(BoxRay::new).collect();
             let f = Frustum::of(&brs);
@@ -411,17 +411,35 @@ mod tests {
                     assert_eq!(d2.map(f32::to_bits)[..n], dists.map(f32::to_bits)[..n]);
                     for group in rays.chunks(PACKET) {
                         let p = Scalar.packet_box_rays(group);
-                        let closest: [f32; PACKET] = std::array::from_fn(|k| group.get(k).map_or(0.0, |r| r.tmax));
                         for slot in 0..WIDTH {
-                            let want = Scalar.slot_rays(&node, slot, &p, f.octant, &closest);
-                            let got = crate::cpu::with_avx2(avx, |t| t.slot_rays(&node, slot, &p, f.octant, &closest));
-                            assert_eq!(got, want, "slot {slot} of {group:?}");
+                            // Each ray's own range, and ranges ending just before its entry
+                            // (which only the tie margin lets in).
+                            let entry = |k: usize| {
+                                let (b, mut tnear) = (p.lane(k), [0f32; WIDTH]);
+                                Scalar.test(&node, &b, b.octant, f32::INFINITY, &mut tnear);
+                                tnear[slot] * (1.0 - 1.0 / 1048576.0)
+                            };
+                            for tie in [false, true] {
+                                let closest: [f32; PACKET] = std::array::from_fn(|k| match group.get(k) {
+                                    Some(r) if !tie => r.tmax,
+                                    Some(_) => entry(k),
+                                    None => 0.0,
+                                });
+                                let want = Scalar.slot_rays(&node, slot, &p, f.octant, &closest);
+                                let got =
+                                    crate::cpu::with_avx2(avx, |t| t.slot_rays(&node, slot, &p, f.octant, &closest));
+                                assert_eq!(got, want, "slot {slot} of {group:?} up to {closest:?}");
+                                ties += (tie && want != 0) as usize;
+                            }
                         }
                     }
                 }
             }
         }
-        assert!(tried > 300 && entered > 10_000, "too little to compare: {tried} packets, {entered} entries");
+        assert!(
+            tried > 300 && entered > 10_000 && ties > 1000,
+            "too little to compare: {tried} packets, {entered} entries, {ties} ties"
+        );
     }
 
     /// The eight-ray triangle filter keeps every ray the scalar watertight test hits (each
@@ -450,16 +468,29 @@ mod tests {
                             }
                         }
                     }
-                    let closest: [f32; PACKET] = std::array::from_fn(|k| group.get(k).map_or(0.0, |r| r.tmax));
                     for lane in 0..4 {
-                        let kept = crate::cpu::with_avx2(avx, |t| t.tri_filter_rays(&blk, lane, &p, &closest))
-                            .expect("the AVX2 kernel");
-                        for (k, ray) in group.iter().enumerate() {
-                            let corner = |c: usize| Vec3::new(blk.c[c][0][lane], blk.c[c][1][lane], blk.c[c][2][lane]);
-                            let sr = ShearedRay::of(ray);
-                            if intersect_sheared(&sr, ray.tmin, ray.tmax, corner(0), corner(1), corner(2)).is_some() {
-                                hits += 1;
-                                assert!(kept >> k & 1 != 0, "ray {k} of {group:?} hits triangle {lane}, filtered out");
+                        let corner = |c: usize| Vec3::new(blk.c[c][0][lane], blk.c[c][1][lane], blk.c[c][2][lane]);
+                        let test = |ray: &Ray, tmax: f32| {
+                            intersect_sheared(&ShearedRay::of(ray), ray.tmin, tmax, corner(0), corner(1), corner(2))
+                        };
+                        // Each ray's own range, and ranges ending exactly at its hit (a tie
+                        // with a hit found before).
+                        for tie in [false, true] {
+                            let closest: [f32; PACKET] = std::array::from_fn(|k| match group.get(k) {
+                                Some(r) if tie => test(r, r.tmax).map_or(r.tmax, |h| h.0),
+                                Some(r) => r.tmax,
+                                None => 0.0,
+                            });
+                            let kept = crate::cpu::with_avx2(avx, |t| t.tri_filter_rays(&blk, lane, &p, &closest))
+                                .expect("the AVX2 kernel");
+                            for (k, ray) in group.iter().enumerate() {
+                                if test(ray, closest[k]).is_some() {
+                                    hits += 1;
+                                    assert!(
+                                        kept >> k & 1 != 0,
+                                        "ray {k} of {group:?} hits triangle {lane} by {closest:?}"
+                                    );
+                                }
                             }
                         }
                     }
