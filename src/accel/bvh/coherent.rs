@@ -350,6 +350,7 @@ mod tests {
     }
 
     /// Eight boxes around the origin, some flat on an axis, one empty.
+    #[allow(clippy::needless_range_loop)]
     fn node(rng: &mut Rng) -> Node8 {
         let mut b = [[0f32; WIDTH]; 6];
         for slot in 0..WIDTH {
