@@ -18,7 +18,8 @@ pub struct TraceCounters {
     pub rays: u64,
     /// Ray–primitive intersection tests.
     pub prim_tests: u64,
-    /// Acceleration-structure nodes visited.
+    /// Acceleration-structure nodes visited; a packet's visit counts once (one test for all of
+    /// its rays), so coherent rays report fewer nodes per ray than they would alone.
     pub nodes: u64,
 }
 
