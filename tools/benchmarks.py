@@ -10,7 +10,7 @@ Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
            wavepath as an EXTRA_PEER (`wavepath rays trace`); several passes, ratios per pass
   e2e      whole renders against Mitsuba 3 at equal error (../shared/peers/e2e/run.sh)
   large    meshes at the size users have: Lucy subdivided (`wavepath subdivide`) to 1.6M and
-           6.4M triangles (25.6M with --large-levels 2,3,4): load, BVH build and peak memory
+           6.4M triangles (100k converted and 25.6M with --large-levels 0,2,3,4): load, BVH build and peak memory
            beside Embree's build (medium and high quality) on the same triangles, alternating
            fresh processes
 
@@ -246,6 +246,11 @@ def large_renders(args, scenes_dir, work):
     return [{"scene": scene, "flags": flags, "level": level, "runs": runs}]
 
 
+def tri_count(n):
+    """A triangle count as a table shows it: 100k, 1.6M."""
+    return f"{n / 1e3:.0f}k" if n < 1e6 else f"{n / 1e6:.1f}M"
+
+
 def md_large(args, part):
     med = statistics.median
     out = ["## Large meshes\n"]
@@ -269,12 +274,12 @@ def md_large(args, part):
         eh = [x.get("embree_high_s") for x in r]
         ratios = [x["embree_medium_s"] / x["build_s"] for x in r if "embree_medium_s" in x]
         erss = [x["embree_medium_rss"] for x in r if "embree_medium_rss" in x]
-        out.append(f"| {tris / 1e6:.1f}M | {row['bytes'] / 1e6:.0f} | {load:.3f} | {row['bytes'] / load / 1e9:.2f} | "
-                   f"{med([x['build_s'] for x in r]):.2f} | "
-                   + (f"{med(em):.2f} | {med(eh):.2f} | {', '.join(f'{x:.2f}' for x in ratios)} | " if ratios else "- | - | - | ")
+        out.append(f"| {tri_count(tris)} | {row['bytes'] / 1e6:.0f} | {load:.3f} | {row['bytes'] / load / 1e9:.2f} | "
+                   f"{med([x['build_s'] for x in r]):.3g} | "
+                   + (f"{med(em):.3g} | {med(eh):.3g} | {', '.join(f'{x:.2f}' for x in ratios)} | " if ratios else "- | - | - | ")
                    + f"{rss / 2 ** 30:.2f} | {rss / tris:.0f} | " + (f"{med(erss) / 2 ** 30:.2f} |" if erss else "- |"))
     out.append("")
-    out.append(f"Command: `tools/benchmarks.sh --parts large` (levels {','.join(map(str, args.large_levels))}).  ")
+    out.append(f"Command: `tools/benchmarks.sh --parts large --large-levels {','.join(map(str, args.large_levels))}`.  ")
     out.append(f"Machine: {MACHINE['cpu']}, {NCPU} cores; load average {part['load_before']:.2f} before, "
                f"{part['load_after']:.2f} after; {part['date']}.\n")
     for r in part.get("renders", []):
@@ -614,7 +619,7 @@ def main(argv):
     ap.add_argument("--bin", default=os.environ.get("WAVEPATH", "target/release/wavepath"),
                     help="wavepath binary (default: $WAVEPATH or target/release/wavepath)")
     ap.add_argument("--parts", default="renders,peers", help="comma list of renders, peers, e2e, large")
-    ap.add_argument("--large-levels", default="2,3", help="large: subdivision levels of Lucy 100k (4: 25.6M)")
+    ap.add_argument("--large-levels", default="2,3", help="large: subdivision levels of Lucy 100k (0: converted as it is; 4: 25.6M)")
     ap.add_argument("--e2e", action="store_true", help="also run the e2e part (same as adding it to --parts)")
     ap.add_argument("--quick", action="store_true",
                     help="a quick look (~3 min): fewer samples, 1 round, 1 peers pass, 3 reps")

@@ -68,8 +68,9 @@ pub struct SubdivideArgs {
     /// Output file (.ply, binary little endian).
     #[arg(value_name = "OUT")]
     pub output: PathBuf,
-    /// Levels: each multiplies the triangles by 4.
-    #[arg(short = 'n', value_name = "LEVELS", value_parser = clap::value_parser!(u32).range(1..=12))]
+    /// Levels: each multiplies the triangles by 4 (0 writes the mesh as it is: a conversion to
+    /// binary PLY, so that every size of a series is read by the same loader).
+    #[arg(short = 'n', value_name = "LEVELS", value_parser = clap::value_parser!(u32).range(0..=12))]
     pub levels: u32,
 }
 

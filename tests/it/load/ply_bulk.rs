@@ -257,6 +257,12 @@ fn subdivide_command_writes_meshes_that_read_back_exactly() {
     let out = d.join("s2.ply");
     let o = run_wavepath(["subdivide", d.join("s.obj").to_str().unwrap(), out.to_str().unwrap(), "-n", "2"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // No levels: the source mesh itself, converted.
+    let same = d.join("s0.ply");
+    let o = run_wavepath(["subdivide", d.join("s.obj").to_str().unwrap(), same.to_str().unwrap(), "-n", "0"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let got = parse(&std::fs::read(&same).unwrap()).unwrap();
+    assert_eq!((&got.positions, &got.triangles), (&src.positions, &src.triangles));
     let got = parse(&std::fs::read(&out).unwrap()).unwrap();
     let (p, t) = wavepath::scene::subdivide::subdivide(&src.positions, &src.triangles, 2).unwrap();
     assert_eq!((&got.positions, &got.triangles), (&p, &t));
