@@ -186,14 +186,15 @@ def part_large(args, scenes_dir, peers_dir):
             subprocess.run([args.bin, "rays", "dump", "--kind", "primary", "--out", rays, "-r", "64", "48", ply],
                            check=True, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         obj = os.path.splitext(ply)[0] + ".obj"
-        if embree and not os.path.exists(obj):
+        if not os.path.exists(obj):
             ply_to_obj(ply, obj)
-        row = {"ply": ply, "bytes": os.path.getsize(ply), "runs": []}
+        row = {"ply": ply, "bytes": os.path.getsize(ply), "obj_bytes": os.path.getsize(obj), "runs": []}
         for rnd in range(args.rounds):
             wait_quiet(args.wait_quiet)
             info = json.loads(peak_rss([args.bin, "info", "--json", ply])[0])
+            obj_info = json.loads(peak_rss([args.bin, "info", "--json", obj])[0])
             out, rss = peak_rss([args.bin, "rays", "trace", ply, rays, str(args.threads), "1"])
-            run = {"round": rnd, "load_s": info["load_s"], "triangles": info["triangles"],
+            run = {"round": rnd, "load_s": info["load_s"], "obj_load_s": obj_info["load_s"], "triangles": info["triangles"],
                    "build_s": json.loads(out)["build_s"], "rss": rss}
             if embree:
                 for q in ("medium", "high"):
@@ -256,25 +257,28 @@ def md_large(args, part):
     out = ["## Large meshes\n"]
     out.append(f"`{part['source']}` subdivided by `wavepath subdivide` (midpoints, shared edges: the same "
                f"surface) into binary PLY. Load: `wavepath info --json` `load_s` (read, parse, validate, "
-               f"from the page cache). Build: `wavepath rays trace MESH RAYS {args.threads} 1` `build_s` "
+               f"from the page cache, on all cores), of the PLY and of the same mesh as OBJ (written by "
+               f"this script, `%.9g` coordinates). Build: `wavepath rays trace MESH RAYS {args.threads} 1` `build_s` "
                f"(8-wide BVH, {args.threads} threads) and the Embree peer's `build_s` on the same triangles "
                f"(OBJ), `--quality medium` and `high`; wavepath's leaves in the default layout (corners below 16M "
                f"primitives, packed from there). Peak: the whole process's resident memory (the Embree "
                f"peer's includes its own OBJ arrays). Medians of {args.rounds} rounds of fresh processes, run "
                f"in turn; the ratio is Embree medium's build time over wavepath's per round (> 1: wavepath "
                f"builds faster).\n")
-    cols = "| triangles | PLY MB | load s | load GB/s | build s | embree medium s | embree high s | ratio vs medium (per round) | peak GiB | B/tri | embree peak GiB |"
-    out += [cols, "|--:|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|"]
+    cols = "| triangles | PLY MB | load s | load GB/s | OBJ MB | OBJ load s | OBJ MB/s | build s | embree medium s | embree high s | ratio vs medium (per round) | peak GiB | B/tri | embree peak GiB |"
+    out += [cols, "|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|"]
     for row in part["rows"]:
         r = row["runs"]
         tris = r[0]["triangles"]
         load = med([x["load_s"] for x in r])
+        obj_load = med([x["obj_load_s"] for x in r])
         rss = med([x["rss"] for x in r])
         em = [x.get("embree_medium_s") for x in r]
         eh = [x.get("embree_high_s") for x in r]
         ratios = [x["embree_medium_s"] / x["build_s"] for x in r if "embree_medium_s" in x]
         erss = [x["embree_medium_rss"] for x in r if "embree_medium_rss" in x]
         out.append(f"| {tri_count(tris)} | {row['bytes'] / 1e6:.0f} | {load:.3f} | {row['bytes'] / load / 1e9:.2f} | "
+                   f"{row['obj_bytes'] / 1e6:.0f} | {obj_load:.3f} | {row['obj_bytes'] / obj_load / 1e6:.0f} | "
                    f"{med([x['build_s'] for x in r]):.3g} | "
                    + (f"{med(em):.3g} | {med(eh):.3g} | {', '.join(f'{x:.2f}' for x in ratios)} | " if ratios else "- | - | - | ")
                    + f"{rss / 2 ** 30:.2f} | {rss / tris:.0f} | " + (f"{med(erss) / 2 ** 30:.2f} |" if erss else "- |"))
