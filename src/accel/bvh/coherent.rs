@@ -105,8 +105,11 @@ pub(super) fn closest_packet<B: PacketTest>(
     let mut shears: Option<[PacketShear; GROUPS]> = None;
     // And their box-test values at the first node with leaf children.
     let mut boxes: Option<[PacketBoxRays; GROUPS]> = None;
+    // Each ray's closest-hit distance so far, kept beside `best` for the eight-ray kernels
+    // (-inf past the packet's rays: they enter nothing).
+    let mut closest: [f32; COHERENT] = std::array::from_fn(|k| best[k].t);
     // The largest closest-hit distance of the packet: what a box must be entered within.
-    let mut reach = farthest(&best[..m]);
+    let mut reach = farthest(&closest);
     let all = Rays::MAX >> (Rays::BITS as usize - m);
     let (mut sp, mut cur, mut entry, mut act) = (0usize, 0u32, f.tmin, all);
     let (mut visited, mut tests) = (0u64, 0u64);
@@ -134,12 +137,9 @@ pub(super) fn closest_packet<B: PacketTest>(
                     for (h, p) in boxes.iter().enumerate() {
                         let lanes = act >> (PACKET * h) & 0xff;
                         if lanes != 0 {
-                            let mut closest = [0f32; PACKET];
-                            for (c, b) in closest.iter_mut().zip(&best[PACKET * h..]) {
-                                *c = b.t;
-                            }
+                            let closest = eighth_of(&closest, h);
                             for (set, &slot) in sets.iter_mut().zip(&slots) {
-                                let rays = isa.slot_rays(node, slot as usize, p, f.octant, &closest) & lanes;
+                                let rays = isa.slot_rays(node, slot as usize, p, f.octant, closest) & lanes;
                                 *set |= (rays as Rays) << (PACKET * h);
                             }
                         }
@@ -160,17 +160,7 @@ pub(super) fn closest_packet<B: PacketTest>(
         } else {
             let (first, count) = leaf_range(cur);
             let blk = bvh.block(first, &mut stack.leaf);
-            // `entry` is at most each ray's own entry distance: past its closest hit, a ray's
-            // own test would not enter the leaf.
-            let mut todo = act;
-            let mut cull = act;
-            while cull != 0 {
-                let k = cull.trailing_zeros() as usize;
-                cull &= cull - 1;
-                if entry > best[k].t * TIE_SCALE {
-                    todo &= !(1 << k);
-                }
-            }
+            let todo = act & within(entry, &closest);
             tests += (todo.count_ones() as usize * count) as u64;
             // (Not in a closure: one compiled out of line would leave the AVX2 context.)
             if shears.is_none() {
@@ -185,10 +175,11 @@ pub(super) fn closest_packet<B: PacketTest>(
                 let lanes = todo >> (PACKET * h) & 0xff;
                 if lanes != 0 {
                     let at = PACKET * h;
-                    leaf_rays(bvh, isa, blk, count, p, lanes, &rays[at..], &mut best[at..at + PACKET]);
+                    let closest = (&mut closest[at..at + PACKET]).try_into().expect("eight values");
+                    leaf_rays(bvh, isa, blk, count, p, lanes, &rays[at..], &mut best[at..at + PACKET], closest);
                 }
             }
-            reach = farthest(&best[..m]);
+            reach = farthest(&closest);
         }
         // Pop the nearest pending child that some ray may still find something closer in.
         loop {
@@ -213,7 +204,7 @@ pub(super) fn closest_packet<B: PacketTest>(
 /// of `count` primitives, each ray with its own closest hit so far (`best[k]`). Where the
 /// instruction set has the kernel and the rays share their axes, each triangle is filtered
 /// for all the rays at once; the filter's survivors take the exact test ray by ray, in any
-/// order (the closest hit does not depend on it).
+/// order (the closest hit does not depend on it). `closest[k]` follows `best[k].t`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn leaf_rays<B: PacketTest>(
@@ -225,6 +216,7 @@ fn leaf_rays<B: PacketTest>(
     lanes: u32,
     rays: &[Ray],
     best: &mut [Best],
+    closest: &mut [f32; PACKET],
 ) {
     let lead = lanes.trailing_zeros() as usize;
     let mut shared = true;
@@ -237,14 +229,9 @@ fn leaf_rays<B: PacketTest>(
     if shared {
         // The kernel reads the axes of lane 0.
         lead_shear.rows[0] = p.rows[lead];
-        let mut closest = [0f32; PACKET];
-        for (c, b) in closest.iter_mut().zip(best.iter()) {
-            *c = b.t;
-        }
         for lane in 0..count {
             let tri = blk.tri_lanes >> lane & 1 != 0;
-            let Some(mut cand) =
-                (if tri { isa.tri_filter_rays(blk, lane, &lead_shear, &closest) } else { Some(lanes) })
+            let Some(mut cand) = (if tri { isa.tri_filter_rays(blk, lane, &lead_shear, closest) } else { Some(lanes) })
             else {
                 break;
             };
@@ -269,19 +256,38 @@ fn leaf_rays<B: PacketTest>(
         let k = rest.trailing_zeros() as usize;
         rest &= rest - 1;
         closest_in_block(bvh, isa, blk, count, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
+        closest[k] = best[k].t;
     }
 }
 
-/// The largest closest-hit distance of `best` (none is NaN).
+/// The rays that may still find a closer hit in a box the packet enters at `entry` (bit `k`:
+/// ray `k`): `entry` is at most each ray's own entry distance, so past a ray's closest hit
+/// (with the box test's tie margin) its own test would not enter the box.
 #[inline(always)]
-fn farthest(best: &[Best]) -> f32 {
+fn within(entry: f32, closest: &[f32; COHERENT]) -> Rays {
+    let mut m = 0;
+    for (k, &t) in closest.iter().enumerate() {
+        m |= ((entry <= t * TIE_SCALE) as Rays) << k;
+    }
+    m
+}
+
+/// The largest closest-hit distance of the packet (none is NaN).
+#[inline(always)]
+fn farthest(closest: &[f32; COHERENT]) -> f32 {
     let mut r = f32::NEG_INFINITY;
-    for b in best {
-        if b.t > r {
-            r = b.t;
+    for &t in closest {
+        if t > r {
+            r = t;
         }
     }
     r
+}
+
+/// Values `8 h .. 8 h + 8` of a packet's per-ray values.
+#[inline(always)]
+fn eighth_of(v: &[f32; COHERENT], h: usize) -> &[f32; PACKET] {
+    v[PACKET * h..PACKET * (h + 1)].try_into().expect("eight values")
 }
 
 /// Rays `8 g ..` of `rays`, at most eight (empty past the end).
