@@ -108,20 +108,29 @@ impl Scene {
 
     /// Axis-aligned bounds of all geometry (triangles and spheres); `None` when there is none.
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        use glam::Vec3A;
         use rayon::prelude::*;
-        let empty = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-        // Parallel over chunks of triangles: only vertices that triangles use count.
-        let (mut lo, mut hi) = self
+        let empty = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+        let positions = &self.mesh.positions;
+        // Parallel over chunks of triangles: only vertices that triangles use count. One
+        // pair of bounds per corner, in SIMD registers, so that the min and max of tens of
+        // millions of corners are three independent chains, not one.
+        let (lo, hi) = self
             .mesh
             .triangles
             .par_chunks(1 << 16)
             .map(|c| {
-                c.iter().flatten().fold(empty, |(lo, hi), &i| {
-                    let p = self.mesh.positions[i as usize];
-                    (lo.min(p), hi.max(p))
-                })
+                let corners = c.iter().fold([empty; 3], |mut acc, t| {
+                    for (a, &i) in acc.iter_mut().zip(t) {
+                        let p = Vec3A::from(positions[i as usize]);
+                        *a = (a.0.min(p), a.1.max(p));
+                    }
+                    acc
+                });
+                corners.into_iter().fold(empty, |a, b| (a.0.min(b.0), a.1.max(b.1)))
             })
             .reduce(|| empty, |a, b| (a.0.min(b.0), a.1.max(b.1)));
+        let (mut lo, mut hi) = (Vec3::from(lo), Vec3::from(hi));
         let mut any = !self.mesh.triangles.is_empty();
         for s in &self.spheres {
             lo = lo.min(s.center - Vec3::splat(s.radius));

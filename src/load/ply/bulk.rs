@@ -86,6 +86,82 @@ fn read(b: &[u8], f: Field, big: bool) -> f32 {
     value(&b[f.offset..], f.ty, big) as f32
 }
 
+/// The integer types of face lists and counts, read without a per-value switch on the type
+/// (the loops over tens of millions of faces are compiled once per type and byte order).
+trait Int {
+    fn get<const BIG: bool>(b: &[u8]) -> i64;
+}
+
+macro_rules! int {
+    ($($t:ty),*) => {$(
+        impl Int for $t {
+            #[inline(always)]
+            fn get<const BIG: bool>(b: &[u8]) -> i64 {
+                let mut a = [0u8; std::mem::size_of::<$t>()];
+                a.copy_from_slice(&b[..std::mem::size_of::<$t>()]);
+                (if BIG { <$t>::from_be_bytes(a) } else { <$t>::from_le_bytes(a) }) as i64
+            }
+        }
+    )*};
+}
+int!(i8, u8, i16, u16, i32, u32);
+
+/// Runs `$f::<T, BIG>($args)` with `T` the integer type `$ty` (never a float: `face_layout`
+/// declines float lists) and `BIG` the byte order.
+macro_rules! by_int {
+    ($ty:expr, $big:expr, $f:ident($($args:expr),*)) => {
+        match ($ty, $big) {
+            (Ty::I8, false) => $f::<i8, false>($($args),*),
+            (Ty::I8, true) => $f::<i8, true>($($args),*),
+            (Ty::U8, false) => $f::<u8, false>($($args),*),
+            (Ty::U8, true) => $f::<u8, true>($($args),*),
+            (Ty::I16, false) => $f::<i16, false>($($args),*),
+            (Ty::I16, true) => $f::<i16, true>($($args),*),
+            (Ty::U16, false) => $f::<u16, false>($($args),*),
+            (Ty::U16, true) => $f::<u16, true>($($args),*),
+            // (Float counts and indices are declined by `face_layout`: never taken.)
+            (Ty::I32 | Ty::F32 | Ty::F64, false) => $f::<i32, false>($($args),*),
+            (Ty::I32 | Ty::F32 | Ty::F64, true) => $f::<i32, true>($($args),*),
+            (Ty::U32, false) => $f::<u32, false>($($args),*),
+            (Ty::U32, true) => $f::<u32, true>($($args),*),
+        }
+    };
+}
+
+/// Whether every face of `fbytes` has three vertices (its count field at `at`).
+fn all_triangles<T: Int, const BIG: bool>(fbytes: &[u8], stride: usize, at: usize) -> bool {
+    fbytes.par_chunks(stride * CHUNK).all(|c| c.chunks_exact(stride).all(|f| T::get::<BIG>(&f[at..]) == 3))
+}
+
+/// The faces' vertex indices (`first`: the first index's offset) into `triangles`; the first
+/// face with an index outside `0..n`, and that index, if any.
+fn face_indices<T: Int, const BIG: bool>(
+    fbytes: &[u8],
+    stride: usize,
+    first: usize,
+    n: usize,
+    triangles: &mut [[u32; 3]],
+) -> Option<(usize, i64)> {
+    let size = std::mem::size_of::<T>();
+    triangles
+        .par_chunks_mut(CHUNK)
+        .zip(fbytes.par_chunks(stride * CHUNK))
+        .enumerate()
+        .filter_map(|(k, (o, src))| {
+            for (j, (t, f)) in o.iter_mut().zip(src.chunks_exact(stride)).enumerate() {
+                let f = &f[first..];
+                let i = [T::get::<BIG>(f), T::get::<BIG>(&f[size..]), T::get::<BIG>(&f[2 * size..])];
+                if i.iter().any(|&i| i < 0 || i as u64 >= n as u64) {
+                    let bad = i.into_iter().find(|&i| i < 0 || i as u64 >= n as u64);
+                    return Some((k * CHUNK + j, bad.unwrap_or_default()));
+                }
+                *t = i.map(|i| i as u32);
+            }
+            None
+        })
+        .min_by_key(|&(face, _)| face)
+}
+
 /// Bytes of an element made of scalars only, and each property's field; `None` when it has a
 /// list.
 fn scalar_layout(def: &ElementDef) -> Option<(usize, Vec<(&str, Field)>)> {
@@ -166,8 +242,7 @@ pub fn parse(header: &Header, payload: &[u8]) -> Option<Result<Mesh, String>> {
     let vbytes = &payload[v_at..v_at + n * v_stride];
     let fbytes = &payload[f_at..f_at + nf * f_stride];
     // Every face a triangle, or the general parser triangulates.
-    let triangles_only =
-        fbytes.par_chunks(f_stride * CHUNK).all(|c| c.chunks_exact(f_stride).all(|f| read(f, count, big) == 3.0));
+    let triangles_only = by_int!(count.ty, big, all_triangles(fbytes, f_stride, count.offset));
     if !triangles_only {
         return None;
     }
@@ -189,9 +264,22 @@ fn convert(
     let n = vbytes.len() / v_stride.max(1);
     let vec3s = |[a, b, c]: [Field; 3]| -> Vec<Vec3> {
         let mut out = vec![Vec3::ZERO; n];
+        // Little-endian floats (what scanners write) without the switch on the type.
+        let le_floats = !big && [a, b, c].iter().all(|f| f.ty == Ty::F32);
+        let f32_at = |v: &[u8], at: usize| {
+            let mut x = [0u8; 4];
+            x.copy_from_slice(&v[at..at + 4]);
+            f32::from_le_bytes(x)
+        };
         out.par_chunks_mut(CHUNK).zip(vbytes.par_chunks(v_stride * CHUNK)).for_each(|(o, src)| {
-            for (p, v) in o.iter_mut().zip(src.chunks_exact(v_stride)) {
-                *p = Vec3::new(read(v, a, big), read(v, b, big), read(v, c, big));
+            if le_floats {
+                for (p, v) in o.iter_mut().zip(src.chunks_exact(v_stride)) {
+                    *p = Vec3::new(f32_at(v, a.offset), f32_at(v, b.offset), f32_at(v, c.offset));
+                }
+            } else {
+                for (p, v) in o.iter_mut().zip(src.chunks_exact(v_stride)) {
+                    *p = Vec3::new(read(v, a, big), read(v, b, big), read(v, c, big));
+                }
             }
         });
         out
@@ -236,27 +324,8 @@ fn convert(
         _ => None,
     };
     let nf = fbytes.len() / f_stride.max(1);
-    let isize = index.size();
     let mut triangles = vec![[0u32; 3]; nf];
-    // Per chunk: the first bad face, if any (negative or out-of-range index).
-    let bad = triangles
-        .par_chunks_mut(CHUNK)
-        .zip(fbytes.par_chunks(f_stride * CHUNK))
-        .enumerate()
-        .filter_map(|(k, (o, src))| {
-            for (j, (t, f)) in o.iter_mut().zip(src.chunks_exact(f_stride)).enumerate() {
-                for (c, slot) in t.iter_mut().enumerate() {
-                    // Integer types only (`face_layout` declines float indices).
-                    let i = value(&f[first + c * isize..], index, big) as i64;
-                    if i < 0 || i as u64 >= n as u64 {
-                        return Some((k * CHUNK + j, i));
-                    }
-                    *slot = i as u32;
-                }
-            }
-            None
-        })
-        .min_by_key(|&(face, _)| face);
+    let bad = by_int!(index, big, face_indices(fbytes, f_stride, first, n, &mut triangles));
     if let Some((face, i)) = bad {
         return Err(if i < 0 {
             format!("face {face}: negative vertex index")
