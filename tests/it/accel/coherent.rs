@@ -151,3 +151,26 @@ fn hard_coherent_runs_match_single_rays() {
     let scene = scene();
     check(&scene, &hard_rays(&scene), "hard", 2);
 }
+
+/// Triangles far smaller than the spacing of the rays (a scanned mesh of tens of millions
+/// seen at a screen's resolution): a packet's frustum then spans many subtrees between its
+/// rays that none of them enters, and the packet must not visit them. Its rays' own tests
+/// decide every child, so the packets take fewer node visits than their rays alone.
+#[test]
+fn packets_over_triangles_smaller_than_their_spacing_visit_only_what_their_rays_enter() {
+    let mut mesh = wavepath::scene::Mesh::default();
+    let (n, half) = (250, 0.25);
+    for i in 0..n {
+        for j in 0..n {
+            let e = 2.0 * half / n as f32;
+            let (x, z) = (i as f32 * e - half, j as f32 * e - half);
+            let c = [(x, z), (x + e, z), (x + e, z + e), (x, z + e)].map(|(x, z)| Vec3::new(x, 0.0, z));
+            quad(&mut mesh, c, 0);
+        }
+    }
+    let scene = scene_of(mesh, Vec::new());
+    // 16 x 12 pixels half a degree apart (a 4 x 4 block is one packet) over the grid: about
+    // ten quads between neighbouring rays.
+    let rays = camera(Vec3::new(0.0, 2.0, 0.6), Vec3::ZERO, (16, 12), 6.0, 1, &mut Sampler::for_sample(2, 2, 0));
+    check(&scene, &rays, "fine", 1);
+}
