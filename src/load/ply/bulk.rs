@@ -151,9 +151,8 @@ fn face_indices<T: Int, const BIG: bool>(
             for (j, (t, f)) in o.iter_mut().zip(src.chunks_exact(stride)).enumerate() {
                 let f = &f[first..];
                 let i = [T::get::<BIG>(f), T::get::<BIG>(&f[size..]), T::get::<BIG>(&f[2 * size..])];
-                if i.iter().any(|&i| i < 0 || i as u64 >= n as u64) {
-                    let bad = i.into_iter().find(|&i| i < 0 || i as u64 >= n as u64);
-                    return Some((k * CHUNK + j, bad.unwrap_or_default()));
+                if let Some(&bad) = i.iter().find(|&&i| i < 0 || i as u64 >= n as u64) {
+                    return Some((k * CHUNK + j, bad));
                 }
                 *t = i.map(|i| i as u32);
             }
