@@ -112,16 +112,14 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, counters: &mut Trac
     }
 }
 
-/// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a caller-provided
-/// stack that [`Stack::holds`] `bvh.stack_need` (batches set up their rays ahead, so the
-/// divisions of one ray overlap the traversal of the one before, and reuse one stack instead
-/// of clearing a fresh one per ray).
+/// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a stack that
+/// [`Stack::holds`] `bvh.stack_need`.
 ///
 /// Children are visited in the node's precomputed order for the ray's octant (nearest by
 /// their entry corner, not by the ray's entry distance): no sort per node. The entry
 /// distances still go on the stack, so a pop skips children beyond the closest hit so far.
 #[inline(always)]
-pub fn closest_hit_with<B: BoxTest, const N: usize>(
+fn closest_hit_with<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
@@ -153,49 +151,155 @@ fn walk<B: BoxTest, const N: usize>(
     counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> Option<Hit> {
-    // The shear is set up at the first leaf: many rays never reach one.
-    let mut sr = None;
-    let mut best = Best::new(ray.tmax);
-    let mut sp = 0usize;
-    let mut cur = 0u32;
-    let mut visited = 0u64;
-    loop {
-        if cur & LEAF_BIT == 0 {
-            visited += 1;
-            let node = &bvh.nodes[cur as usize];
-            let (pushed, dists) = stack.above(sp);
-            let (n, one) = isa.visit(node, br, br.octant, fma, best.t, pushed, dists);
+    let mut w = Walker::new(ray, br, 0);
+    while !w.step(bvh, isa, fma, counters, stack) {}
+    counters.nodes += w.visited;
+    w.best.hit()
+}
+
+/// One ray's closest-hit traversal in progress, advanced a node or a leaf at a time (so
+/// that [`closest_interleaved`] can keep two in flight).
+struct Walker<'r> {
+    ray: &'r Ray,
+    br: &'r BoxRay,
+    /// Where the hit goes (the ray's place in its group).
+    slot: usize,
+    best: Best,
+    /// The shear, set up at the first leaf: many rays never reach one.
+    sr: Option<ShearedRay>,
+    sp: usize,
+    cur: u32,
+    visited: u64,
+}
+
+impl<'r> Walker<'r> {
+    #[inline(always)]
+    fn new(ray: &'r Ray, br: &'r BoxRay, slot: usize) -> Self {
+        Walker { ray, br, slot, best: Best::new(ray.tmax), sr: None, sp: 0, cur: 0, visited: 0 }
+    }
+
+    /// Visits the current node, or tests the current leaf and pops the nearest pending child
+    /// that can still hold something closer; true when the ray is done. `fma` is `br.fma`
+    /// (a constant where the caller's loop is compiled once per form).
+    #[inline(always)]
+    fn step<B: BoxTest, const N: usize>(
+        &mut self,
+        bvh: &Bvh,
+        isa: B,
+        fma: bool,
+        counters: &mut TraceCounters,
+        stack: &mut Stack<N>,
+    ) -> bool {
+        if self.cur & LEAF_BIT == 0 {
+            self.visited += 1;
+            let node = &bvh.nodes[self.cur as usize];
+            let (pushed, dists) = stack.above(self.sp);
+            let br = self.br;
+            let (n, one) = isa.visit(node, br, br.octant, fma, self.best.t, pushed, dists);
             if n == 1 {
                 // One child hit (the common case): no stack traffic.
-                cur = one;
-                continue;
+                self.cur = one;
+                return false;
             }
             if n > 1 {
                 // The nearest is on top: take it, the others wait.
-                sp += n as usize - 1;
-                cur = one;
-                for &r in pushed.iter().take(n as usize) {
-                    prefetch_child(bvh, isa, r);
+                self.sp += n as usize - 1;
+                self.cur = one;
+                if bvh.prefetch {
+                    for &r in pushed.iter().take(n as usize) {
+                        prefetch_child(bvh, isa, r);
+                    }
                 }
-                continue;
+                return false;
             }
         } else {
-            let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
-            counters.prim_tests += leaf_range(cur).1 as u64;
-            leaf_closest(bvh, isa, cur, sr, ray, &mut best, &mut stack.leaf);
+            let ray = self.ray;
+            let sr = self.sr.get_or_insert_with(|| ShearedRay::of(ray));
+            counters.prim_tests += leaf_range(self.cur).1 as u64;
+            leaf_closest(bvh, isa, self.cur, sr, ray, &mut self.best, &mut stack.leaf);
         }
-        // Pop the nearest pending child that can still hold something closer.
         loop {
-            if sp == 0 {
-                counters.nodes += visited;
-                return best.hit();
+            if self.sp == 0 {
+                return true;
             }
-            sp -= 1;
-            let at = sp & Stack::<N>::MASK;
-            if stack.dists[at] <= best.t * TIE_SCALE {
-                cur = stack.nodes[at];
-                break;
+            self.sp -= 1;
+            let at = self.sp & Stack::<N>::MASK;
+            if stack.dists[at] <= self.best.t * TIE_SCALE {
+                self.cur = stack.nodes[at];
+                return false;
             }
+        }
+    }
+
+    /// [`Walker::step`] with the form of the ray's box test chosen per step (a branch that
+    /// follows the ray: the fused form nearly always).
+    #[inline(always)]
+    fn step_any_form<B: BoxTest, const N: usize>(
+        &mut self,
+        bvh: &Bvh,
+        isa: B,
+        counters: &mut TraceCounters,
+        stack: &mut Stack<N>,
+    ) -> bool {
+        if self.br.fma {
+            self.step(bvh, isa, true, counters, stack)
+        } else {
+            self.step(bvh, isa, false, counters, stack)
+        }
+    }
+}
+
+/// Closest hits of the rays `rays[slot[k]]` (box-test values `prep[k]`) for each `k` of
+/// `ks`, into `hits[slot[k]]`, two rays in flight at once: a ray's step waits on a node load
+/// that the other ray's steps overlap, where one ray alone leaves the core idle on each.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub fn closest_interleaved<B: BoxTest, const N: usize>(
+    bvh: &Bvh,
+    isa: B,
+    rays: &[Ray],
+    slot: &[u8],
+    prep: &[BoxRay],
+    ks: &[u8],
+    hits: &mut [Option<Hit>],
+    counters: &mut TraceCounters,
+    stacks: &mut [Stack<N>; 2],
+) {
+    debug_assert!(Stack::<N>::holds(bvh.stack_need));
+    let [sa, sb] = stacks;
+    let mut pending = ks.iter();
+    // The next live ray (dead ones are misses without a traversal).
+    let mut take = |hits: &mut [Option<Hit>], counters: &mut TraceCounters| {
+        for &k in pending.by_ref() {
+            let (k, i) = (k as usize, slot[k as usize] as usize);
+            counters.rays += 1;
+            if prep[k].live {
+                return Some(Walker::new(&rays[i], &prep[k], i));
+            }
+            hits[i] = None;
+        }
+        None
+    };
+    let finish = |w: &Walker, hits: &mut [Option<Hit>], counters: &mut TraceCounters| {
+        counters.nodes += w.visited;
+        hits[w.slot] = w.best.hit();
+    };
+    let mut a = take(hits, counters);
+    let mut b = take(hits, counters);
+    while let (Some(wa), Some(wb)) = (&mut a, &mut b) {
+        if wa.step_any_form(bvh, isa, counters, sa) {
+            finish(wa, hits, counters);
+            a = take(hits, counters);
+        }
+        if wb.step_any_form(bvh, isa, counters, sb) {
+            finish(wb, hits, counters);
+            b = take(hits, counters);
+        }
+    }
+    for (w, st) in [(a, sa), (b, sb)] {
+        if let Some(mut w) = w {
+            while !w.step_any_form(bvh, isa, counters, st) {}
+            finish(&w, hits, counters);
         }
     }
 }
@@ -349,7 +453,7 @@ fn walk_any<B: BoxTest, const N: usize>(
         visited += 1;
         let node = &bvh.nodes[cur as usize];
         let mut mask = isa.test_form(node, br, br.octant, fma, ray.tmax, &mut tnear);
-        if mask.count_ones() > 1 {
+        if bvh.prefetch && mask.count_ones() > 1 {
             let mut m = mask;
             while m != 0 {
                 prefetch_child(bvh, isa, node.child[m.trailing_zeros() as usize]);
