@@ -44,12 +44,14 @@ use rayon::prelude::*;
 use std::time::Instant;
 pub use wide::Node8;
 
-/// Tree size (nodes and leaves, bytes) above which single rays prefetch the children they
-/// push. Below it the tree lives in the caches and the prefetches are only extra
-/// instructions (Lucy 100k, 6 MB: diffuse rays 1-3% faster without); far above it they hide
-/// memory latency (25.6M, 1.6 GB: 16% faster with); at 1.6M (100 MB) they break even.
-/// Packets prefetch at every size (camera rays at 100k: 6-8% slower without).
-const PREFETCH_ABOVE: usize = 32 << 20;
+/// Tree size (nodes and leaves, bytes) above which single rays are traced as a tree that does
+/// not fit the caches: they prefetch the children they push and three are in flight at once
+/// instead of two. Below it the prefetches are only extra instructions (Lucy 100k, 6 MB:
+/// diffuse rays 1-3% faster without) and a third ray gains nothing (3-5% slower); far above
+/// it both hide memory latency (25.6M, 1.6 GB: prefetching +16%, three rays +4-10% over two).
+/// At 1.6M (100 MB) prefetching breaks even. Packets prefetch at every size (camera rays at
+/// 100k: 6-8% slower without).
+const CACHED_UP_TO: usize = 32 << 20;
 
 /// An 8-wide BVH over the triangles and spheres of a scene.
 pub struct Bvh {
@@ -59,9 +61,9 @@ pub struct Bvh {
     leaves: leaf::LeafStore,
     /// Address of the leaf store and bytes per unit of `first`, for prefetching.
     leaf_base: (usize, usize),
-    /// Whether traversal prefetches the children it will visit later: only for trees larger
-    /// than [`PREFETCH_ABOVE`].
-    prefetch: bool,
+    /// Whether single rays are traced as in a tree that fits the caches (see
+    /// [`CACHED_UP_TO`]).
+    cached: bool,
     /// (centre, radius) of each scene sphere; a sphere's primitive id is `tri_count` + its
     /// index.
     spheres: Vec<(Vec3, f32)>,
@@ -132,7 +134,7 @@ impl Bvh {
             root: RootBox::new(lo, hi),
             nodes,
             leaf_base: leaves.base(),
-            prefetch: info.node_bytes + info.leaf_bytes > PREFETCH_ABOVE,
+            cached: info.node_bytes + info.leaf_bytes <= CACHED_UP_TO,
             leaves,
             spheres: scene.spheres.iter().map(|s| (s.center, s.radius)).collect(),
             tri_count: tri_count as u32,
@@ -156,6 +158,14 @@ impl Bvh {
     pub fn with_isa(mut self, isa: Isa) -> Bvh {
         self.isa = isa.effective();
         self.tokens = tokens_of(isa);
+        self
+    }
+
+    /// The same tree traced as if it did (or did not) fit the caches, whatever its size: the
+    /// traversal [`CACHED_UP_TO`] picks for large trees, on small ones (for tests and
+    /// measurements; hits are the same either way).
+    pub fn assume_cached(mut self, cached: bool) -> Bvh {
+        self.cached = cached;
         self
     }
 
@@ -312,7 +322,7 @@ impl Bvh {
         // Every closure given to `with_avx2` is `#[inline(always)]` for the same reason: a
         // larger body (set-up of the shear added to this loop) was left out of line by the
         // inliner, outside the AVX2 context, and ran six times slower.
-        let mut stacks = Box::new([traverse::BigStack::new(), traverse::BigStack::new()]);
+        let mut stacks: Box<[traverse::BigStack; 3]> = Box::new(std::array::from_fn(|_| traverse::BigStack::new()));
         let mut packets = None;
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
@@ -364,17 +374,32 @@ impl Bvh {
                         }
                         k += len;
                     }
-                    traverse::closest_interleaved(
-                        self,
-                        $isa,
-                        rs,
-                        &slot,
-                        &prep,
-                        &singles[..m],
-                        hs,
-                        counters,
-                        &mut stacks,
-                    );
+                    let singles = &singles[..m];
+                    if !self.cached {
+                        traverse::closest_interleaved::<_, _, 3>(
+                            self,
+                            $isa,
+                            rs,
+                            &slot,
+                            &prep,
+                            singles,
+                            hs,
+                            counters,
+                            &mut stacks,
+                        );
+                    } else {
+                        traverse::closest_interleaved::<_, _, 2>(
+                            self,
+                            $isa,
+                            rs,
+                            &slot,
+                            &prep,
+                            singles,
+                            hs,
+                            counters,
+                            &mut stacks,
+                        );
+                    }
                 }
             }};
         }

@@ -205,7 +205,7 @@ impl<'r> Walker<'r> {
                 // The nearest is on top: take it, the others wait.
                 self.sp += n as usize - 1;
                 self.cur = one;
-                if bvh.prefetch {
+                if !bvh.cached {
                     for &r in pushed.iter().take(n as usize) {
                         prefetch_child(bvh, isa, r);
                     }
@@ -250,11 +250,12 @@ impl<'r> Walker<'r> {
 }
 
 /// Closest hits of the rays `rays[slot[k]]` (box-test values `prep[k]`) for each `k` of
-/// `ks`, into `hits[slot[k]]`, two rays in flight at once: a ray's step waits on a node load
-/// that the other ray's steps overlap, where one ray alone leaves the core idle on each.
+/// `ks`, into `hits[slot[k]]`, `K` rays (2 or 3) in flight at once: a ray's step waits on a
+/// node load that the other rays' steps overlap, where one ray alone leaves the core idle
+/// on each. Each ray takes the steps it would take alone, so its hit and counts are the same.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub fn closest_interleaved<B: BoxTest, const N: usize>(
+pub fn closest_interleaved<B: BoxTest, const N: usize, const K: usize>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
@@ -263,10 +264,10 @@ pub fn closest_interleaved<B: BoxTest, const N: usize>(
     ks: &[u8],
     hits: &mut [Option<Hit>],
     counters: &mut TraceCounters,
-    stacks: &mut [Stack<N>; 2],
+    stacks: &mut [Stack<N>; 3],
 ) {
-    debug_assert!(Stack::<N>::holds(bvh.stack_need));
-    let [sa, sb] = stacks;
+    debug_assert!(Stack::<N>::holds(bvh.stack_need) && (2..=3).contains(&K));
+    let [sa, sb, sc] = stacks;
     let mut pending = ks.iter();
     // The next live ray (dead ones are misses without a traversal).
     let mut take = |hits: &mut [Option<Hit>], counters: &mut TraceCounters| {
@@ -280,26 +281,26 @@ pub fn closest_interleaved<B: BoxTest, const N: usize>(
         }
         None
     };
-    let finish = |w: &Walker, hits: &mut [Option<Hit>], counters: &mut TraceCounters| {
-        counters.nodes += w.visited;
-        hits[w.slot] = w.best.hit();
-    };
     let mut a = take(hits, counters);
     let mut b = take(hits, counters);
-    while let (Some(wa), Some(wb)) = (&mut a, &mut b) {
-        if wa.step_any_form(bvh, isa, counters, sa) {
-            finish(wa, hits, counters);
-            a = take(hits, counters);
-        }
-        if wb.step_any_form(bvh, isa, counters, sb) {
-            finish(wb, hits, counters);
-            b = take(hits, counters);
-        }
+    let mut c = if K > 2 { take(hits, counters) } else { None };
+    // One step of a ray in flight; a ray done gives its place to the next.
+    macro_rules! advance {
+        ($w:ident, $stack:ident) => {
+            if let Some(w) = &mut $w {
+                if w.step_any_form(bvh, isa, counters, $stack) {
+                    counters.nodes += w.visited;
+                    hits[w.slot] = w.best.hit();
+                    $w = take(hits, counters);
+                }
+            }
+        };
     }
-    for (w, st) in [(a, sa), (b, sb)] {
-        if let Some(mut w) = w {
-            while !w.step_any_form(bvh, isa, counters, st) {}
-            finish(&w, hits, counters);
+    while a.is_some() || b.is_some() || c.is_some() {
+        advance!(a, sa);
+        advance!(b, sb);
+        if K > 2 {
+            advance!(c, sc);
         }
     }
 }
@@ -453,7 +454,7 @@ fn walk_any<B: BoxTest, const N: usize>(
         visited += 1;
         let node = &bvh.nodes[cur as usize];
         let mut mask = isa.test_form(node, br, br.octant, fma, ray.tmax, &mut tnear);
-        if bvh.prefetch && mask.count_ones() > 1 {
+        if !bvh.cached && mask.count_ones() > 1 {
             let mut m = mask;
             while m != 0 {
                 prefetch_child(bvh, isa, node.child[m.trailing_zeros() as usize]);

@@ -1,6 +1,7 @@
 //! The batch closest-hit path for incoherent rays (`Intersector::closest_hits`: root-box
 //! admission and set-up a group at a time, then the node loop that pushes every hit child)
-//! against the scalar single-ray `closest_hit`, for every instruction set: rays
+//! against the scalar single-ray `closest_hit`, for every instruction set and with two or
+//! three rays in flight: rays
 //! of mixed kinds (diffuse-like bounces from the surface, misses, rays that never enter the
 //! root box, dead rays, vertex chords with tied hits) in batches of every length 1..=70 at
 //! every start, so a ray dropped, traced twice or given another ray's state (stack, set-up,
@@ -71,8 +72,11 @@ fn check(scene: &Scene, what: &str) {
     let want: Vec<_> = rays.iter().map(|r| scalar.closest_hit(r, &mut c)).collect();
     let hits = want.iter().filter(|h| h.is_some()).count();
     assert!(hits > rays.len() / 4 && hits < rays.len() * 3 / 4, "{what}: {hits} hits of {}", rays.len());
-    for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512] {
-        let bvh = Bvh::build(scene).with_isa(isa);
+    // Each instruction set, and each way of tracing single rays (two in flight without
+    // prefetching for trees that fit the caches, three with it for larger ones).
+    let modes = [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512].into_iter().flat_map(|i| [(i, true), (i, false)]);
+    for (isa, cached) in modes {
+        let bvh = Bvh::build(scene).with_isa(isa).assume_cached(cached);
         // Per ray alone: its node count, for the totals of the batches below.
         let nodes: Vec<u64> = rays
             .iter()
@@ -82,7 +86,7 @@ fn check(scene: &Scene, what: &str) {
                 bvh.closest_hits(std::slice::from_ref(r), &mut got, &mut c);
                 assert!(
                     common::same_hit(got[0], want[i]),
-                    "{what} {isa:?} ray {i} alone {r:?}: {:?}, scalar {:?}",
+                    "{what} {isa:?} cached {cached} ray {i} alone {r:?}: {:?}, scalar {:?}",
                     got[0],
                     want[i]
                 );
@@ -100,12 +104,16 @@ fn check(scene: &Scene, what: &str) {
                     let i = start + k;
                     assert!(
                         common::same_hit(*g, want[i]),
-                        "{what} {isa:?} ray {i} in {start}..{end}: {g:?}, scalar {:?}",
+                        "{what} {isa:?} cached {cached} ray {i} in {start}..{end}: {g:?}, scalar {:?}",
                         want[i]
                     );
                 }
-                assert_eq!(c.rays, (end - start) as u64, "{what} {isa:?} rays of {start}..{end}");
-                assert_eq!(c.nodes, nodes[start..end].iter().sum::<u64>(), "{what} {isa:?} nodes of {start}..{end}");
+                assert_eq!(c.rays, (end - start) as u64, "{what} {isa:?} cached {cached}: rays of {start}..{end}");
+                assert_eq!(
+                    c.nodes,
+                    nodes[start..end].iter().sum::<u64>(),
+                    "{what} {isa:?} cached {cached}: nodes of {start}..{end}"
+                );
                 start = end + len % 3;
             }
         }
