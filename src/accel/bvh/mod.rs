@@ -42,15 +42,18 @@ use build::PrimRef;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::time::Instant;
+use traverse::BigStack;
 pub use wide::Node8;
 
-/// Tree size (nodes and leaves, bytes) above which single rays are traced as a tree that does
-/// not fit the caches: they prefetch the children they push and three are in flight at once
-/// instead of two. Below it the prefetches are only extra instructions (Lucy 100k, 6 MB:
-/// diffuse rays 1-3% faster without) and a third ray gains nothing (3-5% slower); far above
-/// it both hide memory latency (25.6M, 1.6 GB: prefetching +16%, three rays +4-10% over two).
-/// At 1.6M (100 MB) prefetching breaks even. Packets prefetch at every size (camera rays at
-/// 100k: 6-8% slower without).
+/// Tree size (nodes and leaves, bytes) above which single rays are traced as in a tree that
+/// does not fit the caches: three in flight at once, each prefetching the children it pushes,
+/// which hides memory latency (25.6M, 1.6 GB: diffuse rays 1.19 -> 1.53 Mrays/s). Below it
+/// they go one at a time without prefetching: the prefetches are only extra instructions
+/// (Lucy 100k, 6 MB: 1-3% faster without), and rays in flight gain 2-5% on a lone mesh's
+/// diffuse rays but cost renders 4-6% of their traverse stage (rays that end after a node or
+/// two, a Cornell box's walls, pay the bookkeeping and overlap nothing). At 1.6M (100 MB) the
+/// prefetches break even and rays in flight gain 15%. Packets prefetch at every size (camera
+/// rays at 100k: 6-8% slower without).
 const CACHED_UP_TO: usize = 32 << 20;
 
 /// An 8-wide BVH over the triangles and spheres of a scene.
@@ -322,7 +325,9 @@ impl Bvh {
         // Every closure given to `with_avx2` is `#[inline(always)]` for the same reason: a
         // larger body (set-up of the shear added to this loop) was left out of line by the
         // inliner, outside the AVX2 context, and ran six times slower.
-        let mut stacks: Box<[traverse::BigStack; 3]> = Box::new(std::array::from_fn(|_| traverse::BigStack::new()));
+        let mut stack = BigStack::boxed();
+        // The stacks of the second and third ray in flight (trees beyond the caches only).
+        let mut more: Option<Box<[BigStack; 2]>> = None;
         let mut packets = None;
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
@@ -348,8 +353,8 @@ impl Bvh {
                     }
                     counters.rays += (rs.len() - n) as u64;
                     hs.fill(None);
-                    // Runs of coherent rays (camera rays) as packets, then the others two at a
-                    // time.
+                    // Runs of coherent rays (camera rays) as packets, the others one by one or,
+                    // in trees beyond the caches, three at a time.
                     let mut k = 0;
                     let mut m = 0;
                     while k < n {
@@ -366,6 +371,11 @@ impl Bvh {
                             for (&i, h) in slot[k..k + len].iter().zip(out) {
                                 hs[i as usize] = h;
                             }
+                        } else if self.cached {
+                            for (&i, br) in slot[k..k + len].iter().zip(&prep[k..k + len]) {
+                                let i = i as usize;
+                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, counters, &mut stack);
+                            }
                         } else {
                             for j in k..k + len {
                                 singles[m] = j as u8;
@@ -374,30 +384,20 @@ impl Bvh {
                         }
                         k += len;
                     }
-                    let singles = &singles[..m];
-                    if !self.cached {
-                        traverse::closest_interleaved::<_, _, 3>(
+                    if m > 0 {
+                        let more = more.get_or_insert_with(|| Box::new([BigStack::new(), BigStack::new()]));
+                        let [b, c] = &mut **more;
+                        let stacks = [&mut *stack, b, c];
+                        traverse::closest_interleaved(
                             self,
                             $isa,
                             rs,
                             &slot,
                             &prep,
-                            singles,
+                            &singles[..m],
                             hs,
                             counters,
-                            &mut stacks,
-                        );
-                    } else {
-                        traverse::closest_interleaved::<_, _, 2>(
-                            self,
-                            $isa,
-                            rs,
-                            &slot,
-                            &prep,
-                            singles,
-                            hs,
-                            counters,
-                            &mut stacks,
+                            stacks,
                         );
                     }
                 }

@@ -119,7 +119,7 @@ pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, counters: &mut Trac
 /// their entry corner, not by the ray's entry distance): no sort per node. The entry
 /// distances still go on the stack, so a pop skips children beyond the closest hit so far.
 #[inline(always)]
-fn closest_hit_with<B: BoxTest, const N: usize>(
+pub(super) fn closest_hit_with<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
     ray: &Ray,
@@ -158,7 +158,7 @@ fn walk<B: BoxTest, const N: usize>(
 }
 
 /// One ray's closest-hit traversal in progress, advanced a node or a leaf at a time (so
-/// that [`closest_interleaved`] can keep two in flight).
+/// that [`closest_interleaved`] can keep three in flight).
 struct Walker<'r> {
     ray: &'r Ray,
     br: &'r BoxRay,
@@ -250,12 +250,13 @@ impl<'r> Walker<'r> {
 }
 
 /// Closest hits of the rays `rays[slot[k]]` (box-test values `prep[k]`) for each `k` of
-/// `ks`, into `hits[slot[k]]`, `K` rays (2 or 3) in flight at once: a ray's step waits on a
-/// node load that the other rays' steps overlap, where one ray alone leaves the core idle
-/// on each. Each ray takes the steps it would take alone, so its hit and counts are the same.
+/// `ks`, into `hits[slot[k]]`, three rays in flight at once: in a tree beyond the caches a
+/// ray's step waits on a node load from memory that the other rays' steps overlap, where one
+/// ray alone leaves the core idle on each. Each ray takes the steps it would take alone, so
+/// its hit and counts are the same.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub fn closest_interleaved<B: BoxTest, const N: usize, const K: usize>(
+pub fn closest_interleaved<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
@@ -264,9 +265,9 @@ pub fn closest_interleaved<B: BoxTest, const N: usize, const K: usize>(
     ks: &[u8],
     hits: &mut [Option<Hit>],
     counters: &mut TraceCounters,
-    stacks: &mut [Stack<N>; 3],
+    stacks: [&mut Stack<N>; 3],
 ) {
-    debug_assert!(Stack::<N>::holds(bvh.stack_need) && (2..=3).contains(&K));
+    debug_assert!(Stack::<N>::holds(bvh.stack_need));
     let [sa, sb, sc] = stacks;
     let mut pending = ks.iter();
     // The next live ray (dead ones are misses without a traversal).
@@ -283,7 +284,7 @@ pub fn closest_interleaved<B: BoxTest, const N: usize, const K: usize>(
     };
     let mut a = take(hits, counters);
     let mut b = take(hits, counters);
-    let mut c = if K > 2 { take(hits, counters) } else { None };
+    let mut c = take(hits, counters);
     // One step of a ray in flight; a ray done gives its place to the next.
     macro_rules! advance {
         ($w:ident, $stack:ident) => {
@@ -299,9 +300,7 @@ pub fn closest_interleaved<B: BoxTest, const N: usize, const K: usize>(
     while a.is_some() || b.is_some() || c.is_some() {
         advance!(a, sa);
         advance!(b, sb);
-        if K > 2 {
-            advance!(c, sc);
-        }
+        advance!(c, sc);
     }
 }
 

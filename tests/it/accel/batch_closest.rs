@@ -1,7 +1,7 @@
 //! The batch closest-hit path for incoherent rays (`Intersector::closest_hits`: root-box
 //! admission and set-up a group at a time, then the node loop that pushes every hit child)
-//! against the scalar single-ray `closest_hit`, for every instruction set and with two or
-//! three rays in flight: rays
+//! against the scalar single-ray `closest_hit`, for every instruction set, one ray or three
+//! in flight: rays
 //! of mixed kinds (diffuse-like bounces from the surface, misses, rays that never enter the
 //! root box, dead rays, vertex chords with tied hits) in batches of every length 1..=70 at
 //! every start, so a ray dropped, traced twice or given another ray's state (stack, set-up,
@@ -72,8 +72,8 @@ fn check(scene: &Scene, what: &str) {
     let want: Vec<_> = rays.iter().map(|r| scalar.closest_hit(r, &mut c)).collect();
     let hits = want.iter().filter(|h| h.is_some()).count();
     assert!(hits > rays.len() / 4 && hits < rays.len() * 3 / 4, "{what}: {hits} hits of {}", rays.len());
-    // Each instruction set, and each way of tracing single rays (two in flight without
-    // prefetching for trees that fit the caches, three with it for larger ones).
+    // Each instruction set, and each way of tracing single rays (one at a time without
+    // prefetching for trees that fit the caches, three in flight with it for larger ones).
     let modes = [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512].into_iter().flat_map(|i| [(i, true), (i, false)]);
     for (isa, cached) in modes {
         let bvh = Bvh::build(scene).with_isa(isa).assume_cached(cached);
