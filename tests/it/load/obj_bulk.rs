@@ -8,7 +8,8 @@ use wavepath::load::{LoadOptions, load};
 use wavepath::scene::Scene;
 
 fn load_text(name: &str, text: &str) -> Result<Scene, String> {
-    let d = temp_dir("obj-bulk");
+    // One directory per test thread: the tests run in parallel and `temp_dir` empties it.
+    let d = temp_dir(&format!("obj-bulk-{:?}", std::thread::current().id()));
     std::fs::write(d.join(name), text).unwrap();
     load(&d.join(name), &LoadOptions::default()).map_err(|e| format!("{e:#}"))
 }
