@@ -214,7 +214,12 @@ impl<'r> Walker<'r> {
             }
         } else {
             let ray = self.ray;
-            let sr = self.sr.get_or_insert_with(|| ShearedRay::of(ray));
+            // Not `get_or_insert_with`: its closure was compiled out of line, a call (and a
+            // leave of the AVX2 context) at every leaf.
+            let sr = match self.sr {
+                Some(ref sr) => sr,
+                None => self.sr.insert(ShearedRay::of(ray)),
+            };
             counters.prim_tests += leaf_range(self.cur).1 as u64;
             leaf_closest(bvh, isa, self.cur, sr, ray, &mut self.best, &mut stack.leaf);
         }
