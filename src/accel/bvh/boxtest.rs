@@ -193,8 +193,9 @@ pub struct Frustum {
 impl Frustum {
     /// The bounds of `rays` (live, at least one, one origin and one octant: see
     /// [`Frustum::joins`]).
-    pub fn of(rays: &[BoxRay]) -> Frustum {
-        let first = &rays[0];
+    pub fn of<'a>(rays: impl IntoIterator<Item = &'a BoxRay>) -> Frustum {
+        let mut rays = rays.into_iter();
+        let first = rays.next().expect("a packet of at least one ray");
         let mut f = Frustum {
             org: first.org,
             inv_lo: first.inv,
@@ -203,7 +204,7 @@ impl Frustum {
             octant: first.octant,
             planes: first.planes,
         };
-        for r in &rays[1..] {
+        for r in rays {
             debug_assert!(Frustum::joins(first, r));
             for axis in 0..3 {
                 f.inv_lo[axis] = f.inv_lo[axis].min(r.inv[axis]);
@@ -238,10 +239,15 @@ impl Frustum {
     }
 }
 
-/// [`BoxTest::admit_mask`], one ray at a time.
+/// [`BoxTest::set_up`], one ray at a time with `isa`'s [`BoxTest::box_ray`].
 #[inline(always)]
-pub fn admit_mask_scalar(root: &RootBox, rays: &[Ray]) -> u32 {
-    rays.iter().enumerate().fold(0, |m, (i, r)| m | (root.admits(&BoxRay::new(r), r.tmax) as u32) << i)
+pub fn set_up_each<B: BoxTest>(isa: B, root: Option<&RootBox>, rays: &[Ray], out: &mut [BoxRay]) -> u32 {
+    let mut mask = 0;
+    for (i, (r, o)) in rays.iter().zip(out).enumerate() {
+        *o = isa.box_ray(r);
+        mask |= (root.is_none_or(|root| root.admits(o, r.tmax)) as u32) << i;
+    }
+    mask
 }
 
 /// The per-instruction-set kernels of the traversal.
@@ -327,11 +333,14 @@ pub trait BoxTest: Copy {
         top as u32
     }
 
-    /// Bit `i` set when ray `i` of `rays` (at most 32) may enter `root`: [`RootBox::admits`]
-    /// of its box-test values (the AVX2 path computes the same answers eight rays at a time).
+    /// The set-up of a group of a batch: the box-test values of each of `rays` (at most 32)
+    /// into `out` (each [`BoxTest::box_ray`]), and the rays that may enter `root` at all (bit
+    /// `i`: [`RootBox::admits`] by those values; every ray when there is no root box). The
+    /// AVX2 path sets up eight rays at once, the same values (most rays of a batch are set
+    /// up, and one at a time this cost a tenth of a diffuse ray's traversal).
     #[inline(always)]
-    fn admit_mask(self, root: &RootBox, rays: &[Ray]) -> u32 {
-        admit_mask_scalar(root, rays)
+    fn set_up(self, root: Option<&RootBox>, rays: &[Ray], out: &mut [BoxRay]) -> u32 {
+        set_up_each(self, root, rays, out)
     }
 
     /// The box-test values of `ray` ([`BoxRay::new`]; the AVX2 path computes the same values

@@ -38,19 +38,19 @@ pub const MIN_RAYS: usize = 4;
 /// degree field of view spans 0.3 degrees).
 const MIN_COS: f32 = 0.9995;
 
-/// How many leading rays of `prep` (box-test values of `rays[slot[i]]`) form a packet with
-/// the first one (at most [`COHERENT`]): live, from the same origin, in the same octant and
-/// within the cone of [`MIN_COS`].
+/// How many leading rays of `slot` (places in `rays`, whose box-test values are `prep`) form
+/// a packet with the first one (at most [`COHERENT`]): live, from the same origin, in the same
+/// octant and within the cone of [`MIN_COS`].
 #[inline(always)]
 pub(super) fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
-    let lead = &prep[0];
+    let lead = &prep[slot[0] as usize];
     if !lead.live {
         return 1;
     }
     let d0 = rays[slot[0] as usize].dir;
     let l0 = d0.length_squared();
     let mut n = 1;
-    while n < prep.len().min(COHERENT) && Frustum::joins(lead, &prep[n]) {
+    while n < slot.len().min(COHERENT) && Frustum::joins(lead, &prep[slot[n] as usize]) {
         let d = rays[slot[n] as usize].dir;
         let dot = d0.dot(d);
         if !(dot > 0.0 && dot * dot >= MIN_COS * MIN_COS * l0 * d.length_squared()) {

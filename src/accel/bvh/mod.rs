@@ -333,22 +333,17 @@ impl Bvh {
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
             ($isa:expr) => {{
-                // Per group: which rays may enter the tree at all (most primary rays miss
-                // it), then the set-up (three divisions) of those ahead of their traversal;
-                // the others are misses without further work.
+                // Per group: the set-up (three divisions per ray) of every ray, eight at a
+                // time, and by it which rays may enter the tree at all (most primary rays miss
+                // it); the others are misses without further work.
                 let mut slot = [0u8; SETUP_GROUP];
                 let mut singles = [0u8; SETUP_GROUP];
                 for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
-                    let mut todo = match &self.root {
-                        Some(root) => $isa.admit_mask(root, rs),
-                        None => u32::MAX >> (SETUP_GROUP - rs.len()),
-                    };
+                    let mut todo = $isa.set_up(self.root.as_ref(), rs, &mut prep[..rs.len()]);
                     let mut n = 0;
                     while todo != 0 {
-                        let i = todo.trailing_zeros() as usize;
+                        slot[n] = todo.trailing_zeros() as u8;
                         todo &= todo - 1;
-                        prep[n] = $isa.box_ray(&rs[i]);
-                        slot[n] = i as u8;
                         n += 1;
                     }
                     counters.rays += (rs.len() - n) as u64;
@@ -358,29 +353,27 @@ impl Bvh {
                     let mut k = 0;
                     let mut m = 0;
                     while k < n {
-                        let len = coherent::packet_len(rs, &slot[k..n], &prep[k..n]);
+                        let len = coherent::packet_len(rs, &slot[k..n], &prep);
                         if len >= coherent::MIN_RAYS {
                             let mut rays = [rs[slot[k] as usize]; coherent::COHERENT];
                             for (r, &i) in rays.iter_mut().zip(&slot[k..k + len]) {
                                 *r = rs[i as usize];
                             }
                             let mut out = [None; coherent::COHERENT];
-                            let f = Frustum::of(&prep[k..k + len]);
+                            let f = Frustum::of(slot[k..k + len].iter().map(|&i| &prep[i as usize]));
                             let packets = packets.get_or_insert_with(|| coherent::PacketStack::new(self));
                             coherent::closest_packet(self, $isa, &rays[..len], &f, &mut out[..len], counters, packets);
                             for (&i, h) in slot[k..k + len].iter().zip(out) {
                                 hs[i as usize] = h;
                             }
                         } else if self.cached {
-                            for (&i, br) in slot[k..k + len].iter().zip(&prep[k..k + len]) {
+                            for &i in &slot[k..k + len] {
                                 let i = i as usize;
-                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], br, counters, &mut stack);
+                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], &prep[i], counters, &mut stack);
                             }
                         } else {
-                            for j in k..k + len {
-                                singles[m] = j as u8;
-                                m += 1;
-                            }
+                            singles[m..m + len].copy_from_slice(&slot[k..k + len]);
+                            m += len;
                         }
                         k += len;
                     }
@@ -388,17 +381,7 @@ impl Bvh {
                         let more = more.get_or_insert_with(|| Box::new([BigStack::new(), BigStack::new()]));
                         let [b, c] = &mut **more;
                         let stacks = [&mut *stack, b, c];
-                        traverse::closest_interleaved(
-                            self,
-                            $isa,
-                            rs,
-                            &slot,
-                            &prep,
-                            &singles[..m],
-                            hs,
-                            counters,
-                            stacks,
-                        );
+                        traverse::closest_interleaved(self, $isa, rs, &prep, &singles[..m], hs, counters, stacks);
                     }
                 }
             }};

@@ -1,7 +1,7 @@
 //! The SIMD box tests. All `unsafe` of the BVH lives here: each kernel can only be reached
 //! through a [`crate::cpu`] token whose constructor checked the CPU at run time.
 use super::boxtest::{
-    BoxRay, BoxTest, EXIT_SCALE, Frustum, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, admit_mask_scalar, far, near,
+    BoxRay, BoxTest, EXIT_SCALE, Frustum, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, far, near, set_up_each,
 };
 use super::leaf::Tri4;
 use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest};
@@ -151,14 +151,15 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn admit_mask(self, root: &RootBox, rays: &[Ray]) -> u32 {
+    fn set_up(self, root: Option<&RootBox>, rays: &[Ray], out: &mut [BoxRay]) -> u32 {
         let mut mask = 0;
-        for (k, eight) in rays.chunks(8).enumerate() {
-            mask |= match <&[Ray; 8]>::try_from(eight) {
+        for (k, (eight, o)) in rays.chunks(8).zip(out.chunks_mut(8)).enumerate() {
+            let m = match (<&[Ray; 8]>::try_from(eight), o.len()) {
                 // SAFETY: `Avx2` exists only if AVX2 was detected.
-                Ok(eight) => unsafe { admit8(root, eight) },
-                Err(_) => admit_mask_scalar(root, eight),
-            } << (8 * k);
+                (Ok(eight), 8) => unsafe { set_up8(root, eight, o.try_into().expect("eight set-ups")) },
+                _ => set_up_each(self, root, eight, o),
+            };
+            mask |= m << (8 * k);
         }
         mask
     }
@@ -227,7 +228,19 @@ unsafe fn transpose_rays8(rays: &[Ray; 8]) -> [__m256; 8] {
     // SAFETY: the caller guarantees AVX2; each load reads one 32-byte `Ray` (asserted layout).
     unsafe {
         let p = rays.as_ptr().cast::<f32>();
-        let r = [0, 1, 2, 3, 4, 5, 6, 7].map(|k| _mm256_loadu_ps(p.add(8 * k)));
+        transpose8([0, 1, 2, 3, 4, 5, 6, 7].map(|k| _mm256_loadu_ps(p.add(8 * k))))
+    }
+}
+
+/// The 8 x 8 transpose: lane `j` of result `k` is lane `k` of `r[j]`.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn transpose8(r: [__m256; 8]) -> [__m256; 8] {
+    // SAFETY: the caller guarantees AVX2; no memory access.
+    unsafe {
         let (t0, t1) = (_mm256_unpacklo_ps(r[0], r[1]), _mm256_unpackhi_ps(r[0], r[1]));
         let (t2, t3) = (_mm256_unpacklo_ps(r[2], r[3]), _mm256_unpackhi_ps(r[2], r[3]));
         let (t4, t5) = (_mm256_unpacklo_ps(r[4], r[5]), _mm256_unpackhi_ps(r[4], r[5]));
@@ -246,6 +259,103 @@ unsafe fn transpose_rays8(rays: &[Ray; 8]) -> [__m256; 8] {
             _mm256_permute2f128_ps::<0x31>(s2, s6),
             _mm256_permute2f128_ps::<0x31>(s3, s7),
         ]
+    }
+}
+
+/// The last eight bytes of a [`BoxRay`] as two words, less the flags: `planes[0..2]` in the
+/// upper half of the first (below them go `fma` and `live`), `planes[2..6]` the second; one
+/// entry per octant.
+const PLANE_WORDS: [[u32; 8]; 2] = {
+    let mut t = [[0u32; 8]; 2];
+    let mut oct = 0;
+    while oct < 8 {
+        let p = PLANES[oct];
+        t[0][oct] = (p[0] as u32) << 16 | (p[1] as u32) << 24;
+        t[1][oct] = u32::from_le_bytes([p[2], p[3], p[4], p[5]]);
+        oct += 1;
+    }
+    t
+};
+
+/// [`BoxTest::set_up`] of eight rays: [`RootBox::admits`]'s answer for each (by the values
+/// below: the same products, so the same answers; a dead ray's answer is not used), and
+/// unless it is no for all, [`box_ray8`]'s values for each (the same operations per lane,
+/// eight rays per register, then transposed into the rays' [`BoxRay`]s).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn set_up8(root: Option<&RootBox>, rays: &[Ray; 8], out: &mut [BoxRay; 8]) -> u32 {
+    // SAFETY: the caller guarantees AVX2; the stores are aligned ones of 32 bytes, the two
+    // halves of each `BoxRay` (64 bytes, 32-byte aligned; layout asserted below), whose bool
+    // bytes receive 0 or 1 (a comparison's sign bit shifted down).
+    unsafe {
+        let f = transpose_rays8(rays);
+        let (org, dir, tmin, tmax) = ([f[0], f[1], f[2]], [f[3], f[4], f[5]], f[6], f[7]);
+        let sign = _mm256_set1_ps(-0.0);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
+        let inv = [0, 1, 2].map(|axis| {
+            let d = dir[axis];
+            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+            let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
+            _mm256_blendv_ps(big, i, finite(i))
+        });
+        // Most camera rays miss the tree: eight misses need nothing more.
+        let admitted = match root {
+            None => 0xff,
+            Some(root) => {
+                let (mut enter, mut exit) = (tmin, _mm256_set1_ps(f32::INFINITY));
+                for axis in 0..3 {
+                    let a = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(root.lo[axis]), org[axis]), inv[axis]);
+                    let b = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(root.hi[axis]), org[axis]), inv[axis]);
+                    enter = _mm256_max_ps(enter, _mm256_min_ps(a, b));
+                    exit = _mm256_min_ps(exit, _mm256_max_ps(a, b));
+                }
+                let exit = _mm256_min_ps(
+                    _mm256_mul_ps(exit, _mm256_set1_ps(EXIT_SCALE)),
+                    _mm256_mul_ps(tmax, _mm256_set1_ps(TIE_SCALE)),
+                );
+                _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
+            }
+        };
+        if admitted == 0 {
+            return 0;
+        }
+        let ones = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        let (mut finite_all, mut fma_all, mut nonzero) = (ones, ones, _mm256_setzero_ps());
+        let (mut on, mut of) = ([_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3]);
+        for axis in 0..3 {
+            let (o, d) = (org[axis], dir[axis]);
+            let oi = _mm256_mul_ps(o, inv[axis]);
+            let e = _mm256_add_ps(
+                _mm256_mul_ps(_mm256_andnot_ps(sign, oi), _mm256_set1_ps(1.0 / 1048576.0)),
+                _mm256_set1_ps(f32::MIN_POSITIVE),
+            );
+            (on[axis], of[axis]) = (_mm256_add_ps(oi, e), _mm256_sub_ps(oi, e));
+            fma_all = _mm256_and_ps(fma_all, _mm256_and_ps(finite(on[axis]), finite(of[axis])));
+            finite_all = _mm256_and_ps(finite_all, _mm256_and_ps(finite(o), finite(d)));
+            nonzero = _mm256_or_ps(nonzero, _mm256_cmp_ps::<_CMP_NEQ_UQ>(d, _mm256_setzero_ps()));
+        }
+        let live = _mm256_and_ps(_mm256_and_ps(finite_all, nonzero), _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
+        let top = |x: __m256| _mm256_srli_epi32::<31>(_mm256_castps_si256(x));
+        let octant = _mm256_or_si256(
+            _mm256_or_si256(top(dir[0]), _mm256_slli_epi32::<1>(top(dir[1]))),
+            _mm256_slli_epi32::<2>(top(dir[2])),
+        );
+        let table = |t: &[u32; 8]| _mm256_permutevar8x32_epi32(_mm256_loadu_si256(t.as_ptr().cast()), octant);
+        let flags =
+            _mm256_or_si256(_mm256_or_si256(top(fma_all), _mm256_slli_epi32::<8>(top(live))), table(&PLANE_WORDS[0]));
+        let cast = _mm256_castsi256_ps;
+        let heads = transpose8([org[0], org[1], org[2], inv[0], inv[1], inv[2], tmin, cast(octant)]);
+        let tails = transpose8([on[0], on[1], on[2], of[0], of[1], of[2], cast(flags), cast(table(&PLANE_WORDS[1]))]);
+        for (k, o) in out.iter_mut().enumerate() {
+            let p = (o as *mut BoxRay).cast::<f32>();
+            _mm256_store_ps(p, heads[k]);
+            _mm256_store_ps(p.add(8), tails[k]);
+        }
+        admitted
     }
 }
 
@@ -342,62 +452,6 @@ unsafe fn slab8_lane(node: &Node8, p: &PacketBoxRays, k: usize) -> __m256 {
             _mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit),
             _mm256_cmp_ps::<_CMP_LE_OQ>(enter, _mm256_set1_ps(p.tie[k])),
         )
-    }
-}
-
-/// [`RootBox::admits`] of eight rays at once, one ray per lane: the eight rays (8 floats
-/// each: origin, dir, tmin, tmax) transposed into one register per field, then per lane the
-/// reciprocal of [`BoxRay::new`] and the same products; min and max of values that are never
-/// NaN for a live ray, so the same answers (a dead ray's answer is not used).
-///
-/// # Safety
-/// The CPU must have AVX2.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-unsafe fn admit8(root: &RootBox, rays: &[Ray; 8]) -> u32 {
-    // SAFETY: the caller guarantees AVX2; each load reads one 32-byte `Ray` (asserted layout).
-    unsafe {
-        let p = rays.as_ptr().cast::<f32>();
-        let r = |k: usize| _mm256_loadu_ps(p.add(8 * k));
-        let (r0, r1, r2, r3, r4, r5, r6, r7) = (r(0), r(1), r(2), r(3), r(4), r(5), r(6), r(7));
-        let (t0, t1) = (_mm256_unpacklo_ps(r0, r1), _mm256_unpackhi_ps(r0, r1));
-        let (t2, t3) = (_mm256_unpacklo_ps(r2, r3), _mm256_unpackhi_ps(r2, r3));
-        let (t4, t5) = (_mm256_unpacklo_ps(r4, r5), _mm256_unpackhi_ps(r4, r5));
-        let (t6, t7) = (_mm256_unpacklo_ps(r6, r7), _mm256_unpackhi_ps(r6, r7));
-        let (s0, s1) = (_mm256_shuffle_ps::<0x44>(t0, t2), _mm256_shuffle_ps::<0xee>(t0, t2));
-        let (s2, s3) = (_mm256_shuffle_ps::<0x44>(t1, t3), _mm256_shuffle_ps::<0xee>(t1, t3));
-        let (s4, s5) = (_mm256_shuffle_ps::<0x44>(t4, t6), _mm256_shuffle_ps::<0xee>(t4, t6));
-        let (s6, s7) = (_mm256_shuffle_ps::<0x44>(t5, t7), _mm256_shuffle_ps::<0xee>(t5, t7));
-        // Field k of the eight rays (0..3 origin, 3..6 dir, 6 tmin, 7 tmax).
-        let org = [
-            _mm256_permute2f128_ps::<0x20>(s0, s4),
-            _mm256_permute2f128_ps::<0x20>(s1, s5),
-            _mm256_permute2f128_ps::<0x20>(s2, s6),
-        ];
-        let dir = [
-            _mm256_permute2f128_ps::<0x20>(s3, s7),
-            _mm256_permute2f128_ps::<0x31>(s0, s4),
-            _mm256_permute2f128_ps::<0x31>(s1, s5),
-        ];
-        let (tmin, tmax) = (_mm256_permute2f128_ps::<0x31>(s2, s6), _mm256_permute2f128_ps::<0x31>(s3, s7));
-        let sign = _mm256_set1_ps(-0.0);
-        let (mut enter, mut exit) = (tmin, _mm256_set1_ps(f32::INFINITY));
-        for axis in 0..3 {
-            let d = dir[axis];
-            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
-            let finite = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), _mm256_set1_ps(f32::INFINITY));
-            let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
-            let inv = _mm256_blendv_ps(big, i, finite);
-            let a = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(root.lo[axis]), org[axis]), inv);
-            let b = _mm256_mul_ps(_mm256_sub_ps(_mm256_set1_ps(root.hi[axis]), org[axis]), inv);
-            enter = _mm256_max_ps(enter, _mm256_min_ps(a, b));
-            exit = _mm256_min_ps(exit, _mm256_max_ps(a, b));
-        }
-        let exit = _mm256_min_ps(
-            _mm256_mul_ps(exit, _mm256_set1_ps(EXIT_SCALE)),
-            _mm256_mul_ps(tmax, _mm256_set1_ps(TIE_SCALE)),
-        );
-        _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(enter, exit)) as u32
     }
 }
 
@@ -540,7 +594,8 @@ static COMPRESS: [u64; 256] = {
     t
 };
 
-// `box_ray` loads a ray as one vector: (origin, dir, tmin, tmax).
+// `box_ray` loads a ray as one vector: (origin, dir, tmin, tmax); it and `set_up8` store a
+// `BoxRay` as two vectors.
 const _: () = assert!(
     std::mem::size_of::<Ray>() == 32
         && std::mem::offset_of!(Ray, origin) == 0
@@ -548,7 +603,14 @@ const _: () = assert!(
         && std::mem::offset_of!(Ray, tmin) == 24
         && std::mem::offset_of!(Ray, tmax) == 28
         && std::mem::size_of::<BoxRay>() == 64
+        && std::mem::offset_of!(BoxRay, org) == 0
+        && std::mem::offset_of!(BoxRay, inv) == 12
+        && std::mem::offset_of!(BoxRay, tmin) == 24
+        && std::mem::offset_of!(BoxRay, octant) == 28
         && std::mem::offset_of!(BoxRay, oi_near) == 32
+        && std::mem::offset_of!(BoxRay, oi_far) == 44
+        && std::mem::offset_of!(BoxRay, fma) == 56
+        && std::mem::offset_of!(BoxRay, live) == 57
         && std::mem::offset_of!(BoxRay, planes) == 58
 );
 
@@ -1008,21 +1070,23 @@ mod tests {
         assert!(n > 100, "too few live rays in the sample: {n}");
     }
 
-    /// The eight-lane root-box test gives every live ray the scalar answer, on rays with
-    /// zero, negative zero, denormal, huge and infinite components and rays aimed at the
-    /// box's corners and edges; groups of every length 1..=32 (partial groups take the
-    /// scalar path for their tail).
+    /// The eight-lane set-up gives every ray the scalar set-up's values (bit for bit, any NaN
+    /// matching any NaN) and every live ray the scalar root-box answer, on rays with zero,
+    /// negative zero, denormal, huge, infinite and NaN components and rays aimed at the box's
+    /// corners and edges; groups of every length 1..=32 (partial groups take the scalar path
+    /// for their tail), with and without a root box.
     #[test]
-    fn avx2_admit_mask_matches_scalar() {
+    fn avx2_set_up_matches_scalar() {
         let Some(avx) = Avx2::new() else { return };
         let root = RootBox::new(Vec3::new(-1.0, -2.0, 0.5), Vec3::new(3.0, 1.0, 0.75)).unwrap();
-        let vals = [0.0, -0.0, 1e-40, -1e-40, 1.0, -2.5, 3e38, -3e38, 1e-30, f32::INFINITY, 0.6, 7.25];
+        let vals = [0.0, -0.0, 1e-40, -1e-40, 1.0, -2.5, 3e38, -3e38, 1e-30, f32::INFINITY, 0.6, 7.25, f32::NAN];
         let mut rays = Vec::new();
         for (i, &a) in vals.iter().enumerate() {
             for (j, &b) in vals.iter().enumerate() {
                 for &c in &vals {
-                    let o = Vec3::new(vals[(i + 4) % 12] - 0.5, b * 0.5 - 1.0, vals[(j + 7) % 12]);
-                    rays.push(Ray { origin: o, dir: Vec3::new(a, b, c), tmin: 0.0, tmax: vals[(i + j) % 12].abs() });
+                    let o = Vec3::new(vals[(i + 4) % 13] - 0.5, b * 0.5 - 1.0, vals[(j + 7) % 13]);
+                    let tmin = [0.0, 0.5, -0.0][(i + j) % 3];
+                    rays.push(Ray { origin: o, dir: Vec3::new(a, b, c), tmin, tmax: vals[(i + j) % 13].abs() });
                 }
             }
         }
@@ -1036,15 +1100,31 @@ mod tests {
                 rays.push(Ray { origin: o, dir: target - o, tmin: 0.0, tmax: 1.0 });
             }
         }
+        let bits = |x: [f32; 3]| x.map(|v| if v.is_nan() { u32::MAX } else { v.to_bits() });
         let mut checked = [0u32; 2];
+        let (mut fast, mut slow) = ([BoxRay::DEAD; 32], [BoxRay::DEAD; 32]);
         for len in 1..=32 {
             for group in rays.chunks(len) {
-                let fast = with_avx2(avx, |t| t.admit_mask(&root, group));
-                let slow = admit_mask_scalar(&root, group);
-                for (i, r) in group.iter().enumerate() {
-                    if BoxRay::new(r).live {
-                        assert_eq!(fast >> i & 1, slow >> i & 1, "{r:?}");
-                        checked[(slow >> i & 1) as usize] += 1;
+                for root in [Some(&root), None] {
+                    let n = group.len();
+                    let got = with_avx2(avx, |t| t.set_up(root, group, &mut fast[..n]));
+                    let want = set_up_each(crate::accel::bvh::boxtest::Scalar, root, group, &mut slow[..n]);
+                    for (i, r) in group.iter().enumerate() {
+                        let (s, v) = (&slow[i], &fast[i]);
+                        if s.live {
+                            assert_eq!(got >> i & 1, want >> i & 1, "{r:?}");
+                            checked[(want >> i & 1) as usize] += 1;
+                        }
+                        if got >> i & 1 == 0 {
+                            // Not admitted: its set-up is not read.
+                            continue;
+                        }
+                        assert_eq!(bits(s.org), bits(v.org), "{r:?}");
+                        assert_eq!(bits(s.inv), bits(v.inv), "{r:?}");
+                        assert_eq!(bits(s.oi_near), bits(v.oi_near), "{r:?}");
+                        assert_eq!(bits(s.oi_far), bits(v.oi_far), "{r:?}");
+                        assert_eq!(bits([s.tmin; 3]), bits([v.tmin; 3]), "{r:?}");
+                        assert_eq!((s.octant, s.fma, s.live, s.planes), (v.octant, v.fma, v.live, v.planes), "{r:?}");
                     }
                 }
             }

@@ -254,34 +254,33 @@ impl<'r> Walker<'r> {
     }
 }
 
-/// Closest hits of the rays `rays[slot[k]]` (box-test values `prep[k]`) for each `k` of
-/// `ks`, into `hits[slot[k]]`, three rays in flight at once: in a tree beyond the caches a
-/// ray's step waits on a node load from memory that the other rays' steps overlap, where one
-/// ray alone leaves the core idle on each. Each ray takes the steps it would take alone, so
-/// its hit and counts are the same.
+/// Closest hits of the rays `rays[i]` (box-test values `prep[i]`) for each `i` of `which`,
+/// into `hits[i]`, three rays in flight at once: in a tree beyond the caches a ray's step
+/// waits on a node load from memory that the other rays' steps overlap, where one ray alone
+/// leaves the core idle on each. Each ray takes the steps it would take alone, so its hit
+/// and counts are the same.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub fn closest_interleaved<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
     rays: &[Ray],
-    slot: &[u8],
     prep: &[BoxRay],
-    ks: &[u8],
+    which: &[u8],
     hits: &mut [Option<Hit>],
     counters: &mut TraceCounters,
     stacks: [&mut Stack<N>; 3],
 ) {
     debug_assert!(Stack::<N>::holds(bvh.stack_need));
     let [sa, sb, sc] = stacks;
-    let mut pending = ks.iter();
+    let mut pending = which.iter();
     // The next live ray (dead ones are misses without a traversal).
     let mut take = |hits: &mut [Option<Hit>], counters: &mut TraceCounters| {
-        for &k in pending.by_ref() {
-            let (k, i) = (k as usize, slot[k as usize] as usize);
+        for &i in pending.by_ref() {
+            let i = i as usize;
             counters.rays += 1;
-            if prep[k].live {
-                return Some(Walker::new(&rays[i], &prep[k], i));
+            if prep[i].live {
+                return Some(Walker::new(&rays[i], &prep[i], i));
             }
             hits[i] = None;
         }
