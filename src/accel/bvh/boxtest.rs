@@ -193,6 +193,7 @@ pub struct Frustum {
 impl Frustum {
     /// The bounds of `rays` (live, at least one, one origin and one octant: see
     /// [`Frustum::joins`]).
+    #[inline(always)]
     pub fn of<'a>(rays: impl IntoIterator<Item = &'a BoxRay>) -> Frustum {
         let mut rays = rays.into_iter();
         let first = rays.next().expect("a packet of at least one ray");

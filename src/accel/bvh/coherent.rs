@@ -44,7 +44,9 @@ const MIN_COS: f32 = 0.9995;
 #[inline(always)]
 pub(super) fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
     let lead = &prep[slot[0] as usize];
-    if !lead.live {
+    // Most rays of a batch are not coherent (diffuse bounces): they fail here, before any
+    // arithmetic.
+    if slot.len() < 2 || !Frustum::joins(lead, &prep[slot[1] as usize]) {
         return 1;
     }
     let d0 = rays[slot[0] as usize].dir;

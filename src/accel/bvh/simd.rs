@@ -228,7 +228,8 @@ unsafe fn transpose_rays8(rays: &[Ray; 8]) -> [__m256; 8] {
     // SAFETY: the caller guarantees AVX2; each load reads one 32-byte `Ray` (asserted layout).
     unsafe {
         let p = rays.as_ptr().cast::<f32>();
-        transpose8([0, 1, 2, 3, 4, 5, 6, 7].map(|k| _mm256_loadu_ps(p.add(8 * k))))
+        let r = |k: usize| _mm256_loadu_ps(p.add(8 * k));
+        transpose8([r(0), r(1), r(2), r(3), r(4), r(5), r(6), r(7)])
     }
 }
 
@@ -296,12 +297,15 @@ unsafe fn set_up8(root: Option<&RootBox>, rays: &[Ray; 8], out: &mut [BoxRay; 8]
         let sign = _mm256_set1_ps(-0.0);
         let inf = _mm256_set1_ps(f32::INFINITY);
         let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
-        let inv = [0, 1, 2].map(|axis| {
+        // A loop, not `array::map`: its closure may be compiled out of line, outside the AVX2
+        // context.
+        let mut inv = [_mm256_setzero_ps(); 3];
+        for axis in 0..3 {
             let d = dir[axis];
             let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
             let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
-            _mm256_blendv_ps(big, i, finite(i))
-        });
+            inv[axis] = _mm256_blendv_ps(big, i, finite(i));
+        }
         // Most camera rays miss the tree: eight misses need nothing more.
         let admitted = match root {
             None => 0xff,
