@@ -40,7 +40,6 @@ use crate::cpu::{Avx2, Isa, Sse};
 use boxtest::{BoxRay, BoxTest, Frustum, RootBox};
 use build::PrimRef;
 use glam::Vec3;
-use packet::{PACKET, PacketShear, PacketTest};
 use rayon::prelude::*;
 use std::time::Instant;
 use traverse::BigStack;
@@ -332,9 +331,6 @@ impl Bvh {
         let mut packets = None;
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
-        // The leaf-test set-up of the group's single rays, eight at a time, made for the
-        // eights that have one (a packet makes its own).
-        let mut shears = [PacketShear::EMPTY; SETUP_GROUP / PACKET];
         macro_rules! run {
             ($isa:expr) => {{
                 // Per group: the set-up (three divisions per ray) of every ray, eight at a
@@ -352,16 +348,6 @@ impl Bvh {
                     }
                     counters.rays += (rs.len() - n) as u64;
                     hs.fill(None);
-                    let mut shorn = 0u32;
-                    macro_rules! shear {
-                        ($i:expr) => {{
-                            let e = $i / PACKET;
-                            if shorn >> e & 1 == 0 {
-                                shorn |= 1 << e;
-                                shears[e] = $isa.packet_shear(&rs[PACKET * e..(PACKET * (e + 1)).min(rs.len())]);
-                            }
-                        }};
-                    }
                     // Runs of coherent rays (camera rays) as packets, the others one by one or,
                     // in trees beyond the caches, three at a time.
                     let mut k = 0;
@@ -383,22 +369,9 @@ impl Bvh {
                         } else if self.cached {
                             for &i in &slot[k..k + len] {
                                 let i = i as usize;
-                                shear!(i);
-                                let sr = shears[i / PACKET].sheared(i % PACKET, &rs[i]);
-                                hs[i] = traverse::closest_hit_with(
-                                    self,
-                                    $isa,
-                                    &rs[i],
-                                    &prep[i],
-                                    Some(&sr),
-                                    counters,
-                                    &mut stack,
-                                );
+                                hs[i] = traverse::closest_hit_with(self, $isa, &rs[i], &prep[i], counters, &mut stack);
                             }
                         } else {
-                            for &i in &slot[k..k + len] {
-                                shear!(i as usize);
-                            }
                             singles[m..m + len].copy_from_slice(&slot[k..k + len]);
                             m += len;
                         }
@@ -408,7 +381,7 @@ impl Bvh {
                         let more = more.get_or_insert_with(|| Box::new([BigStack::new(), BigStack::new()]));
                         let [b, c] = &mut **more;
                         let stacks = [&mut *stack, b, c];
-                        traverse::closest_interleaved(self, $isa, rs, &prep, &shears, &singles[..m], hs, counters, stacks);
+                        traverse::closest_interleaved(self, $isa, rs, &prep, &singles[..m], hs, counters, stacks);
                     }
                 }
             }};

@@ -3,7 +3,6 @@
 use super::Bvh;
 use super::boxtest::{BoxRay, BoxTest, TIE_SCALE};
 use super::leaf::Tri4;
-use super::packet::{PACKET, PacketShear};
 use super::wide::{LEAF_BIT, WIDTH, leaf_range};
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
 use crate::accel::{TraceCounters, sphere};
@@ -107,15 +106,14 @@ impl Best {
 #[inline(always)]
 pub fn closest_hit<B: BoxTest>(bvh: &Bvh, isa: B, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit> {
     if SmallStack::holds(bvh.stack_need) {
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), None, counters, &mut SmallStack::new())
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), counters, &mut SmallStack::new())
     } else {
-        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), None, counters, &mut *BigStack::boxed())
+        closest_hit_with(bvh, isa, ray, &BoxRay::new(ray), counters, &mut *BigStack::boxed())
     }
 }
 
-/// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`), its shear `sr`
-/// (`ShearedRay::of(ray)`) if set up already (else it is made at the first leaf: many rays
-/// never reach one), and a stack that [`Stack::holds`] `bvh.stack_need`.
+/// Closest hit with the ray's box-test values `br` (`BoxRay::new(ray)`) and a stack that
+/// [`Stack::holds`] `bvh.stack_need`.
 ///
 /// Children are visited in the node's precomputed order for the ray's octant (nearest by
 /// their entry corner, not by the ray's entry distance): no sort per node. The entry
@@ -126,7 +124,6 @@ pub(super) fn closest_hit_with<B: BoxTest, const N: usize>(
     isa: B,
     ray: &Ray,
     br: &BoxRay,
-    sr: Option<&ShearedRay>,
     counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> Option<Hit> {
@@ -135,9 +132,12 @@ pub(super) fn closest_hit_with<B: BoxTest, const N: usize>(
     if !br.live {
         return None;
     }
-    let w = Walker::new(ray, br, 0, sr.copied());
     // The loop compiled once per form of the box test (no branch on it per node).
-    if br.fma { walk(bvh, isa, w, true, counters, stack) } else { walk(bvh, isa, w, false, counters, stack) }
+    if br.fma {
+        walk(bvh, isa, ray, br, true, counters, stack)
+    } else {
+        walk(bvh, isa, ray, br, false, counters, stack)
+    }
 }
 
 /// The loop of [`closest_hit_with`] for a live ray; `fma` is `br.fma`.
@@ -145,11 +145,13 @@ pub(super) fn closest_hit_with<B: BoxTest, const N: usize>(
 fn walk<B: BoxTest, const N: usize>(
     bvh: &Bvh,
     isa: B,
-    mut w: Walker,
+    ray: &Ray,
+    br: &BoxRay,
     fma: bool,
     counters: &mut TraceCounters,
     stack: &mut Stack<N>,
 ) -> Option<Hit> {
+    let mut w = Walker::new(ray, br, 0);
     while !w.step(bvh, isa, fma, counters, stack) {}
     counters.nodes += w.visited;
     w.best.hit()
@@ -163,7 +165,7 @@ struct Walker<'r> {
     /// Where the hit goes (the ray's place in its group).
     slot: usize,
     best: Best,
-    /// The shear: set up with the ray's batch, or else at the first leaf.
+    /// The shear, set up at the first leaf: many rays never reach one.
     sr: Option<ShearedRay>,
     sp: usize,
     cur: u32,
@@ -172,8 +174,8 @@ struct Walker<'r> {
 
 impl<'r> Walker<'r> {
     #[inline(always)]
-    fn new(ray: &'r Ray, br: &'r BoxRay, slot: usize, sr: Option<ShearedRay>) -> Self {
-        Walker { ray, br, slot, best: Best::new(ray.tmax), sr, sp: 0, cur: 0, visited: 0 }
+    fn new(ray: &'r Ray, br: &'r BoxRay, slot: usize) -> Self {
+        Walker { ray, br, slot, best: Best::new(ray.tmax), sr: None, sp: 0, cur: 0, visited: 0 }
     }
 
     /// Visits the current node, or tests the current leaf and pops the nearest pending child
@@ -252,8 +254,7 @@ impl<'r> Walker<'r> {
     }
 }
 
-/// Closest hits of the rays `rays[i]` (box-test values `prep[i]`, shear lane `i % PACKET` of
-/// `shears[i / PACKET]`) for each `i` of `which`,
+/// Closest hits of the rays `rays[i]` (box-test values `prep[i]`) for each `i` of `which`,
 /// into `hits[i]`, three rays in flight at once: in a tree beyond the caches a ray's step
 /// waits on a node load from memory that the other rays' steps overlap, where one ray alone
 /// leaves the core idle on each. Each ray takes the steps it would take alone, so its hit
@@ -265,7 +266,6 @@ pub fn closest_interleaved<B: BoxTest, const N: usize>(
     isa: B,
     rays: &[Ray],
     prep: &[BoxRay],
-    shears: &[PacketShear],
     which: &[u8],
     hits: &mut [Option<Hit>],
     counters: &mut TraceCounters,
@@ -280,8 +280,7 @@ pub fn closest_interleaved<B: BoxTest, const N: usize>(
             let i = i as usize;
             counters.rays += 1;
             if prep[i].live {
-                let sr = shears[i / PACKET].sheared(i % PACKET, &rays[i]);
-                return Some(Walker::new(&rays[i], &prep[i], i, Some(sr)));
+                return Some(Walker::new(&rays[i], &prep[i], i));
             }
             hits[i] = None;
         }
