@@ -205,13 +205,21 @@ impl Frustum {
             octant: first.octant,
             planes: first.planes,
         };
+        // Plain comparisons, not `f32::min`, whose NaN handling costs a blend per value: a
+        // live ray's values are never NaN.
         for r in rays {
             debug_assert!(Frustum::joins(first, r));
             for axis in 0..3 {
-                f.inv_lo[axis] = f.inv_lo[axis].min(r.inv[axis]);
-                f.inv_hi[axis] = f.inv_hi[axis].max(r.inv[axis]);
+                if r.inv[axis] < f.inv_lo[axis] {
+                    f.inv_lo[axis] = r.inv[axis];
+                }
+                if r.inv[axis] > f.inv_hi[axis] {
+                    f.inv_hi[axis] = r.inv[axis];
+                }
             }
-            f.tmin = f.tmin.min(r.tmin);
+            if r.tmin < f.tmin {
+                f.tmin = r.tmin;
+            }
         }
         f
     }
