@@ -333,9 +333,9 @@ impl Bvh {
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         macro_rules! run {
             ($isa:expr) => {{
-                // Per group: the set-up (three divisions per ray) of every ray, eight at a
-                // time, and by it which rays may enter the tree at all (most primary rays miss
-                // it); the others are misses without further work.
+                // Per group, eight rays at a time: which may enter the tree at all (most
+                // primary rays miss it) and the set-up (three divisions per ray) of the eights
+                // that have one; the others are misses without further work.
                 let mut slot = [0u8; SETUP_GROUP];
                 let mut singles = [0u8; SETUP_GROUP];
                 for (rs, hs) in rays.chunks(SETUP_GROUP).zip(hits.chunks_mut(SETUP_GROUP)) {
