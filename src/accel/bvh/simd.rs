@@ -278,6 +278,74 @@ const PLANE_WORDS: [[u32; 8]; 2] = {
     t
 };
 
+/// The reciprocal directions of eight rays (one register per axis, lane `k` = ray `k`): per
+/// lane the operations of [`box_ray8`] (`1 / d`, or +-`f32::MAX` with the sign of `d` where
+/// that is not finite).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn inv8(dir: [__m256; 3]) -> [__m256; 3] {
+    // SAFETY: the caller guarantees AVX2; no memory access.
+    unsafe {
+        let sign = _mm256_set1_ps(-0.0);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        // A loop, not `array::map`: its closure may be compiled out of line, outside the AVX2
+        // context.
+        let mut inv = [_mm256_setzero_ps(); 3];
+        for axis in 0..3 {
+            let d = dir[axis];
+            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
+            let finite_i = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
+            let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
+            inv[axis] = _mm256_blendv_ps(big, i, finite_i);
+        }
+        inv
+    }
+}
+
+/// The rest of eight rays' box-test values from their fields and reciprocals `inv`: the
+/// fused-slab terms `oi_near` and `oi_far` per axis, then as comparison masks the lanes
+/// whose terms are all finite (`fma`) and the live lanes; per lane the operations of
+/// [`box_ray8`].
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+unsafe fn fused_terms8(
+    org: [__m256; 3],
+    dir: [__m256; 3],
+    inv: [__m256; 3],
+    tmin: __m256,
+    tmax: __m256,
+) -> ([__m256; 3], [__m256; 3], __m256, __m256) {
+    // SAFETY: the caller guarantees AVX2; no memory access.
+    unsafe {
+        let sign = _mm256_set1_ps(-0.0);
+        let inf = _mm256_set1_ps(f32::INFINITY);
+        let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
+        let ones = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+        let (mut finite_all, mut fma_all, mut nonzero) = (ones, ones, _mm256_setzero_ps());
+        let (mut on, mut of) = ([_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3]);
+        for axis in 0..3 {
+            let (o, d) = (org[axis], dir[axis]);
+            let oi = _mm256_mul_ps(o, inv[axis]);
+            let e = _mm256_add_ps(
+                _mm256_mul_ps(_mm256_andnot_ps(sign, oi), _mm256_set1_ps(1.0 / 1048576.0)),
+                _mm256_set1_ps(f32::MIN_POSITIVE),
+            );
+            (on[axis], of[axis]) = (_mm256_add_ps(oi, e), _mm256_sub_ps(oi, e));
+            fma_all = _mm256_and_ps(fma_all, _mm256_and_ps(finite(on[axis]), finite(of[axis])));
+            finite_all = _mm256_and_ps(finite_all, _mm256_and_ps(finite(o), finite(d)));
+            nonzero = _mm256_or_ps(nonzero, _mm256_cmp_ps::<_CMP_NEQ_UQ>(d, _mm256_setzero_ps()));
+        }
+        let live = _mm256_and_ps(_mm256_and_ps(finite_all, nonzero), _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
+        (on, of, fma_all, live)
+    }
+}
+
 /// [`BoxTest::set_up`] of eight rays: [`RootBox::admits`]'s answer for each (by the values
 /// below: the same products, so the same answers; a dead ray's answer is not used), and
 /// unless it is no for all, [`box_ray8`]'s values for each (the same operations per lane,
@@ -294,18 +362,7 @@ unsafe fn set_up8(root: Option<&RootBox>, rays: &[Ray; 8], out: &mut [BoxRay; 8]
     unsafe {
         let f = transpose_rays8(rays);
         let (org, dir, tmin, tmax) = ([f[0], f[1], f[2]], [f[3], f[4], f[5]], f[6], f[7]);
-        let sign = _mm256_set1_ps(-0.0);
-        let inf = _mm256_set1_ps(f32::INFINITY);
-        let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
-        // A loop, not `array::map`: its closure may be compiled out of line, outside the AVX2
-        // context.
-        let mut inv = [_mm256_setzero_ps(); 3];
-        for axis in 0..3 {
-            let d = dir[axis];
-            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
-            let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
-            inv[axis] = _mm256_blendv_ps(big, i, finite(i));
-        }
+        let inv = inv8(dir);
         // Most camera rays miss the tree: eight misses need nothing more.
         let admitted = match root {
             None => 0xff,
@@ -327,22 +384,7 @@ unsafe fn set_up8(root: Option<&RootBox>, rays: &[Ray; 8], out: &mut [BoxRay; 8]
         if admitted == 0 {
             return 0;
         }
-        let ones = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-        let (mut finite_all, mut fma_all, mut nonzero) = (ones, ones, _mm256_setzero_ps());
-        let (mut on, mut of) = ([_mm256_setzero_ps(); 3], [_mm256_setzero_ps(); 3]);
-        for axis in 0..3 {
-            let (o, d) = (org[axis], dir[axis]);
-            let oi = _mm256_mul_ps(o, inv[axis]);
-            let e = _mm256_add_ps(
-                _mm256_mul_ps(_mm256_andnot_ps(sign, oi), _mm256_set1_ps(1.0 / 1048576.0)),
-                _mm256_set1_ps(f32::MIN_POSITIVE),
-            );
-            (on[axis], of[axis]) = (_mm256_add_ps(oi, e), _mm256_sub_ps(oi, e));
-            fma_all = _mm256_and_ps(fma_all, _mm256_and_ps(finite(on[axis]), finite(of[axis])));
-            finite_all = _mm256_and_ps(finite_all, _mm256_and_ps(finite(o), finite(d)));
-            nonzero = _mm256_or_ps(nonzero, _mm256_cmp_ps::<_CMP_NEQ_UQ>(d, _mm256_setzero_ps()));
-        }
-        let live = _mm256_and_ps(_mm256_and_ps(finite_all, nonzero), _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax));
+        let (on, of, fma_all, live) = fused_terms8(org, dir, inv, tmin, tmax);
         let top = |x: __m256| _mm256_srli_epi32::<31>(_mm256_castps_si256(x));
         let octant = _mm256_or_si256(
             _mm256_or_si256(top(dir[0]), _mm256_slli_epi32::<1>(top(dir[1]))),
@@ -376,38 +418,20 @@ unsafe fn box_rays8(rays: &[Ray; 8]) -> PacketBoxRays {
     unsafe {
         let f = transpose_rays8(rays);
         let (org, dir, tmin, tmax) = ([f[0], f[1], f[2]], [f[3], f[4], f[5]], f[6], f[7]);
-        let sign = _mm256_set1_ps(-0.0);
-        let inf = _mm256_set1_ps(f32::INFINITY);
+        let inv = inv8(dir);
+        let (on, of, fma_all, live) = fused_terms8(org, dir, inv, tmin, tmax);
         let mut out = PacketBoxRays::EMPTY;
-        let ones = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
-        let (mut finite_all, mut fma_all, mut nonzero) = (ones, ones, _mm256_setzero_ps());
         for axis in 0..3 {
-            let (o, d) = (org[axis], dir[axis]);
-            let i = _mm256_div_ps(_mm256_set1_ps(1.0), d);
-            let finite_i = _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, i), inf);
-            let big = _mm256_or_ps(_mm256_and_ps(d, sign), _mm256_set1_ps(f32::MAX));
-            let inv = _mm256_blendv_ps(big, i, finite_i);
-            let oi = _mm256_mul_ps(o, inv);
-            let e = _mm256_add_ps(
-                _mm256_mul_ps(_mm256_andnot_ps(sign, oi), _mm256_set1_ps(1.0 / 1048576.0)),
-                _mm256_set1_ps(f32::MIN_POSITIVE),
-            );
-            let (on, of) = (_mm256_add_ps(oi, e), _mm256_sub_ps(oi, e));
-            _mm256_store_ps(out.org[axis].as_mut_ptr(), o);
-            _mm256_store_ps(out.inv[axis].as_mut_ptr(), inv);
-            _mm256_store_ps(out.oi_near[axis].as_mut_ptr(), on);
-            _mm256_store_ps(out.oi_far[axis].as_mut_ptr(), of);
-            let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(_mm256_andnot_ps(sign, x), inf);
-            fma_all = _mm256_and_ps(fma_all, _mm256_and_ps(finite(on), finite(of)));
-            finite_all = _mm256_and_ps(finite_all, _mm256_and_ps(finite(o), finite(d)));
-            nonzero = _mm256_or_ps(nonzero, _mm256_cmp_ps::<_CMP_NEQ_UQ>(d, _mm256_setzero_ps()));
+            _mm256_store_ps(out.org[axis].as_mut_ptr(), org[axis]);
+            _mm256_store_ps(out.inv[axis].as_mut_ptr(), inv[axis]);
+            _mm256_store_ps(out.oi_near[axis].as_mut_ptr(), on[axis]);
+            _mm256_store_ps(out.oi_far[axis].as_mut_ptr(), of[axis]);
         }
         _mm256_store_ps(out.tmin.as_mut_ptr(), tmin);
         _mm256_store_ps(out.tmax.as_mut_ptr(), tmax);
         _mm256_store_ps(out.tie.as_mut_ptr(), _mm256_mul_ps(tmax, _mm256_set1_ps(TIE_SCALE)));
-        let ordered = _mm256_cmp_ps::<_CMP_LE_OQ>(tmin, tmax);
         out.fma = _mm256_movemask_ps(fma_all) as u32;
-        out.live = _mm256_movemask_ps(_mm256_and_ps(_mm256_and_ps(finite_all, nonzero), ordered)) as u32;
+        out.live = _mm256_movemask_ps(live) as u32;
         let (sx, sy, sz) =
             (_mm256_movemask_ps(dir[0]) as u32, _mm256_movemask_ps(dir[1]) as u32, _mm256_movemask_ps(dir[2]) as u32);
         for k in 0..8 {

@@ -214,12 +214,7 @@ impl<'r> Walker<'r> {
             }
         } else {
             let ray = self.ray;
-            // Not `get_or_insert_with`: its closure was compiled out of line, a call (and a
-            // leave of the AVX2 context) at every leaf.
-            let sr = match self.sr {
-                Some(ref sr) => sr,
-                None => self.sr.insert(ShearedRay::of(ray)),
-            };
+            let sr = shear(&mut self.sr, ray);
             counters.prim_tests += leaf_range(self.cur).1 as u64;
             leaf_closest(bvh, isa, self.cur, sr, ray, &mut self.best, &mut stack.leaf);
         }
@@ -305,6 +300,17 @@ pub fn closest_interleaved<B: BoxTest, const N: usize>(
         advance!(a, sa);
         advance!(b, sb);
         advance!(c, sc);
+    }
+}
+
+/// The ray's shear, set up at its first leaf (many rays never reach one). Not
+/// `Option::get_or_insert_with`: its closure was compiled out of line, a call (and a leave
+/// of the AVX2 context) at every leaf.
+#[inline(always)]
+fn shear<'a>(sr: &'a mut Option<ShearedRay>, ray: &Ray) -> &'a ShearedRay {
+    match sr {
+        Some(sr) => sr,
+        None => sr.insert(ShearedRay::of(ray)),
     }
 }
 
@@ -474,7 +480,7 @@ fn walk_any<B: BoxTest, const N: usize>(
                 continue;
             }
             tests += leaf_range(child).1 as u64;
-            let sr = sr.get_or_insert_with(|| ShearedRay::of(ray));
+            let sr = shear(&mut sr, ray);
             if leaf_any(bvh, isa, child, sr, ray, &mut stack.leaf) {
                 break 'trace true;
             }
