@@ -204,9 +204,10 @@ pub(super) fn closest_packet<B: PacketTest>(
 
 /// The leaf tests of the rays `lanes` (bit `k`: `rays[k]`, lane `k` of `p`) in `blk`, a leaf
 /// of `count` primitives, each ray with its own closest hit so far (`best[k]`). Where the
-/// instruction set has the kernel and the rays share their axes, each triangle is filtered
-/// for all the rays at once; the filter's survivors take the exact test ray by ray, in any
-/// order (the closest hit does not depend on it). `closest[k]` follows `best[k].t`.
+/// instruction set has the kernel and the rays share their axes, each triangle is tested
+/// for all the rays at once ([`super::packet::TriRays`]: the kernel's hits are the scalar
+/// test's, and the rays it leaves undecided take the scalar test one by one), in any order
+/// (the closest hit does not depend on it). `closest[k]` follows `best[k].t`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn leaf_rays<B: PacketTest>(
@@ -232,12 +233,20 @@ fn leaf_rays<B: PacketTest>(
         // The kernel reads the axes of lane 0.
         lead_shear.rows[0] = p.rows[lead];
         for lane in 0..count {
-            let tri = blk.tri_lanes >> lane & 1 != 0;
-            let Some(mut cand) = (if tri { isa.tri_filter_rays(blk, lane, &lead_shear, closest) } else { Some(lanes) })
-            else {
-                break;
-            };
-            cand &= lanes;
+            let mut cand = lanes;
+            if blk.tri_lanes >> lane & 1 != 0 {
+                let Some(r) = isa.tri_rays(blk, lane, &lead_shear, closest) else {
+                    break;
+                };
+                let mut exact = r.exact & lanes;
+                while exact != 0 {
+                    let k = exact.trailing_zeros() as usize;
+                    exact &= exact - 1;
+                    best[k].offer((r.t[k], r.u[k], r.v[k]), blk.ids[lane]);
+                    closest[k] = best[k].t;
+                }
+                cand &= r.unsure;
+            }
             while cand != 0 {
                 let k = cand.trailing_zeros() as usize;
                 cand &= cand - 1;
@@ -451,61 +460,75 @@ mod tests {
         );
     }
 
-    /// The eight-ray triangle filter keeps every ray the scalar watertight test hits (each
-    /// with its own range), on triangles around the packet's rays, sharing edges and corners.
+    /// The eight-ray triangle kernel gives every ray the scalar watertight test's answer (each
+    /// with its own range): its hits bit for bit, its misses scalar misses, and the rays it
+    /// leaves undecided include every scalar hit it did not finish. On fans of triangles
+    /// around the rays (shared edges and corners), around the point a ray aims at exactly,
+    /// around the rays' origin (a corner there: exact-zero edge functions) and just off it (a
+    /// ray leaving the surface: the t bound decides).
     #[test]
-    fn the_eight_ray_filter_keeps_every_scalar_hit() {
+    fn the_eight_ray_kernel_gives_the_scalar_answer() {
         #[cfg(target_arch = "x86_64")]
         if let Some(avx) = crate::cpu::Avx2::new() {
             let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
-            let mut hits = 0;
+            let (mut exact, mut undecided) = (0, 0);
             for rays in packets(&mut rng) {
                 for group in rays.chunks(PACKET) {
                     let p = Scalar.packet_shear(group);
                     if p.rows[..group.len()].iter().any(|r| *r != p.rows[0]) {
                         continue;
                     }
-                    // A fan of four triangles around a point the rays pass near.
-                    let centre = group[0].origin + group[0].dir * (1.0 + rng.next());
+                    let aim = group[0].origin + group[0].dir * (1.0 + rng.next());
                     let scale = (group[0].dir.length() * 0.05).max(1e-3);
-                    let ring: Vec<Vec3> = (0..5).map(|_| centre + rng.vec() * scale).collect();
-                    let mut blk = Tri4 { tri_lanes: 0b1111, ids: [0, 1, 2, 3], ..Tri4::default() };
-                    for lane in 0..4 {
-                        for (c, v) in [centre, ring[lane], ring[lane + 1]].into_iter().enumerate() {
-                            for axis in 0..3 {
-                                blk.c[c][axis][lane] = v[axis];
+                    let grazing = group[0].origin + group[0].dir * (rng.next() * 1e-4);
+                    for centre in [aim + rng.vec() * scale * 0.1, aim, group[0].origin, grazing] {
+                        let ring: Vec<Vec3> = (0..5).map(|_| centre + rng.vec() * scale).collect();
+                        let mut blk = Tri4 { tri_lanes: 0b1111, ids: [0, 1, 2, 3], ..Tri4::default() };
+                        for lane in 0..4 {
+                            for (c, v) in [centre, ring[lane], ring[lane + 1]].into_iter().enumerate() {
+                                for axis in 0..3 {
+                                    blk.c[c][axis][lane] = v[axis];
+                                }
                             }
                         }
-                    }
-                    for lane in 0..4 {
-                        let corner = |c: usize| Vec3::new(blk.c[c][0][lane], blk.c[c][1][lane], blk.c[c][2][lane]);
-                        let test = |ray: &Ray, tmax: f32| {
-                            intersect_sheared(&ShearedRay::of(ray), ray.tmin, tmax, corner(0), corner(1), corner(2))
-                        };
-                        // Each ray's own range, and ranges ending exactly at its hit (a tie
-                        // with a hit found before).
-                        for tie in [false, true] {
-                            let closest: [f32; PACKET] = std::array::from_fn(|k| match group.get(k) {
-                                Some(r) if tie => test(r, r.tmax).map_or(r.tmax, |h| h.0),
-                                Some(r) => r.tmax,
-                                None => 0.0,
-                            });
-                            let kept = crate::cpu::with_avx2(avx, |t| t.tri_filter_rays(&blk, lane, &p, &closest))
-                                .expect("the AVX2 kernel");
-                            for (k, ray) in group.iter().enumerate() {
-                                if test(ray, closest[k]).is_some() {
-                                    hits += 1;
-                                    assert!(
-                                        kept >> k & 1 != 0,
-                                        "ray {k} of {group:?} hits triangle {lane} by {closest:?}"
-                                    );
+                        for lane in 0..4 {
+                            let corner = |c: usize| Vec3::new(blk.c[c][0][lane], blk.c[c][1][lane], blk.c[c][2][lane]);
+                            let test = |ray: &Ray, tmax: f32| {
+                                intersect_sheared(&ShearedRay::of(ray), ray.tmin, tmax, corner(0), corner(1), corner(2))
+                            };
+                            // Each ray's own range, and ranges ending exactly at its hit (a
+                            // tie with a hit found before).
+                            for tie in [false, true] {
+                                let closest: [f32; PACKET] = std::array::from_fn(|k| match group.get(k) {
+                                    Some(r) if tie => test(r, r.tmax).map_or(r.tmax, |h| h.0),
+                                    Some(r) => r.tmax,
+                                    None => 0.0,
+                                });
+                                let got = crate::cpu::with_avx2(avx, |t| t.tri_rays(&blk, lane, &p, &closest))
+                                    .expect("the AVX2 kernel");
+                                assert_eq!(got.exact & got.unsure, 0);
+                                for (k, ray) in group.iter().enumerate() {
+                                    let want = test(ray, closest[k]).map(|(t, u, v)| [t, u, v].map(f32::to_bits));
+                                    let why = || format!("ray {k} of {group:?}, triangle {lane}, by {closest:?}");
+                                    if got.exact >> k & 1 != 0 {
+                                        exact += 1;
+                                        let mine = [got.t[k], got.u[k], got.v[k]].map(f32::to_bits);
+                                        assert_eq!(Some(mine), want, "{}", why());
+                                    } else if got.unsure >> k & 1 != 0 {
+                                        undecided += want.is_some() as usize;
+                                    } else {
+                                        assert_eq!(want, None, "{}", why());
+                                    }
                                 }
                             }
                         }
                     }
                 }
             }
-            assert!(hits > 2000, "too few hits to compare: {hits}");
+            assert!(
+                exact > 10_000 && undecided > 5_000,
+                "too few hits to compare: {exact} exact, {undecided} undecided"
+            );
         }
     }
 }

@@ -60,11 +60,6 @@ pub(super) trait PacketTest: BoxTest {
         self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
     }
 
-    /// The rays of `p` (bit `k`: lane `k`, whose closest hit so far is at `closest[k]`) that
-    /// may hit triangle `lane` of `blk`: the filter of [`BoxTest::tri_filter`] with one ray
-    /// per lane instead of one triangle per lane. Every lane's axes must be those of lane 0
-    /// (`rows`). None where the instruction set has no such kernel: the caller filters ray
-    /// by ray.
     /// The rays of `p` (bit `k`: lane `k`, live, direction octant `oct`, closest hit so far
     /// at `closest[k]`) whose own unfused box test (the [`super::boxtest::Scalar`] one)
     /// enters child `slot` of `node`: one child for eight rays instead of eight children for
@@ -82,11 +77,32 @@ pub(super) trait PacketTest: BoxTest {
         rays
     }
 
+    /// The watertight test of triangle `lane` of `blk` for the rays of `p` (lane `k`, whose
+    /// closest hit so far is at `closest[k]`), one ray per lane instead of one triangle per
+    /// lane: see [`TriRays`]. Every lane's axes must be those of lane 0 (`rows`). None where
+    /// the instruction set has no such kernel: the caller tests ray by ray.
     #[inline(always)]
-    fn tri_filter_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<u32> {
+    fn tri_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<TriRays> {
         let _ = (blk, lane, p, closest);
         None
     }
+}
+
+/// What the eight-ray triangle kernel decided for one triangle. Its operations are the scalar
+/// watertight test's (`intersect_sheared`: same operands, same order, no fused multiply-add),
+/// so where it can finish the test its hit is the scalar one bit for bit; it leaves to the
+/// scalar test only the rays that need more than those operations: an edge function that is
+/// exactly zero (the f64 fallback) and hits whose triangle reaches back to the origin's depth
+/// (the bound on t's rounding error). Every other ray misses.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct TriRays {
+    /// Rays (bit `k`: lane `k`) whose hit is `(t[k], u[k], v[k])`.
+    pub(super) exact: u32,
+    /// Rays the scalar test decides.
+    pub(super) unsure: u32,
+    pub(super) t: [f32; PACKET],
+    pub(super) u: [f32; PACKET],
+    pub(super) v: [f32; PACKET],
 }
 
 impl PacketTest for super::boxtest::Scalar {}

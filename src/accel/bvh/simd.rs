@@ -4,11 +4,12 @@ use super::boxtest::{
     BoxRay, BoxTest, EXIT_SCALE, Frustum, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, far, near, set_up_each,
 };
 use super::leaf::Tri4;
-use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest};
+use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest, TriRays};
 use super::wide::{Node8, WIDTH};
 use crate::accel::triangle::{ShearedRay, range_end};
 use crate::cpu::{Avx2, Sse};
 use crate::geometry::Ray;
+use crate::geometry::error_bound::gamma;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
 
@@ -196,9 +197,9 @@ impl PacketTest for Avx2 {
     }
 
     #[inline(always)]
-    fn tri_filter_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<u32> {
+    fn tri_rays(self, blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> Option<TriRays> {
         // SAFETY: `Avx2` exists only if AVX2 was detected; `lane` < 4 indexes the block's rows.
-        Some(unsafe { tri_filter_rays8(blk, lane % 4, p, closest) })
+        Some(unsafe { tri_rays8(blk, lane % 4, p, closest) })
     }
 
     #[inline(always)]
@@ -828,16 +829,18 @@ unsafe fn shear8(rays: &[Ray; 8]) -> PacketShear {
     }
 }
 
-/// [`tri_filter4`]'s operations for triangle `lane` of `blk` and the eight rays of `p`, one
-/// ray per lane (the corner broadcast, the ray's values in its lane, all rays with the axes
-/// of lane 0), with `tend` = `range_end(closest)` per lane: a ray it rejects, the scalar test
-/// rejects.
+/// [`PacketTest::tri_rays`]: [`tri_filter4`]'s operations for triangle `lane` of `blk` and
+/// the eight rays of `p`, one ray per lane (the corner broadcast, the ray's values in its
+/// lane, all rays with the axes of lane 0), with `tend` = `range_end(closest)` per lane; then,
+/// for the rays it keeps without an exact-zero edge function, the rest of
+/// `intersect_sheared`'s operations (the division, the exact range check, the test of
+/// whether the triangle reaches back to the origin's depth).
 ///
 /// # Safety
 /// The CPU must have AVX2; `lane` < 4.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-unsafe fn tri_filter_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> u32 {
+unsafe fn tri_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PACKET]) -> TriRays {
     // SAFETY: the caller guarantees AVX2; the loads are unaligned ones of 8 f32 from arrays of
     // exactly 8; `rows` are 16 * axis with axis < 3, so the corner indices are in bounds.
     unsafe {
@@ -885,7 +888,40 @@ unsafe fn tri_filter_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[
             _mm256_cmp_ps::<_CMP_GT_OQ>(tt_s, _mm256_mul_ps(tend, det_abs)),
         );
         let accept = _mm256_andnot_ps(_mm256_or_ps(_mm256_and_ps(neg, pos), out_of_range), det_ok);
-        _mm256_movemask_ps(_mm256_or_ps(on_edge, accept)) as u32
+        let mut out = TriRays {
+            exact: 0,
+            unsure: _mm256_movemask_ps(on_edge) as u32,
+            t: [0.0; PACKET],
+            u: [0.0; PACKET],
+            v: [0.0; PACKET],
+        };
+        // Accepted means det is finite and non-zero, so u, v, w are not NaN and the sign test
+        // by min and max was the scalar one exactly; most triangles keep no ray at all.
+        let clean = _mm256_andnot_ps(on_edge, accept);
+        if _mm256_movemask_ps(clean) != 0 {
+            let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+            let t_hit = _mm256_mul_ps(tt, inv);
+            let in_range = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(t_hit, _mm256_loadu_ps(p.tmin.as_ptr())),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t_hit, t),
+            );
+            // The scalar test's `near <= gamma(3) * far` (then the t bound decides): no NaN
+            // reaches here with `in_range` set (a NaN depth makes t NaN).
+            let (szaz, szbz, szcz) = (_mm256_mul_ps(sz, az), _mm256_mul_ps(sz, bz), _mm256_mul_ps(sz, cz));
+            let near = _mm256_min_ps(_mm256_min_ps(szaz, szbz), szcz);
+            let far = _mm256_max_ps(
+                _mm256_max_ps(_mm256_andnot_ps(sign, szaz), _mm256_andnot_ps(sign, szbz)),
+                _mm256_andnot_ps(sign, szcz),
+            );
+            let ahead = _mm256_cmp_ps::<_CMP_GT_OQ>(near, _mm256_mul_ps(_mm256_set1_ps(gamma(3)), far));
+            let hit = _mm256_and_ps(clean, in_range);
+            out.exact = _mm256_movemask_ps(_mm256_and_ps(hit, ahead)) as u32;
+            out.unsure |= _mm256_movemask_ps(_mm256_andnot_ps(ahead, hit)) as u32;
+            _mm256_storeu_ps(out.t.as_mut_ptr(), t_hit);
+            _mm256_storeu_ps(out.u.as_mut_ptr(), _mm256_mul_ps(v, inv));
+            _mm256_storeu_ps(out.v.as_mut_ptr(), _mm256_mul_ps(w, inv));
+        }
+        out
     }
 }
 
