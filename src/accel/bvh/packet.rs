@@ -356,8 +356,10 @@ fn packet_any<B: PacketTest>(
     counters.rays += n as u64;
     let pb = isa.packet_box_rays(&rays[..n]);
     let live = pb.live;
-    // The leaf set-up is made at the packet's first leaf (many rays never reach one).
-    let mut shear: Option<PacketShear> = None;
+    // The leaf set-up is made at the packet's first leaf (many rays never reach one), with
+    // whether all its live rays share their shear axes (then the eight-ray triangle kernel,
+    // which reads the axes of lane 0, may test a triangle for all of them at once).
+    let mut shear: Option<(PacketShear, bool)> = None;
     let mut hit = 0u32;
     let (mut sp, mut cur, mut cur_rays) = (0usize, 0u32, live);
     let (mut visited, mut tests) = (0u64, 0u64);
@@ -406,7 +408,44 @@ fn packet_any<B: PacketTest>(
                     continue;
                 }
                 tests += (count as u32 * m.count_ones()) as u64;
-                let sh = &*shear.get_or_insert_with(|| isa.packet_shear(&rays[..n]));
+                let (sh, shared) = &*shear.get_or_insert_with(|| {
+                    let mut sh = isa.packet_shear(&rays[..n]);
+                    let lead = live.trailing_zeros() as usize % PACKET;
+                    let mut rest = live;
+                    let mut shared = true;
+                    while rest != 0 {
+                        shared &= sh.rows[rest.trailing_zeros() as usize] == sh.rows[lead];
+                        rest &= rest - 1;
+                    }
+                    sh.rows[0] = sh.rows[lead];
+                    (sh, shared)
+                });
+                // More rays than triangles: each triangle for all the rays at once (its hits
+                // are the scalar test's; the rays it leaves undecided take that test).
+                if *shared && m.count_ones() as usize > count {
+                    for lane in 0..count {
+                        let mut unsure = m;
+                        if blk.tri_lanes >> lane & 1 != 0 {
+                            // No kernel: the rays left go on to the filter ray by ray.
+                            let Some(r) = isa.tri_rays(blk, lane, sh, &pb.tmax) else { break };
+                            hit |= r.exact & m;
+                            unsure &= r.unsure & !hit;
+                        }
+                        while unsure != 0 {
+                            let k = unsure.trailing_zeros() as usize;
+                            unsure &= unsure - 1;
+                            if lane_hit(bvh, blk, lane, &sh.sheared(k, &rays[k]), &rays[k], rays[k].tmax).is_some() {
+                                hit |= 1 << k;
+                            }
+                        }
+                        m &= !hit;
+                        if m == 0 || lane + 1 == count {
+                            // Every lane tested: the rays without a hit miss this leaf.
+                            m = 0;
+                            break;
+                        }
+                    }
+                }
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
                     m &= m - 1;

@@ -19,7 +19,8 @@ fn on_triangle(scene: &Scene, i: usize, u: f32, v: f32) -> Vec3 {
 }
 
 /// Queue-like rays: runs of 1..=9 rays with one origin (a run longer than a packet is split),
-/// aimed at random points, corners, edges, a small "light" patch, along edges and axes.
+/// aimed at random points, corners, edges, a small "light" patch (some runs all of them),
+/// along edges and axes.
 fn shadow_like_rays(scene: &Scene, n_origins: usize) -> Vec<Ray> {
     let tris = scene.mesh.triangle_count();
     let mut s = Sampler::for_sample(7, 3, 0);
@@ -39,10 +40,13 @@ fn shadow_like_rays(scene: &Scene, n_origins: usize) -> Vec<Ray> {
             _ => lo + (hi - lo) * Vec3::new(s.next_f32(), s.next_f32(), s.next_f32()),
         };
         let count = 1 + (s.next_f32() * 9.0) as usize;
+        // Every fifth run aims all its rays at the light patch, as the shadow rays of one
+        // point do (one set of shear axes, more rays than triangles in most leaves).
+        let at_light = o % 5 == 3;
         for k in 0..count {
             let t1 = pick(&mut s);
             let [a, b, c] = scene.mesh.corners(t1);
-            let target = match (o + k) % 7 {
+            let target = match if at_light { 0 } else { (o + k) % 7 } {
                 0 => light + Vec3::new(s.next_f32() - 0.5, 0.0, s.next_f32() - 0.5) * 0.1 * (hi - lo),
                 1 => a,
                 2 => 0.5 * (b + c),
