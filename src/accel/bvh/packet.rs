@@ -7,10 +7,11 @@
 //!
 //! Every ray still gets its own box test (its own [`BoxRay`] values, the same operations as
 //! [`BoxTest::test`] in [`traverse::any_hit_with`]) and its own leaf tests (the filter and
-//! exact test of `leaf_any`, in the same lane order); a ray enters a child only if its own
-//! test of that child passed at every level above. So a ray tests a subset of what its
-//! single-ray traversal could reach and the same leaves that matter: the boolean is the
-//! single-ray one, bit for bit, whatever the ISA.
+//! exact test of `leaf_any`, or, where more rays than triangles enter a leaf, the eight-ray
+//! kernel whose hits are that exact test's); a ray enters a child only if its own test of
+//! that child passed at every level above. So a ray tests a subset of what its single-ray
+//! traversal could reach and the same leaves that matter: the boolean is the single-ray one,
+//! bit for bit, whatever the ISA.
 //!
 //! Per-ray set-up is done for the whole packet at once ([`PacketBoxRays`] at the start,
 //! [`PacketShear`] at the first leaf; on AVX2 one ray per lane, with each lane's operations
