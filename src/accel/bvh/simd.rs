@@ -860,8 +860,8 @@ unsafe fn tri_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PA
         let [cx, cy, cz] = sheared_corner8(&blk.c[2], lane, k, o, sh);
         // From here `filter4_tail` lane for lane, with each ray's own range.
         let sign = _mm256_set1_ps(-0.0);
-        let t = _mm256_loadu_ps(closest.as_ptr());
-        let tend = _mm256_add_ps(t, _mm256_mul_ps(_mm256_andnot_ps(sign, t), _mm256_set1_ps(8.0 * f32::EPSILON)));
+        let (tmin, tmax) = (_mm256_loadu_ps(p.tmin.as_ptr()), _mm256_loadu_ps(closest.as_ptr()));
+        let tend = _mm256_add_ps(tmax, _mm256_mul_ps(_mm256_andnot_ps(sign, tmax), _mm256_set1_ps(8.0 * f32::EPSILON)));
         let u = _mm256_sub_ps(_mm256_mul_ps(cx, by), _mm256_mul_ps(cy, bx));
         let v = _mm256_sub_ps(_mm256_mul_ps(ax, cy), _mm256_mul_ps(ay, cx));
         let w = _mm256_sub_ps(_mm256_mul_ps(bx, ay), _mm256_mul_ps(by, ax));
@@ -878,13 +878,12 @@ unsafe fn tri_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PA
             _mm256_cmp_ps::<_CMP_NEQ_OQ>(det, zero),
             _mm256_cmp_ps::<_CMP_LT_OQ>(det_abs, _mm256_set1_ps(f32::INFINITY)),
         );
-        let tt = _mm256_add_ps(
-            _mm256_add_ps(_mm256_mul_ps(u, _mm256_mul_ps(sz, az)), _mm256_mul_ps(v, _mm256_mul_ps(sz, bz))),
-            _mm256_mul_ps(w, _mm256_mul_ps(sz, cz)),
-        );
+        // The corners' depths `sz * z`, as the scalar test's `az`, `bz`, `cz`.
+        let (da, db, dc) = (_mm256_mul_ps(sz, az), _mm256_mul_ps(sz, bz), _mm256_mul_ps(sz, cz));
+        let tt = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(u, da), _mm256_mul_ps(v, db)), _mm256_mul_ps(w, dc));
         let tt_s = _mm256_xor_ps(tt, _mm256_and_ps(det, sign));
         let out_of_range = _mm256_or_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(tt_s, _mm256_mul_ps(_mm256_loadu_ps(p.tmin.as_ptr()), det_abs)),
+            _mm256_cmp_ps::<_CMP_LT_OQ>(tt_s, _mm256_mul_ps(tmin, det_abs)),
             _mm256_cmp_ps::<_CMP_GT_OQ>(tt_s, _mm256_mul_ps(tend, det_abs)),
         );
         let accept = _mm256_andnot_ps(_mm256_or_ps(_mm256_and_ps(neg, pos), out_of_range), det_ok);
@@ -901,17 +900,14 @@ unsafe fn tri_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest: &[f32; PA
         if _mm256_movemask_ps(clean) != 0 {
             let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
             let t_hit = _mm256_mul_ps(tt, inv);
-            let in_range = _mm256_and_ps(
-                _mm256_cmp_ps::<_CMP_GE_OQ>(t_hit, _mm256_loadu_ps(p.tmin.as_ptr())),
-                _mm256_cmp_ps::<_CMP_LE_OQ>(t_hit, t),
-            );
+            let in_range =
+                _mm256_and_ps(_mm256_cmp_ps::<_CMP_GE_OQ>(t_hit, tmin), _mm256_cmp_ps::<_CMP_LE_OQ>(t_hit, tmax));
             // The scalar test's `near <= gamma(3) * far` (then the t bound decides): no NaN
             // reaches here with `in_range` set (a NaN depth makes t NaN).
-            let (szaz, szbz, szcz) = (_mm256_mul_ps(sz, az), _mm256_mul_ps(sz, bz), _mm256_mul_ps(sz, cz));
-            let near = _mm256_min_ps(_mm256_min_ps(szaz, szbz), szcz);
+            let near = _mm256_min_ps(_mm256_min_ps(da, db), dc);
             let far = _mm256_max_ps(
-                _mm256_max_ps(_mm256_andnot_ps(sign, szaz), _mm256_andnot_ps(sign, szbz)),
-                _mm256_andnot_ps(sign, szcz),
+                _mm256_max_ps(_mm256_andnot_ps(sign, da), _mm256_andnot_ps(sign, db)),
+                _mm256_andnot_ps(sign, dc),
             );
             let ahead = _mm256_cmp_ps::<_CMP_GT_OQ>(near, _mm256_mul_ps(_mm256_set1_ps(gamma(3)), far));
             let hit = _mm256_and_ps(clean, in_range);
