@@ -421,31 +421,14 @@ fn packet_any<B: PacketTest>(
                     sh.rows[0] = sh.rows[lead];
                     (sh, shared)
                 });
-                // More rays than triangles: each triangle for all the rays at once (its hits
-                // are the scalar test's; the rays it leaves undecided take that test).
-                if *shared && m.count_ones() as usize > count {
-                    for lane in 0..count {
-                        let mut unsure = m;
-                        if blk.tri_lanes >> lane & 1 != 0 {
-                            // No kernel: the rays left go on to the filter ray by ray.
-                            let Some(r) = isa.tri_rays(blk, lane, sh, &pb.tmax) else { break };
-                            hit |= r.exact & m;
-                            unsure &= r.unsure & !hit;
-                        }
-                        while unsure != 0 {
-                            let k = unsure.trailing_zeros() as usize;
-                            unsure &= unsure - 1;
-                            if lane_hit(bvh, blk, lane, &sh.sheared(k, &rays[k]), &rays[k], rays[k].tmax).is_some() {
-                                hit |= 1 << k;
-                            }
-                        }
-                        m &= !hit;
-                        if m == 0 || lane + 1 == count {
-                            // Every lane tested: the rays without a hit miss this leaf.
-                            m = 0;
-                            break;
-                        }
-                    }
+                // More rays than triangles: each triangle for all the rays at once (without
+                // the kernel, the rays go on ray by ray below).
+                if *shared
+                    && m.count_ones() as usize > count
+                    && let Some(h) = leaf_any_rays(bvh, isa, blk, count, sh, rays, &pb.tmax, m)
+                {
+                    hit |= h;
+                    m = 0;
                 }
                 while m != 0 {
                     let k = m.trailing_zeros() as usize;
@@ -478,6 +461,46 @@ fn packet_any<B: PacketTest>(
     for (k, o) in occluded.iter_mut().enumerate().take(n) {
         *o = hit >> k & 1 != 0;
     }
+}
+
+/// The rays of `m` (bit `k`: `rays[k]`, lane `k` of `sh`, range end `tmax[k]`) that hit a
+/// primitive of `blk`, a leaf of `count`, each triangle tested for all of them at once by
+/// [`PacketTest::tri_rays`] (its hits are the exact test's; the rays it leaves undecided and
+/// the other primitives take the exact test ray by ray). None where the instruction set has
+/// no such kernel.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn leaf_any_rays<B: PacketTest>(
+    bvh: &Bvh,
+    isa: B,
+    blk: &Tri4,
+    count: usize,
+    sh: &PacketShear,
+    rays: &[Ray],
+    tmax: &[f32; PACKET],
+    mut m: u32,
+) -> Option<u32> {
+    let mut hit = 0;
+    for lane in 0..count {
+        let mut unsure = m;
+        if blk.tri_lanes >> lane & 1 != 0 {
+            let r = isa.tri_rays(blk, lane, sh, tmax)?;
+            hit |= r.exact & m;
+            unsure &= r.unsure & !hit;
+        }
+        while unsure != 0 {
+            let k = unsure.trailing_zeros() as usize;
+            unsure &= unsure - 1;
+            if lane_hit(bvh, blk, lane, &sh.sheared(k, &rays[k]), &rays[k], rays[k].tmax).is_some() {
+                hit |= 1 << k;
+            }
+        }
+        m &= !hit;
+        if m == 0 {
+            break;
+        }
+    }
+    Some(hit)
 }
 
 #[cfg(test)]
