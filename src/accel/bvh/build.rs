@@ -102,10 +102,18 @@ fn bounds(refs: &[PrimRef]) -> Bounds {
     (lo, hi, clo, chi)
 }
 
+/// [`bounds`] over chunks in parallel (min and max are exact in any order: the same bounds).
+fn bounds_par(refs: &[PrimRef]) -> Bounds {
+    use rayon::prelude::*;
+    let join = |a: Bounds, b: Bounds| (a.0.min(b.0), a.1.max(b.1), a.2.min(b.2), a.3.max(b.3));
+    let inf = Vec3::splat(f32::INFINITY);
+    refs.par_chunks(SPLIT_PAR_MIN).map(bounds).reduce(|| (inf, -inf, inf, -inf), join)
+}
+
 /// Builds the tree over `refs`, reordering them into leaf order. Only the nodes reachable
 /// from the root (at 0) are the tree; the others are zero.
 pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
-    let b = bounds(refs);
+    let b = bounds_par(refs);
     let mut nodes: Vec<Node2> = bytemuck::zeroed_vec(node_bound(refs.len()));
     build_into(refs, b, 0, 0, &mut nodes, 0);
     nodes
