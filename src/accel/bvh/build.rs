@@ -258,22 +258,31 @@ impl Bins {
         let mut best = (f32::INFINITY, 0usize, 0usize);
         for ax in 0..3 {
             let (cnt, bin) = (&self.cnt[ax], &self.bin[ax]);
-            // Right-to-left sweep: cost of the right side for each split position.
+            // Only occupied bins are visited: an empty bin's boundary splits the primitives
+            // as the one below it does (the same cost, and the sweep keeps the first of
+            // equal costs), so small sets, which fill few of the bins, sweep few positions.
+            let occupied = (0..BINS).fold(0u32, |m, i| m | ((cnt[i] != 0) as u32) << i);
+            // Right-to-left: the cost of the right side from each occupied bin on.
             let mut right_cost = [0f32; BINS];
-            let (mut side, mut c) = (Box3::EMPTY, 0u32);
-            for i in (1..BINS).rev() {
+            let (mut side, mut c, mut m) = (Box3::EMPTY, 0u32, occupied);
+            while m != 0 {
+                let i = 31 - m.leading_zeros() as usize;
+                m &= !(1 << i);
                 side = side.union(bin[i]);
                 c += cnt[i];
-                right_cost[i] = if c == 0 { 0.0 } else { side.area() * blocks(c) };
+                right_cost[i] = side.area() * blocks(c);
             }
-            let (mut side, mut c) = (Box3::EMPTY, 0u32);
-            for i in 0..BINS - 1 {
+            let (mut side, mut c, mut m) = (Box3::EMPTY, 0u32, occupied);
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
                 side = side.union(bin[i]);
                 c += cnt[i];
-                if c == 0 || c as usize == n {
-                    continue;
+                if c as usize == n {
+                    break;
                 }
-                let cost = side.area() * blocks(c) + right_cost[i + 1];
+                // The right side starts at the next occupied bin; its boundary is `i + 1`.
+                let cost = side.area() * blocks(c) + right_cost[m.trailing_zeros() as usize];
                 if cost < best.0 {
                     best = (cost, ax, i + 1);
                 }
