@@ -648,6 +648,60 @@ mod tests {
         assert!(splits > 10_000, "{splits}");
     }
 
+    /// The sweep over every bin position (each empty bin's too), as the reference for the
+    /// sweep that visits occupied bins only.
+    fn cheapest_every_bin(bins: &Bins, n: usize) -> (f32, usize, usize) {
+        let mut best = (f32::INFINITY, 0usize, 0usize);
+        for ax in 0..3 {
+            for at in 1..BINS {
+                let (l, r) = (bins.union(ax, 0..at), bins.union(ax, at..BINS));
+                let c: u32 = bins.cnt[ax][..at].iter().sum();
+                if c == 0 || c as usize == n {
+                    continue;
+                }
+                let cost = l.area() * blocks(c) + r.area() * blocks(n as u32 - c);
+                if cost < best.0 {
+                    best = (cost, ax, at);
+                }
+            }
+        }
+        best
+    }
+
+    #[test]
+    fn the_sweep_over_occupied_bins_chooses_what_every_bin_position_would() {
+        let mut x = 11u64;
+        let mut next = move || {
+            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (x >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut splits = 0;
+        for case in 0..4_000 {
+            let n = FEW + case % 60;
+            // Clustered centroids leave most bins empty; a coarse grid gives equal costs.
+            let clusters: Vec<Vec3> = (0..1 + case % 4).map(|_| Vec3::new(next(), next(), next()) * 10.0).collect();
+            let refs: Vec<PrimRef> = (0..n)
+                .map(|i| {
+                    let at = clusters[i % clusters.len()] + Vec3::new(next(), next(), next()) * 0.3;
+                    let at = if case % 2 == 0 { (at * 2.0).floor() } else { at };
+                    let size = Vec3::new(next(), next(), next()) * if case % 3 == 0 { 0.0 } else { 2.0 };
+                    PrimRef::new(at - size, at + size, i as u32, false)
+                })
+                .collect();
+            let (_, _, clo, chi) = bounds(&refs);
+            let ext = chi - clo;
+            let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
+            let bins = Bins::gather(&refs, clo, scale);
+            let (got, want) = (bins.cheapest(n), cheapest_every_bin(&bins, n));
+            assert_eq!(got.0.to_bits(), want.0.to_bits(), "case {case}: {got:?} vs {want:?}");
+            if want.0.is_finite() {
+                assert_eq!((got.1, got.2), (want.1, want.2), "case {case}");
+                splits += 1;
+            }
+        }
+        assert!(splits > 3_000, "{splits}");
+    }
+
     #[test]
     fn close_triangles_make_one_leaf_but_distant_ones_and_spheres_are_split_off() {
         // Four touching boxes: the best split's halves cover 22/24 of the whole one's area.
