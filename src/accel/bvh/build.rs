@@ -129,11 +129,13 @@ fn node_bound(n: usize) -> usize {
 /// parent's split, so no pass computes them). Below [`PARALLEL_MIN`] primitives the subtree
 /// is written densely from the front of its range.
 fn build_into(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize, nodes: &mut [Node2], at: usize) {
-    let split = if refs.len() < PARALLEL_MIN { None } else { split(refs, b, depth) };
+    let mut bins = Box::new([Bins::empty(), Bins::empty()]);
+    let split = if refs.len() < PARALLEL_MIN { None } else { split(refs, b, depth, &mut bins) };
     let Some((mid, lb, rb)) = split else {
-        build_seq(refs, b, base, depth, nodes, at, &mut 0);
+        build_seq(refs, b, base, depth, nodes, at, &mut 0, &mut bins);
         return;
     };
+    drop(bins);
     let (lo, hi, _, _) = b;
     let right_at = at + 1 + node_bound(mid);
     let (me, rest) = nodes.split_first_mut().expect("a subtree has a node");
@@ -146,7 +148,9 @@ fn build_into(refs: &mut [PrimRef], b: Bounds, base: usize, depth: usize, nodes:
     *me = Node2 { lo, hi, a: at as u32 + 1, b: right_at as u32, count: 0 };
 }
 
-/// Writes the subtree at `nodes[*next]` onwards; returns its root's absolute index.
+/// Writes the subtree at `nodes[*next]` onwards; returns its root's absolute index. `bins`:
+/// scratch for [`split`].
+#[allow(clippy::too_many_arguments)]
 fn build_seq(
     refs: &mut [PrimRef],
     bnd: Bounds,
@@ -155,15 +159,16 @@ fn build_seq(
     nodes: &mut [Node2],
     at: usize,
     next: &mut usize,
+    bins: &mut [Bins; 2],
 ) -> u32 {
     let (lo, hi, _, _) = bnd;
     let me = *next;
     *next += 1;
     nodes[me] = Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 };
-    if let Some((mid, lb, rb)) = split(refs, bnd, depth) {
+    if let Some((mid, lb, rb)) = split(refs, bnd, depth, bins) {
         let (l, r) = refs.split_at_mut(mid);
-        let a = build_seq(l, lb, base, depth + 1, nodes, at, next);
-        let b = build_seq(r, rb, base + mid, depth + 1, nodes, at, next);
+        let a = build_seq(l, lb, base, depth + 1, nodes, at, next, bins);
+        let b = build_seq(r, rb, base + mid, depth + 1, nodes, at, next, bins);
         nodes[me] = Node2 { lo, hi, a, b, count: 0 };
     }
     (at + me) as u32
@@ -233,22 +238,34 @@ impl Bins {
         }
     }
 
-    fn gather(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> Bins {
-        let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
-        let mut even = Bins::empty();
-        if refs.len() < TWO_SETS_MIN {
-            refs.iter().for_each(|r| even.add(r, clo, scale));
-            return even;
+    /// Empties the bins, in place (building a new set moved it through `memcpy` twice).
+    fn clear(&mut self) {
+        for ax in 0..3 {
+            self.cnt[ax] = [0; BINS];
+            for b in &mut self.bin[ax] {
+                *b = Box3::EMPTY;
+            }
         }
-        let mut odd = Bins::empty();
+    }
+
+    /// Fills these bins with `refs` (`odd`: scratch for the second set). Bins are filled in
+    /// place, not returned: a set is 1.7 KB, and making and moving one per split was a
+    /// twentieth of the build's instructions, in `memcpy`.
+    fn gather(&mut self, refs: &[PrimRef], clo: Vec3, scale: Vec3, odd: &mut Bins) {
+        let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
+        self.clear();
+        if refs.len() < TWO_SETS_MIN {
+            refs.iter().for_each(|r| self.add(r, clo, scale));
+            return;
+        }
+        odd.clear();
         let mut pairs = refs.chunks_exact(2);
         for p in &mut pairs {
-            even.add(&p[0], clo, scale);
+            self.add(&p[0], clo, scale);
             odd.add(&p[1], clo, scale);
         }
-        pairs.remainder().iter().for_each(|r| even.add(r, clo, scale));
-        even.merge(&odd);
-        even
+        pairs.remainder().iter().for_each(|r| self.add(r, clo, scale));
+        self.merge(odd);
     }
 
     /// The cheapest split of `n` primitives: (SAH cost, axis, first bin on the right), the
@@ -293,15 +310,25 @@ impl Bins {
 
     /// [`Bins::gather`] over chunks in parallel when there are many primitives: the top
     /// splits would otherwise run on one thread while the others wait for their halves.
-    fn gather_par(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> Bins {
+    fn gather_par(&mut self, refs: &[PrimRef], clo: Vec3, scale: Vec3, odd: &mut Bins) {
         use rayon::prelude::*;
         if refs.len() < SPLIT_PAR_MIN {
-            return Bins::gather(refs, clo, scale);
+            return self.gather(refs, clo, scale, odd);
         }
-        refs.par_chunks(SPLIT_PAR_MIN / 2).map(|c| Bins::gather(c, clo, scale)).reduce(Bins::empty, |mut a, b| {
-            a.merge(&b);
+        let part = |c: &[PrimRef]| {
+            let mut b = Box::new([Bins::empty(), Bins::empty()]);
+            let [even, odd] = &mut *b;
+            even.gather(c, clo, scale, odd);
+            b
+        };
+        let all = refs.par_chunks(SPLIT_PAR_MIN / 2).map(part).reduce_with(|mut a, b| {
+            a[0].merge(&b[0]);
             a
-        })
+        });
+        self.clear();
+        if let Some(all) = all {
+            self.merge(&all[0]);
+        }
     }
 
     /// Box of the primitives in bins `range` of axis `ax`.
@@ -370,7 +397,8 @@ fn partition(refs: &mut [PrimRef], ax: usize, bin: usize, clo: Vec3, scale: Vec3
 
 /// Chooses a split and partitions `refs` around it: the split point and the two sides'
 /// bounds; None makes a leaf.
-fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds, Bounds)> {
+/// `bins`: scratch, reused from split to split (see [`Bins::gather`]).
+fn split(refs: &mut [PrimRef], b: Bounds, depth: usize, bins: &mut [Bins; 2]) -> Option<(usize, Bounds, Bounds)> {
     let (lo, hi, clo, chi) = b;
     let n = refs.len();
     // A leaf of up to MAX_LEAF triangles is one SIMD block: testing it costs about what a
@@ -398,8 +426,12 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize) -> Option<(usize, Bounds
         return median(refs);
     }
     let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-    let bins = (n >= FEW).then(|| Bins::gather_par(refs, clo, scale));
-    let best = match &bins {
+    let bins = (n >= FEW).then(|| {
+        let [even, odd] = bins;
+        even.gather_par(refs, clo, scale, odd);
+        &*even
+    });
+    let best = match bins {
         Some(bins) => bins.cheapest(n),
         None => cheapest_of_few(refs, clo, scale),
     };
@@ -578,7 +610,7 @@ mod tests {
         let mut reference: Vec<Node2> = bytemuck::zeroed_vec(node_bound(n));
         let mut used = 0;
         let b = bounds(&seq);
-        build_seq(&mut seq, b, 0, 0, &mut reference, 0, &mut used);
+        build_seq(&mut seq, b, 0, 0, &mut reference, 0, &mut used, &mut [Bins::empty(), Bins::empty()]);
         // Both walked from the root: the same nodes (boxes, leaf ranges, the same primitives
         // in each leaf: a parallel partition orders each side its own way); leaves covering
         // the references once, in order; a left child right after its parent; every node's
@@ -637,7 +669,9 @@ mod tests {
             let (_, _, clo, chi) = bounds(&refs);
             let ext = chi - clo;
             let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-            let binned = Bins::gather(&refs, clo, scale).cheapest(n);
+            let (mut bins, mut odd) = (Bins::empty(), Bins::empty());
+            bins.gather(&refs, clo, scale, &mut odd);
+            let binned = bins.cheapest(n);
             let few = cheapest_of_few(&refs, clo, scale);
             assert_eq!(few.0.to_bits(), binned.0.to_bits(), "case {case}: {few:?} vs {binned:?}");
             if binned.0.is_finite() {
@@ -691,7 +725,8 @@ mod tests {
             let (_, _, clo, chi) = bounds(&refs);
             let ext = chi - clo;
             let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-            let bins = Bins::gather(&refs, clo, scale);
+            let (mut bins, mut odd) = (Bins::empty(), Bins::empty());
+            bins.gather(&refs, clo, scale, &mut odd);
             let (got, want) = (bins.cheapest(n), cheapest_every_bin(&bins, n));
             assert_eq!(got.0.to_bits(), want.0.to_bits(), "case {case}: {got:?} vs {want:?}");
             if want.0.is_finite() {
