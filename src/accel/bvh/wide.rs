@@ -97,24 +97,21 @@ pub struct Wide {
 /// Collapses `bin` (root at 0) into 8-wide nodes: each wide node takes the descendants of a
 /// binary node that fill its eight slots at least SAH cost ([`Plan`]).
 pub fn collapse(bin: &[Node2]) -> Wide {
-    // Reserved, not touched: a quarter node per primitive (the binary array holds about two
-    // slots per primitive) is several times what trees of small leaves need, and growing
-    // the array by doubling copied every node (emit took twice as long).
-    let mut nodes = Vec::with_capacity(bin.len() / 8 + 1);
     let root_area = area(bin[0].lo, bin[0].hi).max(f32::MIN_POSITIVE) as f64;
-    let mut cost = 0.0;
-    let depth = if bin[0].count > 0 {
+    if bin[0].count > 0 {
         // The whole scene is one leaf: a root with a single leaf child.
         let mut n = Node8::empty();
         set_child(&mut n, 0, &bin[0], leaf_ref(bin[0].a, bin[0].count));
-        cost += C_TRAV as f64 + bin[0].count as f64;
-        nodes.push(n);
-        1
-    } else {
-        emit(bin, &Plan::new(bin, root_area), 0, &mut nodes, root_area, &mut cost)
-    };
-    nodes.par_iter_mut().for_each(Node8::set_order);
-    Wide { nodes, depth, sah_cost: cost }
+        n.set_order();
+        return Wide { nodes: vec![n], depth: 1, sah_cost: C_TRAV as f64 + bin[0].count as f64 };
+    }
+    let plan = Plan::new(bin, root_area);
+    // Every node's place is known from the plan's counts, so subtrees are emitted in
+    // parallel into their own ranges of one array, itself filled in parallel (emitting
+    // on one thread, page faults included, took 0.3-0.5 s at 25.6M triangles).
+    let mut nodes: Vec<Node8> = (0..plan.wide[0]).into_par_iter().map(|_| Node8::empty()).collect();
+    let (depth, sah_cost) = emit(bin, &plan, 0, &mut nodes, 0, root_area);
+    Wide { nodes, depth, sah_cost }
 }
 
 fn set_child(n: &mut Node8, slot: usize, c: &Node2, r: u32) {
@@ -156,6 +153,9 @@ struct Plan {
     /// Both tables start as zeroed memory, mapped lazily: the binary array's unused ranges
     /// (see the builder) cost them nothing either.
     open: Vec<u8>,
+    /// Wide nodes in the subtree of inner node `n` when it becomes a wide node (itself
+    /// included): where each subtree goes in the wide array, before any is emitted.
+    wide: Vec<u32>,
 }
 
 /// SAH cost of visiting a wide node, relative to a leaf block test. The leaves are fixed
@@ -167,8 +167,9 @@ impl Plan {
     fn new(bin: &[Node2], root_area: f64) -> Plan {
         let mut left = vec![[0u8; WIDTH]; bin.len()];
         let mut open = vec![0u8; bin.len()];
-        let cost = plan_subtree(bin, 0, &mut left, &mut open, root_area);
-        Plan { root_cost: cost[0], left, open }
+        let mut wide = vec![0u32; bin.len()];
+        let (cost, _) = plan_subtree(bin, 0, Tables { left: &mut left, open: &mut open, wide: &mut wide }, root_area);
+        Plan { root_cost: cost[0], left, open, wide }
     }
 
     /// The binary nodes that fill the slots of the wide node made from inner node `n` (the
@@ -196,32 +197,53 @@ impl Plan {
 /// Binary nodes from which [`plan_subtree`] plans the two children in parallel.
 const PARALLEL_PLAN: usize = 1 << 14;
 
-/// `cost[k - 1]`: the least SAH cost of subtree `n` in at most `k` slots; fills the plan of
-/// every node of the subtree. Both build paths store a subtree contiguously in preorder
-/// (`n`, then the left child's subtree, then the right child's), so `left` and `open` are
-/// the subtree's own entries (`[0]` is `n`'s) and split into the children's without
-/// overlap: the children are planned in parallel, and only one cost row per level of the
-/// recursion is ever held (the table of every node's costs took 64 bytes a node).
-fn plan_subtree(bin: &[Node2], n: usize, left: &mut [[u8; WIDTH]], open: &mut [u8], root_area: f64) -> [f64; WIDTH] {
+/// A subtree's own entries of the plan's tables (`[0]` is its root's).
+struct Tables<'a> {
+    left: &'a mut [[u8; WIDTH]],
+    open: &'a mut [u8],
+    wide: &'a mut [u32],
+}
+
+impl<'a> Tables<'a> {
+    /// The root's entries, and the tables of the two child subtrees (the left one's
+    /// `len` entries first).
+    #[allow(clippy::type_complexity)]
+    fn split(self, len: usize) -> ((&'a mut [u8; WIDTH], &'a mut u8, &'a mut u32), Tables<'a>, Tables<'a>) {
+        let (own_left, left) = self.left.split_first_mut().expect("a subtree has a root");
+        let (own_open, open) = self.open.split_first_mut().expect("a subtree has a root");
+        let (own_wide, wide) = self.wide.split_first_mut().expect("a subtree has a root");
+        let (ll, lr) = left.split_at_mut(len);
+        let (ol, or) = open.split_at_mut(len);
+        let (wl, wr) = wide.split_at_mut(len);
+        (
+            (own_left, own_open, own_wide),
+            Tables { left: ll, open: ol, wide: wl },
+            Tables { left: lr, open: or, wide: wr },
+        )
+    }
+}
+
+/// `cost[k - 1]`: the least SAH cost of subtree `n` in at most `k` slots, and `count[k - 1]`
+/// the wide nodes it then makes; fills the plan of every node of the subtree. Both build
+/// paths store a subtree contiguously in preorder (`n`, then the left child's subtree, then
+/// the right child's), so the tables' entries are the subtree's own (`[0]` is `n`'s) and
+/// split into the children's without overlap: the children are planned in parallel, and
+/// only one cost row per level of the recursion is ever held (the table of every node's
+/// costs took 64 bytes a node).
+fn plan_subtree(bin: &[Node2], n: usize, t: Tables, root_area: f64) -> ([f64; WIDTH], [u32; WIDTH]) {
     let node = &bin[n];
     let a = area(node.lo, node.hi) as f64 / root_area;
     if node.count > 0 {
-        return [a; WIDTH];
+        return ([a; WIDTH], [0; WIDTH]);
     }
     let (l, r) = (node.a as usize, node.b as usize);
-    debug_assert!(l == n + 1 && r > l && r - n < left.len());
-    let size = left.len();
-    let (own_left, rest_left) = left.split_at_mut(1);
-    let (own_open, rest_open) = open.split_at_mut(1);
-    let (left_l, left_r) = rest_left.split_at_mut(r - l);
-    let (open_l, open_r) = rest_open.split_at_mut(r - l);
-    let (cl, cr) = if size >= PARALLEL_PLAN {
-        rayon::join(
-            || plan_subtree(bin, l, left_l, open_l, root_area),
-            || plan_subtree(bin, r, left_r, open_r, root_area),
-        )
+    debug_assert!(l == n + 1 && r > l && r - n < t.left.len());
+    let size = t.left.len();
+    let ((own_left, own_open, own_wide), tl, tr) = t.split(r - l);
+    let ((cl, nl), (cr, nr)) = if size >= PARALLEL_PLAN {
+        rayon::join(|| plan_subtree(bin, l, tl, root_area), || plan_subtree(bin, r, tr, root_area))
     } else {
-        (plan_subtree(bin, l, left_l, open_l, root_area), plan_subtree(bin, r, left_r, open_r, root_area))
+        (plan_subtree(bin, l, tl, root_area), plan_subtree(bin, r, tr, root_area))
     };
     // Best spread of the two children over `k` slots (k >= 2).
     let spread = |k: usize| -> (f64, u8) {
@@ -231,39 +253,60 @@ fn plan_subtree(bin: &[Node2], n: usize, left: &mut [[u8; WIDTH]], open: &mut [u
     };
     let (full, j8) = spread(WIDTH);
     let one = C_NODE * a + full;
-    own_open[0] = j8.max(1);
-    let (mut c, mut d) = ([one; WIDTH], [0u8; WIDTH]);
+    let j8 = j8.max(1) as usize;
+    *own_open = j8 as u8;
+    *own_wide = 1 + nl[j8 - 1] + nr[WIDTH - j8 - 1];
+    let (mut c, mut d, mut w) = ([one; WIDTH], [0u8; WIDTH], [*own_wide; WIDTH]);
     for k in 2..=WIDTH {
         let (s, j) = spread(k);
         if s < one {
-            (c[k - 1], d[k - 1]) = (s, j);
+            let j = j as usize;
+            (c[k - 1], d[k - 1], w[k - 1]) = (s, j as u8, nl[j - 1] + nr[k - j - 1]);
         }
     }
-    own_left[0] = d;
-    c
+    *own_left = d;
+    (c, w)
 }
 
-/// Emits the wide node for binary inner node `i`; returns the depth of its subtree.
-fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut Vec<Node8>, root_area: f64, cost: &mut f64) -> usize {
+/// Wide nodes from which [`emit`] emits a node's subtrees in parallel.
+const PARALLEL_EMIT: u32 = 1 << 12;
+
+/// Emits the wide node for binary inner node `i` and its subtree into `nodes` (exactly its
+/// `plan.wide[i]` nodes, in preorder; `at` is the index of `nodes[0]` in the whole array);
+/// returns the subtree's depth and SAH cost (its children's, added in slot order).
+fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut [Node8], at: usize, root_area: f64) -> (usize, f64) {
+    debug_assert_eq!(nodes.len(), plan.wide[i] as usize);
     let (kids, count) = plan.children(bin, i);
-    *cost += C_TRAV as f64 * area(bin[i].lo, bin[i].hi) as f64 / root_area;
-    let me = nodes.len();
-    nodes.push(Node8::empty());
-    let mut depth = 1;
+    let (me, mut rest) = nodes.split_first_mut().expect("a wide node");
+    let mut cost = C_TRAV as f64 * area(bin[i].lo, bin[i].hi) as f64 / root_area;
+    // The inner children's subtrees, each with its range of the array.
+    let mut subtrees = Vec::with_capacity(count);
+    let mut next = at + 1;
     for (slot, &k) in kids[..count].iter().enumerate() {
         let c = &bin[k as usize];
         let r = if c.count > 0 {
             debug_assert!(c.count as usize <= MAX_LEAF);
-            *cost += c.count as f64 * area(c.lo, c.hi) as f64 / root_area;
+            cost += c.count as f64 * area(c.lo, c.hi) as f64 / root_area;
             leaf_ref(c.a, c.count)
         } else {
-            let idx = nodes.len() as u32;
-            depth = depth.max(1 + emit(bin, plan, k as usize, nodes, root_area, cost));
-            idx
+            let len = plan.wide[k as usize] as usize;
+            let (sub, more) = std::mem::take(&mut rest).split_at_mut(len);
+            rest = more;
+            subtrees.push((k as usize, sub, next));
+            next += len;
+            (next - len) as u32
         };
-        set_child(&mut nodes[me], slot, c, r);
+        set_child(me, slot, c, r);
     }
-    depth
+    me.set_order();
+    let run = |(k, sub, at): (usize, &mut [Node8], usize)| emit(bin, plan, k, sub, at, root_area);
+    let done: Vec<(usize, f64)> = if plan.wide[i] >= PARALLEL_EMIT {
+        subtrees.into_par_iter().map(run).collect()
+    } else {
+        subtrees.into_iter().map(run).collect()
+    };
+    let depth = 1 + done.iter().map(|d| d.0).max().unwrap_or(0);
+    (depth, done.iter().fold(cost, |c, d| c + d.1))
 }
 
 #[cfg(test)]
