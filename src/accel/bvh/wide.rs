@@ -390,8 +390,9 @@ mod tests {
             (h >> 8) as f32 / (1 << 24) as f32
         };
         let mut better = 0;
-        for scene in 0..12 {
-            let n = [50, 300, 2000][scene % 3];
+        // The last scene is large enough for subtrees to be emitted in parallel.
+        for scene in 0..13 {
+            let n = if scene == 12 { 150_000 } else { [50, 300, 2000][scene % 3] };
             let mut refs: Vec<PrimRef> = (0..n)
                 .map(|id| {
                     let cluster = if scene % 2 == 0 { (rnd() * 5.0).floor() * 10.0 } else { 0.0 };
@@ -421,6 +422,34 @@ mod tests {
             assert!((own - sp).abs() <= 1e-9 * sp, "scene {scene}: plan says {own}, its tree costs {sp}");
             assert!(sp <= sg * (1.0 + 1e-9), "scene {scene}: planned {sp} > greedy {sg}");
             better += (sp < sg * (1.0 - 1e-6)) as usize;
+            // The emitted array is the planned nodes in that order: each inner child points
+            // at the node made from its binary node, with nothing left over.
+            let w = collapse(&bin);
+            assert!(scene < 12 || w.nodes.len() > 2 * PARALLEL_EMIT as usize, "{}", w.nodes.len());
+            assert_eq!((w.nodes.len(), plan.wide[0] as usize), (p.len(), p.len()), "scene {scene}");
+            let ra = |n: &Node2| area(n.lo, n.hi) as f64 / root_area;
+            let mut want_cost = 0.0;
+            let mut seen = vec![false; p.len()];
+            let mut stack = vec![(0usize, 0u32)];
+            while let Some((j, b)) = stack.pop() {
+                assert!(!seen[j], "scene {scene}: node {j} reached twice");
+                seen[j] = true;
+                let (kids, count) = plan.children(&bin, b as usize);
+                assert_eq!(&kids[..count], &p[j][..], "scene {scene}: node {j}");
+                want_cost += C_TRAV as f64 * ra(&bin[b as usize]);
+                for (slot, &k) in kids[..count].iter().enumerate() {
+                    let r = w.nodes[j].child[slot];
+                    if bin[k as usize].count == 0 {
+                        assert!(r & LEAF_BIT == 0 && (r as usize) > j, "scene {scene}: node {j} slot {slot}");
+                        stack.push((r as usize, k));
+                    } else {
+                        assert_eq!(leaf_range(r), (bin[k as usize].a as usize, bin[k as usize].count as usize));
+                        want_cost += bin[k as usize].count as f64 * ra(&bin[k as usize]);
+                    }
+                }
+            }
+            assert!(seen.iter().all(|&s| s), "scene {scene}: an emitted node no parent points at");
+            assert!((w.sah_cost - want_cost).abs() <= 1e-9 * want_cost, "scene {scene}: {} vs {want_cost}", w.sah_cost);
         }
         assert!(better > 0, "the plan never found a cheaper tree than the greedy collapse");
     }
