@@ -339,7 +339,7 @@ impl Bins {
 
 /// `refs.swap(i, k)` field by field: the compiler copies a whole 28-byte reference through a
 /// stack slot with overlapping 16-byte moves, and reading back such a slot waits for both
-/// stores to retire (a tenth of the build's time was that wait).
+/// stores to retire (the wait was 5% of the build).
 #[inline(always)]
 fn swap_refs(refs: &mut [PrimRef], i: usize, k: usize) {
     let (a, b) = (&refs[i], &refs[k]);
@@ -363,8 +363,7 @@ fn partition(refs: &mut [PrimRef], ax: usize, bin: usize, clo: Vec3, scale: Vec3
     let (mut i, mut j) = (0, refs.len());
     loop {
         // The centroids that stopped each scan are kept for after the swap: read back from
-        // the references just swapped, they waited on the swap's stores (a tenth of the
-        // build).
+        // the references just swapped, they waited on the swap's stores.
         let mut cr = Vec3A::ZERO;
         while i < j {
             cr = refs[i].centroid_a();

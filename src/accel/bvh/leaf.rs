@@ -146,7 +146,7 @@ pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, packed: boo
             Some(start)
         })
         .collect();
-    let total_units = starts.last().map_or(0, |&s| s + sizes.last().map_or(0, |g| g.iter().map(|&n| n as usize).sum()));
+    let total_units: usize = sizes.iter().flatten().map(|&n| n as usize).sum();
     assert!(
         total_leaves < MAX_PRIMS && total_units < MAX_PRIMS,
         "a BVH holds at most {MAX_PRIMS} leaves and leaf lines"

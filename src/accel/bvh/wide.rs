@@ -150,7 +150,7 @@ struct Plan {
     left: Vec<[u8; WIDTH]>,
     /// Slots given to the left child when inner node `n` becomes a wide node (its children
     /// spread over all eight slots; at least one, so the 0 of a node never planned reads as 1).
-    /// Both tables start as zeroed memory, mapped lazily: the binary array's unused ranges
+    /// The tables start as zeroed memory, mapped lazily: the binary array's unused ranges
     /// (see the builder) cost them nothing either.
     open: Vec<u8>,
     /// Wide nodes in the subtree of inner node `n` when it becomes a wide node (itself
