@@ -645,13 +645,28 @@ mod tests {
         assert!(used > n / MAX_LEAF, "{used} nodes");
     }
 
-    #[test]
-    fn few_primitives_choose_the_split_the_bins_choose() {
-        let mut x = 7u64;
-        let mut next = move || {
+    /// Uniform numbers in [0, 1) from a seed (a linear congruential generator).
+    fn uniform(seed: u64) -> impl FnMut() -> f32 {
+        let mut x = seed;
+        move || {
             x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
             (x >> 40) as f32 / (1u64 << 24) as f32
-        };
+        }
+    }
+
+    /// The builder's binning frame of `refs` and their bins: centroid lower corner and scale.
+    fn binned(refs: &[PrimRef]) -> (Vec3, Vec3, Bins) {
+        let (_, _, clo, chi) = bounds(refs);
+        let ext = chi - clo;
+        let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
+        let (mut bins, mut odd) = (Bins::empty(), Bins::empty());
+        bins.gather(refs, clo, scale, &mut odd);
+        (clo, scale, bins)
+    }
+
+    #[test]
+    fn few_primitives_choose_the_split_the_bins_choose() {
+        let mut next = uniform(7);
         let mut splits = 0;
         for case in 0..20_000 {
             let n = 2 + case % (FEW - 2);
@@ -665,11 +680,7 @@ mod tests {
                     PrimRef::new(at - size, at + size, i as u32, false)
                 })
                 .collect();
-            let (_, _, clo, chi) = bounds(&refs);
-            let ext = chi - clo;
-            let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-            let (mut bins, mut odd) = (Bins::empty(), Bins::empty());
-            bins.gather(&refs, clo, scale, &mut odd);
+            let (clo, scale, bins) = binned(&refs);
             let binned = bins.cheapest(n);
             let few = cheapest_of_few(&refs, clo, scale);
             assert_eq!(few.0.to_bits(), binned.0.to_bits(), "case {case}: {few:?} vs {binned:?}");
@@ -703,11 +714,7 @@ mod tests {
 
     #[test]
     fn the_sweep_over_occupied_bins_chooses_what_every_bin_position_would() {
-        let mut x = 11u64;
-        let mut next = move || {
-            x = x.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
-            (x >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = uniform(11);
         let mut splits = 0;
         for case in 0..4_000 {
             let n = FEW + case % 60;
@@ -721,11 +728,7 @@ mod tests {
                     PrimRef::new(at - size, at + size, i as u32, false)
                 })
                 .collect();
-            let (_, _, clo, chi) = bounds(&refs);
-            let ext = chi - clo;
-            let scale = Vec3::select(ext.cmpgt(Vec3::ZERO), Vec3::splat(BINS as f32) / ext, Vec3::ZERO);
-            let (mut bins, mut odd) = (Bins::empty(), Bins::empty());
-            bins.gather(&refs, clo, scale, &mut odd);
+            let (_, _, bins) = binned(&refs);
             let (got, want) = (bins.cheapest(n), cheapest_every_bin(&bins, n));
             assert_eq!(got.0.to_bits(), want.0.to_bits(), "case {case}: {got:?} vs {want:?}");
             if want.0.is_finite() {

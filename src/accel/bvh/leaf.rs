@@ -375,12 +375,10 @@ mod tests {
     /// and without leaves, empty and inner slots, leaves of one to three units.
     #[test]
     fn a_walk_finds_every_unit_from_anywhere() {
-        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut i = 0u64;
         let mut next = move || {
-            x ^= x << 13;
-            x ^= x >> 7;
-            x ^= x << 17;
-            x
+            i += 1;
+            crate::sampling::splitmix64(i)
         };
         let blank = Node8 { b: [[0.0; WIDTH]; 6], child: [EMPTY; WIDTH], perm: [0; WIDTH] };
         let mut nodes = vec![blank; 5 * GROUP + 17];
