@@ -279,8 +279,9 @@ fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut [Node8], at: usize, ro
     let (kids, count) = plan.children(bin, i);
     let (me, mut rest) = nodes.split_first_mut().expect("a wide node");
     let mut cost = C_TRAV as f64 * area(bin[i].lo, bin[i].hi) as f64 / root_area;
-    // The inner children's subtrees, each with its range of the array.
-    let mut subtrees = Vec::with_capacity(count);
+    // The inner children's subtrees, each with its range of the array (in an array, not a
+    // vector: no allocation per wide node).
+    let mut subtrees: [Option<(usize, &mut [Node8], usize)>; WIDTH] = Default::default();
     let mut next = at + 1;
     for (slot, &k) in kids[..count].iter().enumerate() {
         let c = &bin[k as usize];
@@ -292,7 +293,7 @@ fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut [Node8], at: usize, ro
             let len = plan.wide[k as usize] as usize;
             let (sub, more) = std::mem::take(&mut rest).split_at_mut(len);
             rest = more;
-            subtrees.push((k as usize, sub, next));
+            subtrees[slot] = Some((k as usize, sub, next));
             next += len;
             (next - len) as u32
         };
@@ -300,13 +301,14 @@ fn emit(bin: &[Node2], plan: &Plan, i: usize, nodes: &mut [Node8], at: usize, ro
     }
     me.set_order();
     let run = |(k, sub, at): (usize, &mut [Node8], usize)| emit(bin, plan, k, sub, at, root_area);
-    let done: Vec<(usize, f64)> = if plan.wide[i] >= PARALLEL_EMIT {
-        subtrees.into_par_iter().map(run).collect()
+    // The children's costs are added in slot order on both paths (the same sum).
+    let add = |(depth, cost): (usize, f64), (d, c): (usize, f64)| (depth.max(1 + d), cost + c);
+    if plan.wide[i] >= PARALLEL_EMIT {
+        let done: Vec<(usize, f64)> = subtrees.into_par_iter().flatten().map(run).collect();
+        done.into_iter().fold((1, cost), add)
     } else {
-        subtrees.into_iter().map(run).collect()
-    };
-    let depth = 1 + done.iter().map(|d| d.0).max().unwrap_or(0);
-    (depth, done.iter().fold(cost, |c, d| c + d.1))
+        subtrees.into_iter().flatten().map(run).fold((1, cost), add)
+    }
 }
 
 #[cfg(test)]
