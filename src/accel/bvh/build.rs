@@ -363,7 +363,17 @@ fn partition<const BOXES: bool>(
     scale: Vec3,
 ) -> (usize, Sides, Sides) {
     let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
-    let left = |c: Vec3A| bins_of(c, clo, scale)[ax] < bin;
+    // `bins_of(c)[ax] < bin` on the split's one axis, by one compare instead of a clamp and a
+    // conversion of all three: the bin truncates `x = (c - clo) * scale` clamped to
+    // [0, BINS - 1] (a NaN to 0), and for a whole `bin` in 1..BINS that is below `bin`
+    // exactly when `x` is below `bin` or NaN (x below 0 or NaN: bin 0; x at BINS - 1 or
+    // above: the last bin). A NaN does occur: an extent so small that `scale` is infinite.
+    let (c0, s0, edge) = (clo[ax], scale[ax], bin as f32);
+    debug_assert!((1..BINS).contains(&bin));
+    let left = |c: Vec3A| {
+        let x = (c[ax] - c0) * s0;
+        x < edge || x.is_nan()
+    };
     let (mut lc, mut rc) = (Box3::EMPTY, Box3::EMPTY);
     let (mut lb, mut rb) = (Box3::EMPTY, Box3::EMPTY);
     let grow = |b: &mut Box3, r: &PrimRef| {
@@ -724,6 +734,49 @@ mod tests {
         let (mut bins, mut odd) = (Bins::empty(), Bins::empty());
         bins.gather(refs, clo, scale, &mut odd);
         (clo, scale, bins)
+    }
+
+    #[test]
+    fn the_partition_puts_each_reference_on_the_side_of_its_bin() {
+        // Random boxes, and points whose centroids differ along x by the smallest float:
+        // a scale so large it is infinite, and `0 * inf` (the lowest centroid) is NaN, which
+        // the bins count in bin 0.
+        let mut next = uniform(11);
+        let random: Vec<PrimRef> =
+            (0..500).map(|i| unit_box(Vec3::new(next(), next(), next()) * 10.0, i, false)).collect();
+        let tiny: Vec<PrimRef> = (0..40)
+            .map(|i| {
+                let at = Vec3::new(f32::from_bits(i % 2), 1.0, 2.0);
+                PrimRef::new(at, at, i, false)
+            })
+            .collect();
+        let ids = |refs: &[PrimRef]| {
+            let mut v: Vec<u32> = refs.iter().map(PrimRef::id).collect();
+            v.sort();
+            v
+        };
+        assert_eq!(binned(&tiny).1.x, f32::INFINITY, "the points' scale along x is infinite");
+        for set in [random, tiny] {
+            let (clo, scale, bins) = binned(&set);
+            for ax in 0..3 {
+                for bin in 1..BINS {
+                    let (clo_a, scale_a) = (Vec3A::from(clo), Vec3A::from(scale));
+                    let left: Vec<PrimRef> =
+                        set.iter().filter(|r| bins_of(r.centroid_a(), clo_a, scale_a)[ax] < bin).copied().collect();
+                    let mut refs = set.clone();
+                    let (mid, (lb, lc), _) = partition::<true>(&mut refs, ax, bin, clo, scale);
+                    assert_eq!(ids(&refs[..mid]), ids(&left), "axis {ax}, bin {bin}");
+                    if mid > 0 {
+                        // The side's box is its bins' box, as the bins of all the references give it.
+                        let b = bins.union(ax, 0..bin);
+                        assert_eq!((lb.lo, lb.hi), (b.lo, b.hi), "axis {ax}, bin {bin}");
+                        assert!(
+                            left.iter().all(|r| lc.lo.cmple(r.centroid_a()).all() && lc.hi.cmpge(r.centroid_a()).all())
+                        );
+                    }
+                }
+            }
+        }
     }
 
     #[test]
