@@ -351,18 +351,22 @@ fn swap_refs(refs: &mut [PrimRef], i: usize, k: usize) {
 /// A side of a partition: the box of its primitives and the box of their centroids.
 type Sides = (Box3, Box3);
 
-/// Moves the primitives whose centroid falls in a bin below `bin` on axis `ax` to the front
-/// (Hoare's scheme: only misplaced pairs are swapped); returns how many they are and both
-/// sides' [`Sides`]: the centroid boxes always, the primitives' boxes when `BOXES` (else
-/// empty: the bins of all the primitives already have them).
-fn partition<const BOXES: bool>(
-    refs: &mut [PrimRef],
+/// Where a set is split: below or above bin boundary `bin` on axis `ax` of the binning frame
+/// (centroid lower corner `clo`, bins per unit `scale`).
+#[derive(Clone, Copy)]
+struct Cut {
     ax: usize,
     bin: usize,
     clo: Vec3,
     scale: Vec3,
-) -> (usize, Sides, Sides) {
-    let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
+}
+
+/// Moves the primitives whose centroid falls in a bin below the cut to the front (Hoare's
+/// scheme: only misplaced pairs are swapped); returns how many they are and both sides'
+/// [`Sides`]: the centroid boxes always, the primitives' boxes when `BOXES` (else empty: the
+/// bins of all the primitives already have them).
+fn partition<const BOXES: bool>(refs: &mut [PrimRef], cut: Cut) -> (usize, Sides, Sides) {
+    let Cut { ax, bin, clo, scale } = cut;
     // `bins_of(c)[ax] < bin` on the split's one axis, by one compare instead of a clamp and a
     // conversion of all three: the bin truncates `x = (c - clo) * scale` clamped to
     // [0, BINS - 1] (a NaN to 0), and for a whole `bin` in 1..BINS that is below `bin`
@@ -482,13 +486,14 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize, bins: &mut [Bins; 2]) ->
         return median(refs);
     }
     let (ax, bin) = (best.1, best.2);
+    let cut = Cut { ax, bin, clo, scale };
     let side = |(b, c): Sides| (b.lo.into(), b.hi.into(), c.lo.into(), c.hi.into());
     if sampled {
         // The bins saw a sample: the sides' boxes are taken by the partition.
-        let (mid, l, r) = partition_par::<true>(refs, ax, bin, clo, scale);
+        let (mid, l, r) = partition_par::<true>(refs, cut);
         return Some((mid, side(l), side(r)));
     }
-    let (mid, (_, lc), (_, rc)) = partition_par::<false>(refs, ax, bin, clo, scale);
+    let (mid, (_, lc), (_, rc)) = partition_par::<false>(refs, cut);
     let Some(bins) = bins else {
         let (l, r) = refs.split_at(mid);
         return Some((mid, bounds(l), bounds(r)));
@@ -512,23 +517,15 @@ const SPLIT_PAR_MIN: usize = 1 << 18;
 /// shorter of the first half's right part and the second half's left part trades places
 /// with the far end of the other (the order within a side does not matter). The sides are
 /// the same sets as one pass would give.
-fn partition_par<const BOXES: bool>(
-    refs: &mut [PrimRef],
-    ax: usize,
-    bin: usize,
-    clo: Vec3,
-    scale: Vec3,
-) -> (usize, Sides, Sides) {
+fn partition_par<const BOXES: bool>(refs: &mut [PrimRef], cut: Cut) -> (usize, Sides, Sides) {
     let n = refs.len();
     if n < SPLIT_PAR_MIN {
-        return partition::<BOXES>(refs, ax, bin, clo, scale);
+        return partition::<BOXES>(refs, cut);
     }
     let half = n / 2;
     let (a, b) = refs.split_at_mut(half);
-    let ((ma, la, ra), (mb, lb, rb)) = rayon::join(
-        || partition_par::<BOXES>(a, ax, bin, clo, scale),
-        || partition_par::<BOXES>(b, ax, bin, clo, scale),
-    );
+    let ((ma, la, ra), (mb, lb, rb)) =
+        rayon::join(|| partition_par::<BOXES>(a, cut), || partition_par::<BOXES>(b, cut));
     // refs: [left of a: ma | right of a: half - ma | left of b: mb | right of b].
     let moved = (half - ma).min(mb);
     let (a, b) = refs.split_at_mut(half);
@@ -764,7 +761,7 @@ mod tests {
                     let left: Vec<PrimRef> =
                         set.iter().filter(|r| bins_of(r.centroid_a(), clo_a, scale_a)[ax] < bin).copied().collect();
                     let mut refs = set.clone();
-                    let (mid, (lb, lc), _) = partition::<true>(&mut refs, ax, bin, clo, scale);
+                    let (mid, (lb, lc), _) = partition::<true>(&mut refs, Cut { ax, bin, clo, scale });
                     assert_eq!(ids(&refs[..mid]), ids(&left), "axis {ax}, bin {bin}");
                     if mid > 0 {
                         // The side's box is its bins' box, as the bins of all the references give it.
