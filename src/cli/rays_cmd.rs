@@ -63,7 +63,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     }
     let per_ray = |x: u64| x as f64 / counters.rays.max(1) as f64;
     let notes = format!(
-        "wavepath bvh8 (binned SAH, 16 bins x 3 axes, sets of 16k and more binned from a sample of 4096, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
+        "wavepath bvh8 (binned SAH, 16 bins x 3 axes, sets of 128k and more binned from a sample of 16k, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
          isa={}; leaves={}; nodes={} depth={} sah_cost={:.2}; {:.1} nodes and {:.1} prim tests per ray",
         bvh.isa().name(),
         bvh.layout(),

@@ -502,12 +502,15 @@ fn split(refs: &mut [PrimRef], b: Bounds, depth: usize, bins: &mut [Bins; 2]) ->
 }
 
 /// Sets of at least this many primitives choose their split from the bins of a sample of
-/// [`SAMPLE`] of them, not of all: at 6.4M triangles the build is 8% faster (the top levels
-/// bin a few thousand references instead of all of them) and its SAH cost the same to a
-/// tenth of a percent (docs/decisions.md, "Build").
-const SAMPLED_MIN: usize = 1 << 14;
+/// [`SAMPLE`] of them, not of all: the top levels of a large mesh bin a sixteenth of their
+/// references or fewer, for the same SAH cost to a tenth of a percent (docs/decisions.md,
+/// "Build"). Smaller sets bin all: a sample misses the few large triangles of a scene's
+/// walls, and at 16k the top split of a dragon in a Cornell box changed enough to cost 2.5%
+/// more nodes per ray (or 0.6% fewer at 64k: the top split is sensitive either way), so
+/// scenes of up to 128k primitives keep the trees of full binning.
+const SAMPLED_MIN: usize = 1 << 17;
 /// References a sampled split bins.
-const SAMPLE: usize = 1 << 12;
+const SAMPLE: usize = 1 << 14;
 const _: () = assert!(SAMPLED_MIN >= 2 * SAMPLE && SAMPLE.is_multiple_of(2));
 
 /// Sets of at least this many primitives are partitioned by several threads.
