@@ -138,20 +138,13 @@ pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, packed: boo
         })
         .collect();
     let total_leaves: usize = sizes.iter().map(Vec::len).sum();
-    let starts: Vec<usize> = sizes
-        .iter()
-        .scan(0, |at, g| {
-            let start = *at;
-            *at += g.iter().map(|&n| n as usize).sum::<usize>();
-            Some(start)
-        })
-        .collect();
+    let starts = group_starts(&sizes);
     let total_units: usize = sizes.iter().flatten().map(|&n| n as usize).sum();
     assert!(
         total_leaves < MAX_PRIMS && total_units < MAX_PRIMS,
         "a BVH holds at most {MAX_PRIMS} leaves and leaf lines"
     );
-    let walk = || Walk { nodes, sizes: &sizes, starts: &starts, next: usize::MAX, node: 0, slot: 0, leaf: 0, off: 0 };
+    let walk = || Walk::new(nodes, &sizes, &starts);
     let store = if packed {
         // Each record is made twice, to count its lines and to write them: keeping them
         // between the passes would hold as much memory again as the store itself.
@@ -234,7 +227,24 @@ struct Walk<'a> {
     off: usize,
 }
 
-impl Walk<'_> {
+/// The first unit of each group, from its leaves' units (`sizes`).
+fn group_starts(sizes: &[Vec<u8>]) -> Vec<usize> {
+    sizes
+        .iter()
+        .scan(0, |at, g| {
+            let start = *at;
+            *at += g.iter().map(|&n| n as usize).sum::<usize>();
+            Some(start)
+        })
+        .collect()
+}
+
+impl<'a> Walk<'a> {
+    /// A walk before its first seek.
+    fn new(nodes: &'a [Node8], sizes: &'a [Vec<u8>], starts: &'a [usize]) -> Self {
+        Walk { nodes, sizes, starts, next: usize::MAX, node: 0, slot: 0, leaf: 0, off: 0 }
+    }
+
     /// The builder's (first, count) of the leaf holding unit `u`, and `u`'s place in it.
     fn unit(&mut self, u: usize) -> (u32, u32, usize) {
         if u != self.next {
@@ -402,25 +412,9 @@ mod tests {
                 };
             }
         }
-        let starts: Vec<usize> = sizes
-            .iter()
-            .scan(0, |at, g: &Vec<u8>| {
-                let start = *at;
-                *at += g.iter().map(|&s| s as usize).sum::<usize>();
-                Some(start)
-            })
-            .collect();
+        let starts = group_starts(&sizes);
         assert!(sizes[2].is_empty() && want.len() > 4 * GROUP);
-        let walk = || Walk {
-            nodes: &nodes,
-            sizes: &sizes,
-            starts: &starts,
-            next: usize::MAX,
-            node: 0,
-            slot: 0,
-            leaf: 0,
-            off: 0,
-        };
+        let walk = || Walk::new(&nodes, &sizes, &starts);
         let mut w = walk();
         for (u, &unit) in want.iter().enumerate() {
             assert_eq!(w.unit(u), unit, "unit {u} by steps");
