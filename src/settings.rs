@@ -54,8 +54,8 @@ pub struct Settings {
     pub rr_continue: f32,
     /// Use the BVH (false: brute force, `--no-bvh`).
     pub use_bvh: bool,
-    /// How the BVH's leaves hold their triangles (`--bvh-leaves`).
-    pub leaves: LeafLayout,
+    /// How the BVH is built and its leaves stored (`--bvh-build`, `--bvh-leaves`).
+    pub bvh: BvhOptions,
     pub seed: u64,
     pub cell: Option<Cell>,
     pub integrator: IntegratorKind,
@@ -83,6 +83,24 @@ pub struct Settings {
     pub rr_depth: u32,
     /// How each pixel's samples spread over the path space (`--sampler`).
     pub sampler: crate::sampling::SamplerKind,
+}
+
+/// How the BVH is made: every choice gives the same hits, only time and memory differ.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BvhOptions {
+    pub build: BvhBuild,
+    pub leaves: LeafLayout,
+}
+
+/// How the BVH's tree is built: a trade of build time for trace time.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum BvhBuild {
+    /// Binned SAH: the tree rays traverse fastest.
+    #[default]
+    Sah,
+    /// Morton order (LBVH): a fraction of the build time for a tree rays take longer in,
+    /// for large meshes whose render is short next to their build.
+    Fast,
 }
 
 /// How BVH leaves hold their triangles: the same hits either way, a trade of memory for
@@ -114,7 +132,7 @@ impl Default for Settings {
             shading: Shading::Global,
             rr_continue: 0.65,
             use_bvh: true,
-            leaves: LeafLayout::Auto,
+            bvh: BvhOptions::default(),
             seed: 0,
             cell: None,
             integrator: IntegratorKind::Wavefront,

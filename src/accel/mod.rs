@@ -7,7 +7,7 @@ pub mod sphere;
 pub mod triangle;
 
 pub use brute::BruteForce;
-pub use bvh::{Bvh, LeafLayout};
+pub use bvh::{Bvh, BvhBuild, BvhOptions, LeafLayout};
 
 use crate::geometry::{Hit, Ray};
 
@@ -78,11 +78,11 @@ pub struct BuildInfo {
     pub leaf_bytes: usize,
 }
 
-/// Builds the intersector the settings ask for: the BVH (leaves in `s.leaves`, box tests of
+/// Builds the intersector the settings ask for: the BVH (built and stored as `s.bvh` says, box tests of
 /// at most `s.isa`), or brute force for `--no-bvh`.
 pub fn build(scene: &crate::scene::Scene, s: &crate::settings::Settings) -> (Box<dyn Intersector>, BuildInfo) {
     if s.use_bvh {
-        let bvh = Bvh::build_with(scene, s.leaves).with_isa(s.isa);
+        let bvh = Bvh::build_with(scene, s.bvh).with_isa(s.isa);
         let info = bvh.info();
         return (Box::new(bvh), info);
     }

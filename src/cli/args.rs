@@ -1,6 +1,6 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use super::choices::{Camera, Fov, Integrator, Leaves, Roulette, Sampler, Shading, Split, Tonemap};
+use super::choices::{BvhBuild, Camera, Fov, Integrator, Leaves, Roulette, Sampler, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::cpu::Isa;
@@ -183,6 +183,11 @@ pub struct RenderArgs {
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,
+    /// How the BVH is built: sah (binned surface area heuristic, the tree rays traverse
+    /// fastest) or fast (Morton order: a fraction of the build time, rays 10-20% slower; for
+    /// large meshes rendered briefly). Same image either way.
+    #[arg(long, value_enum, default_value = "sah")]
+    pub bvh_build: BvhBuild,
     /// How the BVH's leaves hold their triangles: corners (three cache lines a leaf), packed
     /// (each distinct vertex once: two thirds of the memory, a gather per leaf test) or auto
     /// (packed from 16 million primitives). Same image either way.
@@ -295,6 +300,9 @@ pub struct TraceArgs {
     /// Widest SIMD instruction set of the box tests: scalar, sse, avx2, avx512.
     #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
     pub isa: Isa,
+    /// How the BVH is built: sah or fast (Morton order).
+    #[arg(long, value_enum, default_value = "sah")]
+    pub bvh_build: BvhBuild,
     /// How the BVH's leaves hold their triangles: corners, packed or auto.
     #[arg(long, value_enum, default_value = "auto")]
     pub bvh_leaves: Leaves,

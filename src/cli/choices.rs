@@ -46,6 +46,16 @@ choice! {
 }
 
 choice! {
+    /// How the BVH's tree is built (same hits either way).
+    BvhBuild => wavepath::settings::BvhBuild {
+        /// Binned SAH: the fastest tree to trace.
+        Sah,
+        /// Morton order: a fraction of the build time, slower rays.
+        Fast,
+    }
+}
+
+choice! {
     /// How the BVH's leaves hold their triangles (same hits either way).
     Leaves => wavepath::settings::LeafLayout {
         /// Packed from 16 million primitives, corners below.

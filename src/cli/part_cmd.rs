@@ -21,7 +21,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     };
     let scene = prepare_scene(a, &s)?;
     if s.use_bvh {
-        super::check_build_memory(&scene, s.leaves, a.max_memory)?;
+        super::check_build_memory(&scene, s.bvh.leaves, a.max_memory)?;
     }
     let scene_hash = identity::scene_hash(&scene);
     let (acc, mut stats) = wavepath::render::with_threads(s.threads, || -> Result<_> {

@@ -3,7 +3,7 @@
 use super::args::{DumpArgs, TraceArgs};
 use anyhow::{Result, bail};
 use std::time::Instant;
-use wavepath::accel::{Bvh, TraceCounters};
+use wavepath::accel::{Bvh, BvhBuild, BvhOptions, TraceCounters};
 use wavepath::load::LoadOptions;
 use wavepath::rayfile::file::{HitRecord, read_rays, write_hits, write_rays};
 use wavepath::rayfile::{diffuse_rays, primary_rays, trace_all};
@@ -34,8 +34,10 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let rays = read_rays(&args.rays)?;
     let scene = super::with_spinner("loading", || super::load_scene(&args.mesh, &LoadOptions::default()))?;
     super::check_build_memory(&scene, args.bvh_leaves.into(), None)?;
-    let bvh =
-        super::with_spinner("building the BVH", || Bvh::build_with(&scene, args.bvh_leaves.into())).with_isa(args.isa);
+    let bvh = super::with_spinner("building the BVH", || {
+        Bvh::build_with(&scene, BvhOptions { build: args.bvh_build.into(), leaves: args.bvh_leaves.into() })
+    })
+    .with_isa(args.isa);
     let info = bvh.info();
     let mut hits = vec![HitRecord::MISS; rays.len()];
     for _ in 0..args.warmup {
@@ -62,8 +64,12 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
         write_hits(path, &hits)?;
     }
     let per_ray = |x: u64| x as f64 / counters.rays.max(1) as f64;
+    let tree = match BvhBuild::from(args.bvh_build) {
+        BvhBuild::Sah => "binned SAH, 16 bins x 3 axes, sets of 128k and more binned from a sample of 16k",
+        BvhBuild::Fast => "Morton order (LBVH), 30-bit codes",
+    };
     let notes = format!(
-        "wavepath bvh8 (binned SAH, 16 bins x 3 axes, sets of 128k and more binned from a sample of 16k, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
+        "wavepath bvh8 ({tree}, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \
          isa={}; leaves={}; nodes={} depth={} sah_cost={:.2}; {:.1} nodes and {:.1} prim tests per ray",
         bvh.isa().name(),
         bvh.layout(),

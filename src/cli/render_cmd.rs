@@ -59,7 +59,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         scene.lights.len()
     );
     if s.use_bvh {
-        super::check_build_memory(&scene, s.leaves, a.max_memory)?;
+        super::check_build_memory(&scene, s.bvh.leaves, a.max_memory)?;
     }
     let effects = Effects::of(&scene, &s);
     for e in &effects.on {

@@ -4,7 +4,7 @@ use super::RenderArgs;
 use super::choices::Roulette;
 use anyhow::{Result, bail};
 use wavepath::sampling::SamplerKind;
-use wavepath::settings::{Cell, Settings, Shading};
+use wavepath::settings::{BvhOptions, Cell, Settings, Shading};
 
 /// Largest image side accepted; beyond this a typo is far more likely than a real render.
 pub const MAX_SIDE: i64 = 1 << 15;
@@ -66,7 +66,7 @@ pub fn settings(a: &RenderArgs) -> Result<Settings> {
     };
     s.hemisphere = a.hemisphere;
     s.use_bvh = !a.no_bvh;
-    s.leaves = a.bvh_leaves.into();
+    s.bvh = BvhOptions { build: a.bvh_build.into(), leaves: a.bvh_leaves.into() };
     s.isa = a.isa;
     s.seed = a.seed;
     s.integrator = a.integrator.into();

@@ -22,8 +22,8 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         bail!("{}: --save-dir is not a folder", d.display());
     }
     let scene = super::with_spinner("loading", || prepare_scene(&a.render, &s))?;
-    super::check_build_memory(&scene, s.leaves, a.render.max_memory)?;
-    let bvh = super::with_spinner("building the BVH", || Bvh::build_with(&scene, s.leaves).with_isa(s.isa));
+    super::check_build_memory(&scene, s.bvh.leaves, a.render.max_memory)?;
+    let bvh = super::with_spinner("building the BVH", || Bvh::build_with(&scene, s.bvh).with_isa(s.isa));
     let opts = ViewOptions {
         listen: SocketAddr::new(a.listen, a.port),
         save_dir: a.save_dir.clone(),

@@ -15,7 +15,7 @@ pub const MAX_LEAF: usize = 4;
 /// Bins per axis for the SAH sweep.
 const BINS: usize = 16;
 /// Subtrees with fewer primitives are built on the current thread.
-const PARALLEL_MIN: usize = 4096;
+pub(super) const PARALLEL_MIN: usize = 4096;
 /// Below this many levels SAH splits are used; deeper, object-median splits bound the depth.
 const SAH_MAX_DEPTH: usize = 48;
 /// Cost of a node visit relative to one primitive test.
@@ -121,7 +121,7 @@ pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
 }
 
 /// Most binary nodes over `n` primitives (every leaf holds one or more).
-fn node_bound(n: usize) -> usize {
+pub(super) fn node_bound(n: usize) -> usize {
     2 * n.max(1) - 1
 }
 

@@ -26,6 +26,7 @@ mod boxtest;
 mod build;
 mod coherent;
 mod leaf;
+mod morton;
 mod packet;
 mod simd;
 mod traverse;
@@ -34,7 +35,7 @@ mod wide;
 use super::{BuildInfo, Intersector, TraceCounters};
 use crate::geometry::{Hit, Ray};
 use crate::scene::Scene;
-pub use crate::settings::LeafLayout;
+pub use crate::settings::{BvhBuild, BvhOptions, LeafLayout};
 
 use crate::cpu::{Avx2, Isa, Sse};
 use boxtest::{BoxRay, BoxTest, Frustum, RootBox};
@@ -84,37 +85,51 @@ impl Bvh {
     /// Builds the tree with the leaf layout chosen by size; the box test is the best the CPU
     /// has (see [`Bvh::with_isa`]).
     pub fn build(scene: &Scene) -> Bvh {
-        Bvh::build_with(scene, LeafLayout::Auto)
+        Bvh::build_with(scene, BvhOptions::default())
     }
 
-    /// Builds the tree with leaves in `layout`.
-    pub fn build_with(scene: &Scene, layout: LeafLayout) -> Bvh {
+    /// Builds the tree by `opts.build` with leaves in `opts.leaves`.
+    pub fn build_with(scene: &Scene, opts: BvhOptions) -> Bvh {
         let start = Instant::now();
         let mesh = &scene.mesh;
         let tri_count = mesh.triangle_count();
         let total = tri_count + scene.spheres.len();
         assert!(total < wide::MAX_PRIMS, "a BVH holds at most {} primitives", wide::MAX_PRIMS);
-        let mut refs: Vec<PrimRef> = (0..tri_count)
-            .into_par_iter()
-            .map(|i| {
+        // A primitive's box: triangles first, then spheres (its index is its id).
+        let prim = |i: usize| {
+            if i < tri_count {
                 let [a, b, c] = mesh.corners(i);
-                PrimRef::new(a.min(b).min(c), a.max(b).max(c), i as u32, false)
-            })
-            .collect();
-        refs.extend(scene.spheres.iter().enumerate().map(|(i, s)| {
-            let r = Vec3::splat(s.radius.abs());
-            PrimRef::new(s.center - r, s.center + r, (tri_count + i) as u32, true)
-        }));
-        let (mut nodes, depth, sah_cost, ids) = if refs.is_empty() {
+                (a.min(b).min(c), a.max(b).max(c))
+            } else {
+                let s = &scene.spheres[i - tri_count];
+                let r = Vec3::splat(s.radius.abs());
+                (s.center - r, s.center + r)
+            }
+        };
+        let (mut nodes, depth, sah_cost, ids) = if total == 0 {
             (vec![], 0, 0.0, vec![])
         } else {
-            let bin = build::build(&mut refs);
-            // Only the ids are kept: the references are freed before the collapse allocates.
-            let ids: Vec<u32> = std::mem::take(&mut refs).par_iter().map(PrimRef::id).collect();
+            let (bin, ids) = match opts.build {
+                BvhBuild::Sah => {
+                    let mut refs: Vec<PrimRef> = (0..total)
+                        .into_par_iter()
+                        .map(|i| {
+                            let (lo, hi) = prim(i);
+                            PrimRef::new(lo, hi, i as u32, i >= tri_count)
+                        })
+                        .collect();
+                    let bin = build::build(&mut refs);
+                    // Only the ids are kept: the references are freed before the collapse
+                    // allocates.
+                    let ids: Vec<u32> = refs.par_iter().map(PrimRef::id).collect();
+                    (bin, ids)
+                }
+                BvhBuild::Fast => morton::build(total, prim),
+            };
             let w = wide::collapse(&bin);
             (w.nodes, w.depth, w.sah_cost, ids)
         };
-        let leaves = leaf::store_leaves(&mut nodes, &ids, scene, packs(layout, total));
+        let leaves = leaf::store_leaves(&mut nodes, &ids, scene, packs(opts.leaves, total));
         drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
         let info = BuildInfo {

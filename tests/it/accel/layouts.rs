@@ -1,10 +1,11 @@
-//! The two leaf layouts (`--bvh-leaves corners|packed`): the same hits bit for bit on every
-//! traversal path and instruction set, and the memory each says it takes.
+//! The two leaf layouts (`--bvh-leaves corners|packed`) and the two builds (`--bvh-build
+//! sah|fast`): the same hits bit for bit on every traversal path and instruction set, and the
+//! memory each layout says it takes.
 
 use crate::common::meshgen::{icosphere, scene_of};
 use crate::common::{Xorshift, same_hit};
 use glam::Vec3;
-use wavepath::accel::{BruteForce, Bvh, Intersector, LeafLayout, TraceCounters};
+use wavepath::accel::{BruteForce, Bvh, BvhBuild, BvhOptions, Intersector, LeafLayout, TraceCounters};
 use wavepath::cpu::Isa;
 use wavepath::geometry::Ray;
 use wavepath::scene::{Mesh, Scene, Sphere};
@@ -82,7 +83,7 @@ fn rays(scene: &Scene) -> Vec<Ray> {
 }
 
 #[test]
-fn packed_leaves_give_the_hits_of_corner_leaves_on_every_path() {
+fn every_build_and_leaf_layout_gives_the_hits_of_brute_force_on_every_path() {
     for (name, scene) in scenes() {
         let rays = rays(&scene);
         let brute = BruteForce::new(&scene);
@@ -90,10 +91,11 @@ fn packed_leaves_give_the_hits_of_corner_leaves_on_every_path() {
         let want: Vec<_> = rays.iter().map(|r| brute.closest_hit(r, &mut c)).collect();
         let hits = want.iter().filter(|h| h.is_some()).count();
         assert!(hits > rays.len() / 4 && hits < rays.len(), "{name}: {hits} of {} rays hit", rays.len());
-        for layout in [LeafLayout::Corners, LeafLayout::Packed] {
+        let layouts = [LeafLayout::Corners, LeafLayout::Packed];
+        for (build, leaves) in [BvhBuild::Sah, BvhBuild::Fast].into_iter().flat_map(|b| layouts.map(|l| (b, l))) {
             for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512] {
-                let bvh = Bvh::build_with(&scene, layout).with_isa(isa);
-                let what = format!("{name} {layout:?} {isa:?}");
+                let bvh = Bvh::build_with(&scene, BvhOptions { build, leaves }).with_isa(isa);
+                let what = format!("{name} {build:?} {leaves:?} {isa:?}");
                 let mut batch = vec![None; rays.len()];
                 bvh.closest_hits(&rays, &mut batch, &mut c);
                 let (mut any, mut packets) = (vec![false; rays.len()], vec![false; rays.len()]);
@@ -116,8 +118,8 @@ fn packed_leaves_give_the_hits_of_corner_leaves_on_every_path() {
 fn leaf_layouts_take_the_memory_they_report() {
     let sphere_bytes = 16;
     for (name, scene) in scenes() {
-        let corners = Bvh::build_with(&scene, LeafLayout::Corners).info();
-        let packed = Bvh::build_with(&scene, LeafLayout::Packed).info();
+        let with = |leaves| Bvh::build_with(&scene, BvhOptions { leaves, ..BvhOptions::default() }).info();
+        let (corners, packed) = (with(LeafLayout::Corners), with(LeafLayout::Packed));
         // The same tree; only the leaves differ.
         assert_eq!((corners.nodes, corners.depth), (packed.nodes, packed.depth), "{name}");
         assert_eq!(corners.node_bytes, corners.nodes * 256, "{name}: a node is four cache lines");
