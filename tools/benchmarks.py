@@ -194,14 +194,16 @@ def part_large(args, scenes_dir, peers_dir):
             info = json.loads(peak_rss([args.bin, "info", "--json", ply])[0])
             obj_info = json.loads(peak_rss([args.bin, "info", "--json", obj])[0])
             out, rss = peak_rss([args.bin, "rays", "trace", ply, rays, str(args.threads), "1"])
+            fast, fast_rss = peak_rss([args.bin, "rays", "trace", ply, rays, str(args.threads), "1", "--bvh-build", "fast"])
             run = {"round": rnd, "load_s": info["load_s"], "obj_load_s": obj_info["load_s"], "triangles": info["triangles"],
-                   "build_s": json.loads(out)["build_s"], "rss": rss}
+                   "build_s": json.loads(out)["build_s"], "rss": rss,
+                   "fast_build_s": json.loads(fast)["build_s"], "fast_rss": fast_rss}
             if embree:
                 for q in ("medium", "high"):
                     eo, erss = peak_rss([embree, obj, rays, str(args.threads), "1", "--quality", q])
                     run[f"embree_{q}_s"], run[f"embree_{q}_rss"] = json.loads(eo)["build_s"], erss
             log(f"large x{4 ** level} round {rnd}: load {run['load_s']:.3f} s build {run['build_s']:.2f} s "
-                f"peak {rss / 2 ** 30:.2f} GiB" + (f"; embree medium {run['embree_medium_s']:.2f} s high "
+                f"(fast {run['fast_build_s']:.2f} s) peak {rss / 2 ** 30:.2f} GiB" + (f"; embree medium {run['embree_medium_s']:.2f} s high "
                                                      f"{run['embree_high_s']:.2f} s" if embree else ""))
             row["runs"].append(run)
         part["rows"].append(row)
@@ -214,10 +216,14 @@ def part_large(args, scenes_dir, peers_dir):
     return part
 
 
+LARGE_VARIANTS = (("sah", "auto"), ("sah", "corners"), ("fast", "auto"))
+
+
 def large_renders(args, scenes_dir, work):
-    """The Cornell box around the largest subdivided Lucy (`--subdivide`), in both BVH leaf
-    layouts, alternating fresh processes: seconds to the first pixel (load, subdivision and
-    build: the wall time before rendering starts), total seconds, peak memory, Mrays/s."""
+    """The Cornell box around the largest subdivided Lucy (`--subdivide`), with the BVH's
+    builds and leaf layouts of `LARGE_VARIANTS`, alternating fresh processes: seconds to the
+    first pixel (load, subdivision and build: the wall time before rendering starts), total
+    seconds, peak memory, Mrays/s."""
     scene, flags = LARGE_RENDER
     path = os.path.join(scenes_dir, scene)
     level = max(args.large_levels)
@@ -226,22 +232,23 @@ def large_renders(args, scenes_dir, work):
         return []
     runs = []
     for rnd in range(args.rounds):
-        for layout in ("auto", "corners"):
+        for build, layout in LARGE_VARIANTS:
             wait_quiet(args.wait_quiet)
-            stats = os.path.join(work, f"render-{layout}.json")
+            stats = os.path.join(work, f"render-{build}-{layout}.json")
             cmd = [args.bin, path, "--subdivide", str(level), *flags.split(), "-t", str(args.threads),
-                   "--bvh-leaves", layout, "-f", os.path.join(work, f"cblucy-{layout}.png"), "--stats", stats]
+                   "--bvh-build", build, "--bvh-leaves", layout,
+                   "-f", os.path.join(work, f"cblucy-{build}-{layout}.png"), "--stats", stats]
             t0 = time.monotonic()
             _, rss = peak_rss(cmd)
             wall = time.monotonic() - t0
             with open(stats) as f:
                 st = json.load(f)
-            run = {"round": rnd, "layout": layout, "wall": wall, "rss": rss, "render_s": st["render_s"],
+            run = {"round": rnd, "build": build, "layout": layout, "wall": wall, "rss": rss, "render_s": st["render_s"],
                    "first_pixel": wall - st["render_s"], "build_s": st["bvh"]["build_s"],
                    "mrays": st["mrays_per_s"], "triangles": st["triangles"], "rays": st["rays"]["total"],
                    "mesh_bytes": st["mesh_bytes"], "node_bytes": st["bvh"]["node_bytes"],
                    "leaf_bytes": st["bvh"]["leaf_bytes"]}
-            log(f"large render {layout} round {rnd}: first pixel {run['first_pixel']:.1f} s, total {wall:.1f} s, "
+            log(f"large render {build} {layout} round {rnd}: first pixel {run['first_pixel']:.1f} s, total {wall:.1f} s, "
                 f"peak {rss / 2 ** 30:.2f} GiB, {run['mrays']:.2f} Mrays/s")
             runs.append(run)
     return [{"scene": scene, "flags": flags, "level": level, "runs": runs}]
@@ -261,12 +268,13 @@ def md_large(args, part):
                f"this script, `%.9g` coordinates). Build: `wavepath rays trace MESH RAYS {args.threads} 1` `build_s` "
                f"(8-wide BVH, {args.threads} threads) and the Embree peer's `build_s` on the same triangles "
                f"(OBJ), `--quality medium` and `high`; wavepath's leaves in the default layout (corners below 16M "
-               f"primitives, packed from there). Peak: the whole process's resident memory (the Embree "
+               f"primitives, packed from there), its default build (binned SAH) and, beside it, `--bvh-build fast` "
+               f"(Morton order). Peak: the whole process's resident memory (the Embree "
                f"peer's includes its own OBJ arrays). Medians of {args.rounds} rounds of fresh processes, run "
                f"in turn; the ratio is Embree medium's build time over wavepath's per round (> 1: wavepath "
                f"builds faster).\n")
-    cols = "| triangles | PLY MB | load s | load GB/s | OBJ MB | OBJ load s | OBJ MB/s | build s | embree medium s | embree high s | ratio vs medium (per round) | peak GiB | B/tri | embree peak GiB |"
-    out += [cols, "|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|"]
+    cols = "| triangles | PLY MB | load s | load GB/s | OBJ MB | OBJ load s | OBJ MB/s | build s | fast build s | embree medium s | embree high s | ratio vs medium (per round) | peak GiB | B/tri | fast peak GiB | embree peak GiB |"
+    out += [cols, "|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|---|--:|--:|--:|--:|"]
     for row in part["rows"]:
         r = row["runs"]
         tris = r[0]["triangles"]
@@ -279,9 +287,10 @@ def md_large(args, part):
         erss = [x["embree_medium_rss"] for x in r if "embree_medium_rss" in x]
         out.append(f"| {tri_count(tris)} | {row['bytes'] / 1e6:.0f} | {load:.3f} | {row['bytes'] / load / 1e9:.2f} | "
                    f"{row['obj_bytes'] / 1e6:.0f} | {obj_load:.3f} | {row['obj_bytes'] / obj_load / 1e6:.0f} | "
-                   f"{med([x['build_s'] for x in r]):.3g} | "
+                   f"{med([x['build_s'] for x in r]):.3g} | {med([x['fast_build_s'] for x in r]):.3g} | "
                    + (f"{med(em):.3g} | {med(eh):.3g} | {', '.join(f'{x:.2f}' for x in ratios)} | " if ratios else "- | - | - | ")
-                   + f"{rss / 2 ** 30:.2f} | {rss / tris:.0f} | " + (f"{med(erss) / 2 ** 30:.2f} |" if erss else "- |"))
+                   + f"{rss / 2 ** 30:.2f} | {rss / tris:.0f} | {med([x['fast_rss'] for x in r]) / 2 ** 30:.2f} | "
+                   + (f"{med(erss) / 2 ** 30:.2f} |" if erss else "- |"))
     out.append("")
     out.append(f"Command: `tools/benchmarks.sh --parts large --large-levels {','.join(map(str, args.large_levels))}`.  ")
     out.append(f"Machine: {MACHINE['cpu']}, {NCPU} cores; load average {part['load_before']:.2f} before, "
@@ -291,18 +300,19 @@ def md_large(args, part):
         tris = runs[0]["triangles"]
         out.append(f"### A Cornell box around the {tris / 1e6:.1f}M-triangle Lucy\n")
         out.append(f"`wavepath {args.scenes_shown}/{r['scene']} --subdivide {r['level']} {r['flags']} -t {args.threads} "
-                   f"--bvh-leaves LAYOUT --stats` (glass Lucy, global illumination), alternating fresh processes, "
+                   f"--bvh-build BUILD --bvh-leaves LAYOUT --stats` (glass Lucy, global illumination), alternating fresh processes, "
                    f"medians of {args.rounds}. First pixel: the wall time before rendering starts (load, "
                    f"subdivision, BVH build). Resident: the mesh, the tree's nodes and its leaves as the stats "
                    f"report them; peak: the whole process.\n")
-        out.append("| leaves | first pixel s | of it BVH build s | render s | total s | Mrays/s | peak GiB | B/tri | mesh / nodes / leaves B/tri |")
-        out.append("|---|--:|--:|--:|--:|--:|--:|--:|---|")
-        for layout in ("auto", "corners"):
-            sel = [x for x in runs if x["layout"] == layout]
+        out.append("| build | leaves | first pixel s | of it BVH build s | render s | total s | Mrays/s | peak GiB | B/tri | mesh / nodes / leaves B/tri |")
+        out.append("|---|---|--:|--:|--:|--:|--:|--:|--:|---|")
+        for build, layout in LARGE_VARIANTS:
+            # Runs recorded before the fast build existed carry no "build": they are SAH builds.
+            sel = [x for x in runs if (x.get("build", "sah"), x["layout"]) == (build, layout)]
             if not sel:
                 continue
             m = lambda k: statistics.median([x[k] for x in sel])
-            out.append(f"| {layout} | {m('first_pixel'):.1f} | {m('build_s'):.1f} | {m('render_s'):.1f} | {m('wall'):.1f} | "
+            out.append(f"| {build} | {layout} | {m('first_pixel'):.1f} | {m('build_s'):.1f} | {m('render_s'):.1f} | {m('wall'):.1f} | "
                        f"{m('mrays'):.2f} | {m('rss') / 2 ** 30:.2f} | {m('rss') / tris:.0f} | "
                        f"{sel[0]['mesh_bytes'] / tris:.1f} / {sel[0]['node_bytes'] / tris:.1f} / {sel[0]['leaf_bytes'] / tris:.1f} |")
         out.append("")
@@ -497,10 +507,12 @@ def md_peers(args, part, scenes_dir, title="## Ray throughput against the peers\
                f"primary hit). Mrays/s, best of {part['env']['REPS']} timed passes per run and best of "
                f"{passes} harness pass{'es' if passes > 1 else ''}; the ratios are wavepath over the peer within one "
                f"pass (fresh processes run back to back), their median over passes with the range in "
-               f"brackets. `hits`: wavepath's verdict against Embree's watertight `robust` variant.\n")
+               f"brackets. `hits`: wavepath's verdict against Embree's watertight `robust` variant; `/ embree robust` "
+               f"compares with the one peer variant that asks for a watertight triangle test, as "
+               f"wavepath's is (docs/decisions.md, \"Where the gap to the fastest peers is\").\n")
     out.append("| mesh, rays, threads | " + " | ".join(label(c) for c in cols) +
-               " | / embree single | / embree packet16 | / obvhs cwbvh | / tinybvh bvh8 | hits |")
-    out.append("|---|" + "--:|" * len(cols) + "--:|--:|--:|--:|---|")
+               " | / embree robust | / embree single | / embree packet16 | / obvhs cwbvh | / tinybvh bvh8 | hits |")
+    out.append("|---|" + "--:|" * len(cols) + "--:|--:|--:|--:|--:|---|")
     keys = []
     for r in rows:
         k = (r["mesh"], r["set"], r["threads"])
@@ -534,7 +546,7 @@ def md_peers(args, part, scenes_dir, title="## Ray throughput against the peers\
             b = best(c)
             cells.append("-" if b is None else (f"**{b:.2f}**" if c == "wavepath:-" else f"{b:.2f}"))
         out.append(f"| {mesh} {set_} {thr}T{' !' if busy > 0.10 else ''} | " + " | ".join(cells) +
-                   f" | {ratio('embree:single')} | {ratio('embree:packet16')} | {ratio('obvhs:cwbvh')} | {ratio('tinybvh:bvh8')} | "
+                   f" | {ratio('embree:robust')} | {ratio('embree:single')} | {ratio('embree:packet16')} | {ratio('obvhs:cwbvh')} | {ratio('tinybvh:bvh8')} | "
                    f"{', '.join(verdicts)} |")
     out.append("")
     out.append("`!`: other processes used more than 10% of the CPUs during some run of that row "
