@@ -37,7 +37,7 @@ pub trait Intersector: Sync + Send {
     fn closest_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> Option<Hit>;
     /// Whether anything is hit with `t` in `[ray.tmin, ray.tmax]` (shadow rays; may stop early).
     fn any_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> bool;
-    /// Short name for logs ("brute force", "bvh8 avx2", ...).
+    /// Short name for logs ("brute force", "bvh8 avx2, sah build", ...).
     fn name(&self) -> String;
 
     /// Closest hits for a whole queue of rays; accelerators override this to exploit the
@@ -66,6 +66,8 @@ pub trait Intersector: Sync + Send {
 /// How the acceleration structure turned out (zeros for brute force).
 #[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize)]
 pub struct BuildInfo {
+    /// How the tree was built (`--bvh-build`: "sah" or "fast"; empty for brute force).
+    pub method: &'static str,
     pub build_s: f64,
     pub nodes: usize,
     /// Leaf blocks (each holds at most four primitives).
@@ -78,8 +80,8 @@ pub struct BuildInfo {
     pub leaf_bytes: usize,
 }
 
-/// Builds the intersector the settings ask for: the BVH (built and stored as `s.bvh` says, box tests of
-/// at most `s.isa`), or brute force for `--no-bvh`.
+/// Builds the intersector the settings ask for: the BVH (built and stored as `s.bvh` says, box tests
+/// of at most `s.isa`), or brute force for `--no-bvh`.
 pub fn build(scene: &crate::scene::Scene, s: &crate::settings::Settings) -> (Box<dyn Intersector>, BuildInfo) {
     if s.use_bvh {
         let bvh = Bvh::build_with(scene, s.bvh).with_isa(s.isa);

@@ -66,7 +66,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let per_ray = |x: u64| x as f64 / counters.rays.max(1) as f64;
     let tree = match BvhBuild::from(args.bvh_build) {
         BvhBuild::Sah => "binned SAH, 16 bins x 3 axes, sets of 128k and more binned from a sample of 16k",
-        BvhBuild::Fast => "Morton order (LBVH), 30-bit codes",
+        BvhBuild::Fast => "Morton order (LBVH), sets of 16 and fewer cut into leaves of four in curve order",
     };
     let notes = format!(
         "wavepath bvh8 ({tree}, SoA child boxes; leaves <= 4 in SoA blocks: SSE filter, then the scalar watertight test); \

@@ -239,10 +239,14 @@ fn the_fast_bvh_build_renders_the_same_image() {
     // order against binned SAH), the closest hits and so every sample do not.
     let dir = temp_dir("cli-bvh-build");
     let render = |build: &str| {
-        let out = dir.join(format!("{build}.pfm"));
+        let (out, stats) = (dir.join(format!("{build}.pfm")), dir.join(format!("{build}.json")));
         let args = ["-s", "4", "-l", "2", "-m", "4", "-r", "64", "48", "-t", "2", "--bvh-build", build];
-        let o = run_wavepath(args.into_iter().chain(["-f", out.to_str().unwrap()]));
+        let o = run_wavepath(args.into_iter().chain(["-f", out.to_str().unwrap(), "--stats", stats.to_str().unwrap()]));
         assert!(o.status.success(), "{}", stderr(&o));
+        // The log and the stats say which build it was.
+        assert!(stderr(&o).contains(&format!("{build} build")), "{}", stderr(&o));
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+        assert_eq!(json["bvh"]["method"], build);
         read_pfm(&out).2
     };
     let (sah, fast) = (render("sah"), render("fast"));

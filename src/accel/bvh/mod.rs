@@ -133,6 +133,10 @@ impl Bvh {
         drop(ids);
         assert!(WIDTH_STACK * (depth + 1) <= traverse::BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
         let info = BuildInfo {
+            method: match opts.build {
+                BvhBuild::Sah => "sah",
+                BvhBuild::Fast => "fast",
+            },
             build_s: start.elapsed().as_secs_f64(),
             nodes: nodes.len(),
             leaves: leaves.leaves(),
@@ -292,7 +296,7 @@ impl Intersector for Bvh {
     }
 
     fn name(&self) -> String {
-        format!("bvh8 {}", self.isa.name())
+        format!("bvh8 {}, {} build", self.isa.name(), self.info.method)
     }
 
     fn closest_hits(&self, rays: &[Ray], hits: &mut [Option<Hit>], counters: &mut TraceCounters) {
