@@ -175,7 +175,11 @@ impl Largest {
     }
 
     fn merge(mut self, o: Largest) -> Largest {
-        o.refs.iter().for_each(|(_, r)| self.offer(r));
+        for (key, r) in &o.refs {
+            if *key > self.floor {
+                self.insert(*key, r);
+            }
+        }
         self
     }
 }
@@ -215,15 +219,37 @@ fn build_into(
     };
     drop(bins);
     let (lo, hi, _, _) = b;
+    let (l, r) = refs.split_at_mut(mid);
+    join_subtrees(
+        nodes,
+        at,
+        mid,
+        |n, i| build_into(l, lb, lbig, base, depth + 1, n, i),
+        |n, i| build_into(r, rb, rbig, base + mid, depth + 1, n, i),
+        |_, _| (lo, hi),
+    );
+}
+
+/// Builds a node's two subtrees in parallel into their ranges of `nodes` (the node at
+/// `nodes[0]`, index `at` of the whole array; the left subtree, over `mid` primitives, from
+/// `at + 1`, the right one after the left's [`node_bound`]): `left` and `right` get their
+/// range and its absolute index. Then writes the node with the box `boxed` makes of the two
+/// results, and returns that box.
+pub(super) fn join_subtrees<A: Send, B: Send>(
+    nodes: &mut [Node2],
+    at: usize,
+    mid: usize,
+    left: impl FnOnce(&mut [Node2], usize) -> A + Send,
+    right: impl FnOnce(&mut [Node2], usize) -> B + Send,
+    boxed: impl FnOnce(&A, &B) -> (Vec3, Vec3),
+) -> (Vec3, Vec3) {
     let right_at = at + 1 + node_bound(mid);
     let (me, rest) = nodes.split_first_mut().expect("a subtree has a node");
     let (left_nodes, right_nodes) = rest.split_at_mut(node_bound(mid));
-    let (l, r) = refs.split_at_mut(mid);
-    rayon::join(
-        || build_into(l, lb, lbig, base, depth + 1, left_nodes, at + 1),
-        || build_into(r, rb, rbig, base + mid, depth + 1, right_nodes, right_at),
-    );
+    let (a, b) = rayon::join(|| left(left_nodes, at + 1), || right(right_nodes, right_at));
+    let (lo, hi) = boxed(&a, &b);
     *me = Node2 { lo, hi, a: at as u32 + 1, b: right_at as u32, count: 0 };
+    (lo, hi)
 }
 
 /// Writes the subtree at `nodes[*next]` onwards; returns its root's absolute index. `bins`:

@@ -10,7 +10,7 @@
 //! No primitive references are made: a primitive's box is computed where it is needed, from
 //! the scene, so the build holds the sort keys (8 bytes a primitive) where the SAH build
 //! holds its references (28).
-use super::build::{MAX_LEAF, Node2, PARALLEL_MIN, node_bound};
+use super::build::{MAX_LEAF, Node2, PARALLEL_MIN, join_subtrees, node_bound};
 use glam::Vec3;
 use rayon::prelude::*;
 
@@ -75,7 +75,13 @@ where
     let inf = Vec3::INFINITY;
     let (lo, hi) = (0..n)
         .into_par_iter()
-        .fold(|| (inf, -inf), |(lo, hi), i| (lo.min(centroid(i)), hi.max(centroid(i))))
+        .fold(
+            || (inf, -inf),
+            |(lo, hi), i| {
+                let c = centroid(i);
+                (lo.min(c), hi.max(c))
+            },
+        )
         .reduce(|| (inf, -inf), |a, b| (a.0.min(b.0), a.1.max(b.1)));
     let extent = (hi - lo).max_element();
     // One point (or an extent that overflows) gives every primitive the same code, and the
@@ -133,17 +139,15 @@ impl<F: Fn(usize) -> (Vec3, Vec3) + Sync> Tree<F> {
             return self.emit_seq(keys, base, nodes, at, &mut 0).1;
         }
         let mid = split_point(keys, self.kf);
-        let right_at = at + 1 + node_bound(mid);
-        let (me, rest) = nodes.split_first_mut().expect("a subtree has a node");
-        let (left_nodes, right_nodes) = rest.split_at_mut(node_bound(mid));
         let (l, r) = keys.split_at(mid);
-        let (lb, rb) = rayon::join(
-            || self.emit_par(l, base, left_nodes, at + 1),
-            || self.emit_par(r, base + mid, right_nodes, right_at),
-        );
-        let (lo, hi) = (lb.0.min(rb.0), lb.1.max(rb.1));
-        *me = Node2 { lo, hi, a: at as u32 + 1, b: right_at as u32, count: 0 };
-        (lo, hi)
+        join_subtrees(
+            nodes,
+            at,
+            mid,
+            |n, i| self.emit_par(l, base, n, i),
+            |n, i| self.emit_par(r, base + mid, n, i),
+            |a, b| (a.0.min(b.0), a.1.max(b.1)),
+        )
     }
 
     /// [`Tree::emit_par`] on one thread, its nodes written densely from `nodes[*next]` on;
