@@ -5,10 +5,10 @@ use glam::Vec3;
 use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Duration;
-use wavepath::accel::{Bvh, Intersector, TraceCounters};
-use wavepath::geometry::Ray;
-use wavepath::rayfile::{diffuse_rays, primary_rays};
-use wavepath::scene::{Mesh, Scene};
+use wavepath::Ray;
+use wavepath::{Bvh, Intersector, TraceCounters};
+use wavepath::{Mesh, Scene};
+use wavepath::{diffuse_rays, primary_rays};
 
 fn scenes() -> Vec<(String, Scene)> {
     let dir =
@@ -16,7 +16,7 @@ fn scenes() -> Vec<(String, Scene)> {
     let mut out = Vec::new();
     for name in ["dragon_100k", "lucy_100k"] {
         let p = dir.join("meshes").join(format!("{name}.obj"));
-        if let Ok(s) = wavepath::load::load(&p, &Default::default()) {
+        if let Ok(s) = wavepath::load(&p, &Default::default()) {
             out.push((name.to_string(), s));
         }
     }
@@ -48,10 +48,10 @@ fn generated() -> Scene {
         }
     }
     let material_ids = vec![0; triangles.len()];
-    let mut s = wavepath::load::default_scene();
+    let mut s = wavepath::default_scene();
     s.mesh = Mesh { positions, normals: None, uvs: None, colors: None, triangles, material_ids: material_ids.into() };
     s.spheres.clear();
-    s.camera = wavepath::scene::Camera::look_at(Vec3::new(0.0, 0.5, 3.5), Vec3::ZERO, Vec3::Y, 45.0, 4.0 / 3.0);
+    s.camera = wavepath::Camera::look_at(Vec3::new(0.0, 0.5, 3.5), Vec3::ZERO, Vec3::Y, 45.0, 4.0 / 3.0);
     s
 }
 

@@ -5,9 +5,9 @@
 //! when present, else the embedded default Cornell box.
 
 use std::time::Instant;
-use wavepath::accel::{self, Intersector};
-use wavepath::scene::Scene;
-use wavepath::settings::{IntegratorKind, Settings, Shading};
+use wavepath::Intersector;
+use wavepath::Scene;
+use wavepath::{IntegratorKind, Settings, Shading};
 
 const REPS: usize = 3;
 
@@ -17,9 +17,9 @@ fn scene() -> Scene {
         .unwrap_or_else(|| std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/scenes"));
     let path = dir.join("cs184/sky/CBspheres_lambertian.dae");
     let mut scene = if path.is_file() {
-        wavepath::load::load(&path, &Default::default()).expect("scene loads")
+        wavepath::load(&path, &Default::default()).expect("scene loads")
     } else {
-        wavepath::load::default_scene()
+        wavepath::default_scene()
     };
     scene.camera.fit_aspect(4.0 / 3.0);
     scene
@@ -31,7 +31,7 @@ fn best(scene: &Scene, bvh: &dyn Intersector, cases: &[&Settings]) -> Vec<(f64, 
     for _ in 0..REPS {
         for (i, s) in cases.iter().enumerate() {
             let start = Instant::now();
-            let (_, st) = wavepath::render::render(scene, bvh, s).expect("renders");
+            let (_, st) = wavepath::render(scene, bvh, s).expect("renders");
             let secs = start.elapsed().as_secs_f64();
             if secs < out[i].0 {
                 out[i] = (secs, st.total_rays() as f64 / secs / 1e6);
@@ -43,7 +43,7 @@ fn best(scene: &Scene, bvh: &dyn Intersector, cases: &[&Settings]) -> Vec<(f64, 
 
 fn main() {
     let scene = scene();
-    let (bvh, _) = accel::build(&scene, &Default::default());
+    let (bvh, _) = wavepath::build_accel(&scene, &Default::default());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("thread pool");
     pool.install(|| {
         let base = Settings { width: 240, height: 180, spp: 16, light_samples: 4, threads: 2, ..Settings::default() };

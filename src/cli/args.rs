@@ -3,7 +3,7 @@
 use super::choices::{BvhBuild, Camera, Fov, Integrator, Leaves, Roulette, Sampler, Shading, Split, Tonemap};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
-use wavepath::cpu::Isa;
+use wavepath::Isa;
 
 #[derive(Parser, Debug)]
 #[command(

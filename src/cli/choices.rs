@@ -23,7 +23,7 @@ macro_rules! choice {
 
 choice! {
     /// What a pixel shows.
-    Shading => wavepath::settings::Shading {
+    Shading => wavepath::Shading {
         /// The shading normal as n * 0.5 + 0.5 (the seed's debug mode).
         Normals,
         /// Emission plus direct light (depth 1).
@@ -35,7 +35,7 @@ choice! {
 
 choice! {
     /// How each pixel's samples spread over the path space.
-    Sampler => wavepath::sampling::SamplerKind {
+    Sampler => wavepath::SamplerKind {
         /// Independent hashed numbers (the seed's).
         Independent,
         /// Jittered strata: one sample per cell of each dimension pair's grid.
@@ -47,7 +47,7 @@ choice! {
 
 choice! {
     /// How the BVH's tree is built (same hits either way).
-    BvhBuild => wavepath::settings::BvhBuild {
+    BvhBuild => wavepath::BvhBuild {
         /// Binned SAH: the fastest tree to trace.
         Sah,
         /// Morton order: a fraction of the build time, slower rays.
@@ -57,7 +57,7 @@ choice! {
 
 choice! {
     /// How the BVH's leaves hold their triangles (same hits either way).
-    Leaves => wavepath::settings::LeafLayout {
+    Leaves => wavepath::LeafLayout {
         /// Packed from 16 million primitives, corners below.
         Auto,
         /// Triangle corners copied into the leaves: no lookup, 192 bytes a leaf.
@@ -69,7 +69,7 @@ choice! {
 
 choice! {
     /// Which light-transport implementation runs.
-    Integrator => wavepath::settings::IntegratorKind {
+    Integrator => wavepath::IntegratorKind {
         /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
         Wavefront,
         /// The simple recursive single-ray reference.
@@ -79,7 +79,7 @@ choice! {
 
 choice! {
     /// How linear radiance becomes 8-bit PNG values.
-    Tonemap => wavepath::film::Tonemap {
+    Tonemap => wavepath::Tonemap {
         /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1).
         Cs184,
         /// Plain sRGB encoding of clamp(L, 0, 1).
@@ -89,7 +89,7 @@ choice! {
 
 choice! {
     /// Which camera a COLLADA file gets.
-    Camera => wavepath::load::CameraMode {
+    Camera => wavepath::CameraMode {
         /// The CS184 reference placement (see COLLADA-CS184.md): the seed's pictures use it.
         Cs184,
         /// The file's camera exactly as written.
@@ -99,7 +99,7 @@ choice! {
 
 choice! {
     /// How a render is cut into parts.
-    Split => wavepath::parts::Split {
+    Split => wavepath_apps::parts::Split {
         /// Bands of rows, dealt round-robin to the parts: every pixel is rendered by one part
         /// exactly as a single process renders it, so the merge is bit-identical.
         Tiles,
@@ -111,7 +111,7 @@ choice! {
 
 choice! {
     /// The setting a study varies.
-    Sweep => wavepath::study::SweepKind {
+    Sweep => wavepath_apps::study::SweepKind {
         /// Samples per pixel 1, 2, 4, ... up to the cap: one curve.
         Spp,
         /// Samples per area light (-l) 1 ... 64, each over the spp ladder.
@@ -134,8 +134,8 @@ choice! {
 /// How a CS184 camera's field of view follows `-r` (a command-line choice only: it picks
 /// between [`Camera::fit_to`] as loaded and [`Camera::whole_frame`] first).
 ///
-/// [`Camera::fit_to`]: wavepath::scene::Camera::fit_to
-/// [`Camera::whole_frame`]: wavepath::scene::Camera::whole_frame
+/// [`Camera::fit_to`]: wavepath::Camera::fit_to
+/// [`Camera::whole_frame`]: wavepath::Camera::whole_frame
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Fov {
     /// The reference renderer's rule: its 800x600 picture's angle per pixel, so `-r W H` shows
@@ -147,7 +147,7 @@ pub enum Fov {
 
 impl Fov {
     /// Fits `cam` to a `width x height` image by this rule.
-    pub fn apply(self, cam: &mut wavepath::scene::Camera, width: usize, height: usize) {
+    pub fn apply(self, cam: &mut wavepath::Camera, width: usize, height: usize) {
         if self == Fov::Frame {
             cam.whole_frame();
         }

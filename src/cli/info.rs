@@ -4,16 +4,16 @@ use super::args::InfoArgs;
 use anyhow::Result;
 use serde_json::json;
 use std::time::Instant;
-use wavepath::effects::Effects;
-use wavepath::load::LoadOptions;
-use wavepath::scene::{Environment, Scene};
-use wavepath::settings::Settings;
+use wavepath::Effects;
+use wavepath::LoadOptions;
+use wavepath::Settings;
+use wavepath::{Environment, Scene};
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
     let mut scene = super::load_scene(&a.scene, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?;
     if let Some(e) = &a.envmap {
-        scene.env = Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
+        scene.env = Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?));
     }
     let load_s = t0.elapsed().as_secs_f64();
     // The camera as a render at the default resolution sees it.

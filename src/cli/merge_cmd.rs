@@ -6,13 +6,13 @@ use anyhow::Result;
 
 pub fn run(a: &MergeArgs) -> Result<()> {
     check_output_extension(&a.output)?;
-    let merged = wavepath::parts::merge_files(&a.parts)?;
+    let merged = wavepath_apps::parts::merge_files(&a.parts)?;
     let m = &merged.parts[0];
     let film = merged.acc.to_film();
-    wavepath::film::write_image(&film, &a.output, a.tonemap.into())?;
-    let rate = wavepath::film::rate_film(film.width, film.height, &merged.acc.samples_taken(), m.spp);
+    wavepath::write_image(&film, &a.output, a.tonemap.into())?;
+    let rate = wavepath::rate_film(film.width, film.height, &merged.acc.samples_taken(), m.spp);
     let rate_path = rate_image_path(&a.output);
-    wavepath::film::write_rate_image(&rate, &rate_path)?;
+    wavepath::write_rate_image(&rate, &rate_path)?;
     let stats = merged.stats_json();
     eprintln!(
         "[wavepath] Merged {} parts ({} split) of {} {}x{}: {} rays, slowest part {:.3} s render, {:.3} s wall",

@@ -59,20 +59,20 @@ pub fn main() -> i32 {
 /// Loads a scene file and prints the loader's notes, which only a scene that loaded has.
 /// A file whose mesh cannot fit in the memory left (about its size for binary meshes, times
 /// four per `--subdivide` level) is refused before it is read.
-fn load_scene(path: &std::path::Path, opts: &wavepath::load::LoadOptions) -> anyhow::Result<wavepath::scene::Scene> {
+fn load_scene(path: &std::path::Path, opts: &wavepath::LoadOptions) -> anyhow::Result<wavepath::Scene> {
     load_scene_within(path, opts, None)
 }
 
 fn load_scene_within(
     path: &std::path::Path,
-    opts: &wavepath::load::LoadOptions,
+    opts: &wavepath::LoadOptions,
     limit: Option<u64>,
-) -> anyhow::Result<wavepath::scene::Scene> {
+) -> anyhow::Result<wavepath::Scene> {
     if let Ok(meta) = std::fs::metadata(path) {
         let need = (meta.len() as u128) << (2 * opts.subdivide.min(32));
         check_memory(path, need, "loading it", limit)?;
     }
-    let scene = wavepath::load::load(path, opts)?;
+    let scene = wavepath::load(path, opts)?;
     for n in &scene.notes {
         eprintln!("{n}");
     }
@@ -80,12 +80,8 @@ fn load_scene_within(
 }
 
 /// Refuses, before the allocations, a BVH that cannot fit in the memory left.
-fn check_build_memory(
-    scene: &wavepath::scene::Scene,
-    layout: wavepath::accel::LeafLayout,
-    limit: Option<u64>,
-) -> anyhow::Result<()> {
-    let need = wavepath::accel::Bvh::build_bytes(scene.primitive_count(), layout);
+fn check_build_memory(scene: &wavepath::Scene, layout: wavepath::LeafLayout, limit: Option<u64>) -> anyhow::Result<()> {
+    let need = wavepath::Bvh::build_bytes(scene.primitive_count(), layout);
     check_memory(std::path::Path::new(&scene.name), need as u128, "building its BVH", limit)
 }
 

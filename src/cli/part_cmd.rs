@@ -6,7 +6,7 @@ use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::path::PathBuf;
 use std::time::Instant;
-use wavepath::parts::{PartMeta, PartSpec, PartStats, identity};
+use wavepath_apps::parts::{PartMeta, PartSpec, PartStats, identity};
 
 pub fn run(a: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
@@ -24,9 +24,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         super::check_build_memory(&scene, s.bvh.leaves, a.max_memory)?;
     }
     let scene_hash = identity::scene_hash(&scene);
-    let (acc, mut stats) = wavepath::render::with_threads(s.threads, || -> Result<_> {
-        let (accel, build) = wavepath::accel::build(&scene, &s);
-        let (acc, mut stats) = wavepath::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
+    let (acc, mut stats) = wavepath::with_threads(s.threads, || -> Result<_> {
+        let (accel, build) = wavepath::build_accel(&scene, &s);
+        let (acc, mut stats) = wavepath_apps::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
         stats.build_s = build.build_s;
         stats.threads = rayon::current_num_threads();
         Ok((acc, stats))
@@ -34,7 +34,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     stats.host = host_name();
     stats.wall_s = t0.elapsed().as_secs_f64();
     let meta = PartMeta {
-        format: wavepath::parts::file::FORMAT,
+        format: wavepath_apps::parts::file::FORMAT,
         part: spec,
         scene: scene.name.clone(),
         scene_hash,
@@ -45,7 +45,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         stats: stats.clone(),
         pixels: String::new(),
     };
-    wavepath::parts::file::write(&out, &meta, &acc)?;
+    wavepath_apps::parts::file::write(&out, &meta, &acc)?;
     let _: &PartStats = &stats;
     eprintln!(
         "[wavepath] Part {} ({} split) of {}: {} rays in {:.3} s render, {:.3} s wall; wrote {}",

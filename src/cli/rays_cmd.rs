@@ -3,10 +3,11 @@
 use super::args::{DumpArgs, TraceArgs};
 use anyhow::{Result, bail};
 use std::time::Instant;
-use wavepath::accel::{Bvh, BvhBuild, BvhOptions, TraceCounters};
-use wavepath::load::LoadOptions;
-use wavepath::rayfile::file::{HitRecord, read_rays, write_hits, write_rays};
-use wavepath::rayfile::{diffuse_rays, primary_rays, trace_all};
+use wavepath::LoadOptions;
+use wavepath::{Bvh, BvhBuild, BvhOptions, TraceCounters};
+use wavepath::{diffuse_rays, primary_rays};
+use wavepath_apps::rayfile::file::{HitRecord, read_rays, write_hits, write_rays};
+use wavepath_apps::rayfile::trace_all;
 
 pub fn run_dump(args: &DumpArgs) -> Result<()> {
     let (w, h) = match args.resolution.as_deref() {

@@ -5,11 +5,11 @@ use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use wavepath::effects::Effects;
-use wavepath::load::{LoadOptions, default_scene};
-use wavepath::scene::{Scene, read_camera_file};
-use wavepath::settings::Settings;
-use wavepath::stats::RenderStats;
+use wavepath::Effects;
+use wavepath::RenderStats;
+use wavepath::Settings;
+use wavepath::{LoadOptions, default_scene};
+use wavepath::{Scene, read_camera_file};
 
 /// Loads the scene the arguments name (or the default) with the camera adjustments applied.
 pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
@@ -38,7 +38,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
         scene.camera.focal_distance = d as f32;
     }
     if let Some(e) = &a.envmap {
-        scene.env = wavepath::scene::Environment::Map(std::sync::Arc::new(wavepath::scene::EnvMap::load(e)?));
+        scene.env = wavepath::Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?));
     }
     Ok(scene)
 }
@@ -71,9 +71,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
              biased, each estimate times the distance to the light"
         );
     }
-    let (film, build) = wavepath::render::with_threads(s.threads, || -> Result<_> {
+    let (film, build) = wavepath::with_threads(s.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
-        let (accel, build) = super::with_spinner("building the BVH", || wavepath::accel::build(&scene, &s));
+        let (accel, build) = super::with_spinner("building the BVH", || wavepath::build_accel(&scene, &s));
         let mb = |b: usize| b as f64 / 1e6;
         eprintln!(
             "[wavepath] Built {} in {:.4} s ({} nodes, {} leaves, depth {}); resident: mesh {:.1} MB, nodes {:.1} MB, leaves {:.1} MB",
@@ -92,18 +92,18 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                 b.inc(n);
             }
         };
-        let result = wavepath::render::render_with_progress(&scene, accel.as_ref(), &s, &tick)?;
+        let result = wavepath::render_with_progress(&scene, accel.as_ref(), &s, &tick)?;
         if let Some(b) = &bar {
             b.finish_and_clear();
         }
         Ok((result, build))
     })??;
-    let wavepath::render::RenderOutput { film, stats, samples } = film;
-    wavepath::film::write_image(&film, &out, a.tonemap.into())?;
-    if s.shading != wavepath::settings::Shading::Normals {
+    let wavepath::RenderOutput { film, stats, samples } = film;
+    wavepath::write_image(&film, &out, a.tonemap.into())?;
+    if s.shading != wavepath::Shading::Normals {
         let rate_path = rate_image_path(&out);
-        let rate = wavepath::film::rate_film(film.width, film.height, &samples, s.spp);
-        wavepath::film::write_rate_image(&rate, &rate_path)?;
+        let rate = wavepath::rate_film(film.width, film.height, &samples, s.spp);
+        wavepath::write_rate_image(&rate, &rate_path)?;
         eprintln!("[wavepath] Wrote sample-rate image {}", rate_path.display());
     }
     for line in stats.log_lines() {
@@ -111,7 +111,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     eprintln!("[wavepath] Wrote {}", out.display());
     if let Some(p) = &a.stats {
-        let json = wavepath::stats::to_json(&scene, &s, &effects, &build, &stats);
+        let json = wavepath::stats_json(&scene, &s, &effects, &build, &stats);
         write_atomic(p, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     let _: &RenderStats = &stats;
@@ -127,7 +127,7 @@ pub fn rate_image_path(out: &Path) -> PathBuf {
 /// A progress bar over camera samples, only when stderr is a terminal.
 fn progress_bar(s: &Settings) -> Option<indicatif::ProgressBar> {
     use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() || s.shading == wavepath::settings::Shading::Normals {
+    if !std::io::stderr().is_terminal() || s.shading == wavepath::Shading::Normals {
         return None;
     }
     let r = s.region();

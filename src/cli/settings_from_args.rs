@@ -3,8 +3,8 @@
 use super::RenderArgs;
 use super::choices::Roulette;
 use anyhow::{Result, bail};
-use wavepath::sampling::SamplerKind;
-use wavepath::settings::{BvhOptions, Cell, Settings, Shading};
+use wavepath::SamplerKind;
+use wavepath::{BvhOptions, Cell, Settings, Shading};
 
 /// Largest image side accepted; beyond this a typo is far more likely than a real render.
 pub const MAX_SIDE: i64 = 1 << 15;

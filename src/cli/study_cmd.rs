@@ -1,12 +1,12 @@
-//! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`wavepath::study`]).
+//! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`wavepath_apps::study`]).
 
 use super::choices::{Camera, Sampler, Sweep};
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
-use wavepath::load::{CameraMode, LoadOptions, default_scene};
-use wavepath::settings::{Settings, Shading};
-use wavepath::study::StudyConfig;
+use wavepath::{CameraMode, LoadOptions, default_scene};
+use wavepath::{Settings, Shading};
+use wavepath_apps::study::StudyConfig;
 
 #[derive(Args, Debug, Clone)]
 #[command(long_about = "Sweeps one setting and, for each value, renders at samples per pixel \
@@ -124,17 +124,17 @@ pub fn run(a: &StudyArgs) -> Result<()> {
         None => default_scene(),
     };
     a.fov.apply(&mut scene.camera, cfg.base.width, cfg.base.height);
-    let identity = wavepath::study::reference::scene_identity(a.scene.as_deref())?;
+    let identity = wavepath_apps::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
     let camera_label = format!("{:?} {:?}", CameraMode::from(a.camera), a.fov);
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
-    let result = wavepath::render::with_threads(cfg.base.threads, || -> Result<_> {
-        let (accel, _) = wavepath::accel::build(&scene, &cfg.base);
-        wavepath::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
+    let result = wavepath::with_threads(cfg.base.threads, || -> Result<_> {
+        let (accel, _) = wavepath::build_accel(&scene, &cfg.base);
+        wavepath_apps::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
     })??;
-    wavepath::study::report::write_all(&result, &out, &stem, &command)?;
+    wavepath_apps::study::report::write_all(&result, &out, &stem, &command)?;
     log(&format!("wrote {}/report.md, study.csv, error_vs_time.png and .svg", out.display()));
     Ok(())
 }

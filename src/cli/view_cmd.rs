@@ -5,8 +5,8 @@ use super::render_cmd::prepare_scene;
 use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::net::SocketAddr;
-use wavepath::accel::Bvh;
-use wavepath::view::{ViewOptions, Viewer};
+use wavepath::Bvh;
+use wavepath_apps::view::{ViewOptions, Viewer};
 
 /// The samples-per-pixel cap when `-s` is left at its default of 1.
 const DEFAULT_CAP: u32 = 1024;
@@ -40,7 +40,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     }
     let session = viewer.session.clone();
     ctrlc::set_handler(move || session.stop())?;
-    wavepath::render::with_threads(s.threads, || viewer.run(scene, &bvh, &opts))?;
+    wavepath::with_threads(s.threads, || viewer.run(scene, &bvh, &opts))?;
     eprintln!("[wavepath view] stopped");
     // The render thread has been joined. Connections whose clients stopped reading may still
     // block their writers (and the server's drop on them): the process ends without waiting.

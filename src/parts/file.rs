@@ -7,12 +7,12 @@
 
 use super::spec::PartSpec;
 use super::stats::PartStats;
-use crate::film::{Accumulator, PixelSums};
 use anyhow::{Context, Result, anyhow, bail};
 use exr::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use wavepath::{Accumulator, PixelSums};
 
 /// Version of the part-file layout; a merge refuses any other.
 pub const FORMAT: u32 = 2;

@@ -1,9 +1,9 @@
 //! What must agree between parts before they may be merged: the scene they rendered and
 //! the settings they rendered it with.
 
-use crate::film::Accumulator;
-use crate::scene::Scene;
-use crate::settings::Settings;
+use wavepath::Accumulator;
+use wavepath::Scene;
+use wavepath::Settings;
 
 /// FNV-1a, 64 bit: stable across runs, platforms and Rust versions (unlike `DefaultHasher`),
 /// which is all a check that two processes loaded the same scene needs.

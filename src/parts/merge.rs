@@ -3,10 +3,10 @@
 use super::file::{self, Part, PartMeta};
 use super::spec::Split;
 use super::stats::PartStats;
-use crate::film::Accumulator;
 use anyhow::{Result, bail};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
+use wavepath::Accumulator;
 
 /// A merged render: the sums of every pixel and the parts' headers (in part order).
 pub struct Merged {
@@ -100,7 +100,7 @@ fn add(acc: &mut Accumulator, p: &Part) -> Result<()> {
     Ok(())
 }
 
-/// The settings that differ between two settings keys (`Debug` of [`crate::settings::Settings`]),
+/// The settings that differ between two settings keys (`Debug` of [`wavepath::Settings`]),
 /// so the refusal says `seed: 3` vs `seed: 0` rather than two whole structs.
 fn setting_difference(a: &str, b: &str) -> (String, String) {
     let fields = |s: &str| -> Vec<String> {

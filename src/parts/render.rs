@@ -2,11 +2,11 @@
 
 use super::spec::PartSpec;
 use super::stats::PartStats;
-use crate::accel::Intersector;
-use crate::film::Accumulator;
-use crate::scene::Scene;
-use crate::settings::Settings;
 use anyhow::Result;
+use wavepath::Accumulator;
+use wavepath::Intersector;
+use wavepath::Scene;
+use wavepath::Settings;
 
 /// Renders part `spec` of the render `s` describes; pixels the part does not own keep
 /// zero sums. `progress` is told how many camera samples finished.
@@ -25,7 +25,7 @@ pub fn render_part(
     // sums whatever the cell, which is what makes the tile merge exact.
     for cell in spec.cells(s.width, s.height) {
         let part = Settings { cell: Some(cell), sample_range: Some((first, end)), ..s.clone() };
-        let (sums, st) = crate::render::render_sums(scene, accel, &part, progress)?;
+        let (sums, st) = wavepath::render_sums(scene, accel, &part, progress)?;
         stats.add_render(&st);
         let rows = cell.y * s.width..(cell.y + cell.h) * s.width;
         acc.pixels[rows.clone()].copy_from_slice(&sums.pixels[rows]);

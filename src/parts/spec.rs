@@ -1,9 +1,9 @@
 //! Which part of a render one process takes: part I of N, split by image bands or by
 //! sample ranges.
 
-use crate::settings::{Cell, Settings};
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
+use wavepath::{Cell, Settings};
 
 /// How a render is cut into parts.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -104,7 +104,7 @@ impl PartSpec {
         if s.cell.is_some() {
             bail!("--part cannot be combined with -p (a part already chooses its own pixels)");
         }
-        if s.shading == crate::settings::Shading::Normals {
+        if s.shading == wavepath::Shading::Normals {
             bail!("--part renders light transport only; --shading normals has no sums to merge");
         }
         if self.split == Split::Samples {

@@ -1,7 +1,7 @@
 //! A part's statistics, kept in its file, and the statistics of a merged render.
 
-use crate::stats::{RenderStats, StageTimes};
 use serde::{Deserialize, Serialize};
+use wavepath::{RenderStats, StageTimes};
 
 /// What one part did and how long it took.
 #[derive(Clone, Debug, Default, Serialize, Deserialize, PartialEq)]

@@ -1,10 +1,10 @@
 //! Ray and hit files in the format of ../shared/peers (little-endian, see DESIGN.md).
-use crate::geometry::{Hit, Ray};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::io::Write;
 use std::path::Path;
+use wavepath::{Hit, Ray};
 
 pub const MAGIC: [u8; 4] = *b"RAYS";
 pub const VERSION: u32 = 1;

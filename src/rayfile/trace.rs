@@ -1,9 +1,9 @@
 //! Tracing a ray file the way the peers' harness does (../shared/peers/README.md).
 use super::file::HitRecord;
-use crate::accel::{Intersector, TraceCounters};
-use crate::geometry::{Hit, Ray};
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use wavepath::{Hit, Ray};
+use wavepath::{Intersector, TraceCounters};
 
 /// Rays handed to a thread at a time (the peers' scheduler uses the same).
 pub const CHUNK: usize = 1024;

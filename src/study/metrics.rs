@@ -1,7 +1,7 @@
 //! How far a render is from the reference: the error measures the study reports.
 
-use crate::film::{Accumulator, Film};
 use glam::DVec3;
+use wavepath::{Accumulator, Film};
 
 /// Added to the squared reference value in the relative MSE so black pixels do not divide
 /// by zero (the usual choice, Rousselle et al. 2011).

@@ -14,13 +14,13 @@ pub mod sweep;
 pub use metrics::{ErrorStats, Reference, compare, log_log_slope};
 pub use sweep::{Curve, Ladder, SweepKind, curves, spp_ladder};
 
-use crate::accel::Intersector;
-use crate::film::Film;
-use crate::scene::Scene;
-use crate::settings::Settings;
 use anyhow::Result;
 use std::path::PathBuf;
 use std::time::Instant;
+use wavepath::Film;
+use wavepath::Intersector;
+use wavepath::Scene;
+use wavepath::Settings;
 
 /// What a study runs.
 #[derive(Clone, Debug)]
@@ -107,7 +107,7 @@ pub fn run(
     let mut ref_base = cfg.base.clone();
     if cfg.sweep.needs_deep_reference() {
         ref_base.max_depth = ref_base.max_depth.max(sweep::DEEP);
-        ref_base.shading = crate::settings::Shading::Global;
+        ref_base.shading = wavepath::Shading::Global;
     }
     let ref_settings = reference::reference_settings(&ref_base, cfg.ref_spp);
     log(&format!(
@@ -123,7 +123,7 @@ pub fn run(
     });
     // One untimed render first, so thread start-up and cold caches do not land on the
     // first measured point.
-    let _ = crate::integrator::wavefront::render_wavefront(scene, accel, &cfg.base, &|_| {});
+    let _ = wavepath::render_sums(scene, accel, &cfg.base, &|_| {})?;
     let mut points = Vec::new();
     for (ci, c) in curves.iter().enumerate() {
         let runs: Vec<(Settings, Option<f32>)> = match &c.ladder {
@@ -139,7 +139,7 @@ pub fn run(
                 .collect(),
         };
         for (s, tolerance) in runs {
-            let p = measure(scene, accel, &s, tolerance, ci, &reference);
+            let p = measure(scene, accel, &s, tolerance, ci, &reference)?;
             log(&format!(
                 "{:<28} spp {:>5} {}{:>8.3} s  {:>10} rays  rmse {:.5}  relMSE {:.5}  ci95 {:.5}",
                 c.label,
@@ -169,11 +169,11 @@ pub fn measure(
     tolerance: Option<f32>,
     curve: usize,
     reference: &Reference,
-) -> Point {
+) -> Result<Point> {
     let t0 = Instant::now();
-    let (acc, stats) = crate::integrator::wavefront::render_wavefront(scene, accel, s, &|_| {});
+    let (acc, stats) = wavepath::render_sums(scene, accel, s, &|_| {})?;
     let seconds = t0.elapsed().as_secs_f64();
-    Point {
+    Ok(Point {
         curve,
         settings: s.clone(),
         tolerance,
@@ -183,5 +183,5 @@ pub fn measure(
         error: compare(&acc, reference),
         film: acc.to_film(),
         samples: acc.samples_taken(),
-    }
+    })
 }

@@ -2,12 +2,12 @@
 //! changes whenever the scene file or a setting that changes the image changes.
 
 use super::metrics::Reference;
-use crate::accel::Intersector;
-use crate::film::{Film, Tonemap, write_image};
-use crate::scene::Scene;
-use crate::settings::Settings;
 use anyhow::{Context, Result};
 use std::path::{Path, PathBuf};
+use wavepath::Intersector;
+use wavepath::Scene;
+use wavepath::Settings;
+use wavepath::{Film, Tonemap, write_image};
 
 /// Added to the base seed for the reference, so the reference never shares random numbers
 /// with the renders it judges (shared samples would make their errors look smaller).
@@ -125,7 +125,7 @@ pub fn reference(
     std::fs::create_dir_all(cache_dir)
         .with_context(|| format!("{}: cannot create cache folder", cache_dir.display()))?;
     let t0 = std::time::Instant::now();
-    let (acc, _) = crate::integrator::wavefront::render_wavefront(scene, accel, settings, &|_| {});
+    let (acc, _) = wavepath::render_sums(scene, accel, settings, &|_| {})?;
     let seconds = t0.elapsed().as_secs_f64();
     let r = Reference::from_accumulator(&acc);
     write_image(&r.mean, &mean_p, Tonemap::Cs184)?;

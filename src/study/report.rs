@@ -2,10 +2,10 @@
 //! Markdown report that shows them.
 
 use super::{Ladder, StudyResult};
-use crate::film::{Tonemap, rate_film, write_image, write_rate_image};
 use anyhow::{Context, Result};
 use std::fmt::Write as _;
 use std::path::Path;
+use wavepath::{Tonemap, rate_film, write_image, write_rate_image};
 
 pub const CSV_HEADER: &str = "sweep,curve,spp,light_samples,max_depth,rr,hemisphere,adaptive_tolerance,\
 seconds,rays,mean_spp,rmse,rel_mse,ci95_mean,predicted_rmse,ref_floor,invalid_samples";

@@ -2,8 +2,8 @@
 //! rendered at a ladder of sample counts (or, for adaptive sampling, of tolerances), so
 //! error against time shows which setting buys the most accuracy per second.
 
-use crate::sampling::SamplerKind;
-use crate::settings::Settings;
+use wavepath::SamplerKind;
+use wavepath::Settings;
 
 /// The setting a study varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -131,7 +131,7 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
 }
 
 fn depth_settings(b: &Settings, m: u32, rr: f32) -> Settings {
-    let shading = if m > 1 { crate::settings::Shading::Global } else { crate::settings::Shading::Direct };
+    let shading = if m > 1 { wavepath::Shading::Global } else { wavepath::Shading::Direct };
     Settings { max_depth: m, rr_continue: rr, shading, ..b.clone() }
 }
 

@@ -3,8 +3,8 @@
 
 use super::options::ViewOptions;
 use super::session::ViewState;
-use crate::scene::format_camera_settings;
-use crate::settings::Shading;
+use wavepath::Shading;
+use wavepath::format_camera_settings;
 
 /// The camera file's name in the command.
 pub const CAMERA_FILE: &str = "view-camera.txt";

@@ -2,7 +2,7 @@
 //! bounds before anything changes: a bad value is a message for a 400, never a panic and
 //! never a render with absurd settings.
 
-use crate::settings::Shading;
+use wavepath::Shading;
 
 /// One change a client asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]

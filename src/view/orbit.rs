@@ -2,8 +2,8 @@
 //! pan the camera and its target together, zoom toward the target. The camera keeps its
 //! fields of view, clip planes and lens; only its position and frame change.
 
-use crate::scene::Camera;
 use glam::{Mat3, Vec3};
+use wavepath::Camera;
 
 /// A camera and the point it orbits about.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -5,9 +5,6 @@
 use super::controls::parse_query;
 use super::options::ViewOptions;
 use super::session::{Frame, Session};
-use crate::accel::Bvh;
-use crate::film::write_image;
-use crate::scene::Scene;
 use anyhow::{Context, Result};
 use base64::Engine;
 use std::io::Write;
@@ -16,6 +13,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Duration;
 use tiny_http::{Header, Method, Request, Response, Server};
+use wavepath::Bvh;
+use wavepath::Scene;
+use wavepath::write_image;
 
 /// The page: HTML and a little JavaScript, no framework, no build step.
 const PAGE: &str = include_str!("page.html");
@@ -32,7 +32,7 @@ pub struct Viewer {
 
 impl Viewer {
     /// Binds the address (port 0: a free one).
-    pub fn bind(scene: &Scene, settings: crate::settings::Settings, opts: &ViewOptions) -> Result<Viewer> {
+    pub fn bind(scene: &Scene, settings: wavepath::Settings, opts: &ViewOptions) -> Result<Viewer> {
         let server = Server::http(opts.listen).map_err(|e| anyhow::anyhow!("cannot listen on {}: {e}", opts.listen))?;
         let addr = server.server_addr().to_ip().context("the server has no IP address")?;
         Ok(Viewer { server: Arc::new(server), addr, session: Session::new(scene, settings) })
@@ -140,7 +140,7 @@ fn handle(req: Request, path: &str, session: &Session, bvh: &Bvh, opts: &ViewOpt
             };
             let Some(f) = latest() else { return req.respond(text(404, "no frame yet")) };
             let name = format!("wavepath-view-{:06}-{}spp.{ext}", f.seq, f.spp);
-            match write_image(&f.film, &dir.join(&name), crate::film::Tonemap::Srgb) {
+            match write_image(&f.film, &dir.join(&name), wavepath::Tonemap::Srgb) {
                 Ok(()) => req.respond(text(200, &name)),
                 Err(e) => req.respond(text(500, &format!("{e:#}"))),
             }
@@ -182,7 +182,7 @@ fn encode_file(f: &Frame, ext: &str) -> Result<Vec<u8>> {
     let dir = std::env::temp_dir().join(format!("wavepath-view-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let path = dir.join(format!("image-{}.{ext}", f.seq));
-    write_image(&f.film, &path, crate::film::Tonemap::Srgb)?;
+    write_image(&f.film, &path, wavepath::Tonemap::Srgb)?;
     let bytes = std::fs::read(&path)?;
     let _ = std::fs::remove_file(&path);
     Ok(bytes)

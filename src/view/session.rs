@@ -8,14 +8,14 @@
 
 use super::controls::Change;
 use super::orbit::Orbit;
-use crate::accel::{Bvh, Intersector};
-use crate::effects::Effects;
-use crate::film::{Accumulator, Film, Tonemap};
-use crate::scene::{Environment, Scene};
-use crate::settings::{Settings, Shading};
 use glam::Vec3;
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
+use wavepath::Effects;
+use wavepath::{Accumulator, Film, Tonemap};
+use wavepath::{Bvh, Intersector};
+use wavepath::{Environment, Scene};
+use wavepath::{Settings, Shading};
 
 /// One published image and the figures shown beside it.
 #[derive(Clone, Debug)]
@@ -187,7 +187,7 @@ impl Session {
                 let quick = Settings { width: w, height: h, spp: 1, adaptive: None, sample_range: None, ..s.clone() };
                 scene.camera.fit_to(w as f32, h as f32);
                 let t = Instant::now();
-                if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &quick, &|_| {}) {
+                if let Ok(out) = wavepath::render_with_progress(&scene, bvh, &quick, &|_| {}) {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
                     let estimate = t.elapsed().as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.spp) as f64;
@@ -203,7 +203,7 @@ impl Session {
                     let full = Settings { adaptive: None, sample_range: None, ..s.clone() };
                     scene.camera = st.orbit.camera;
                     scene.camera.fit_to(s.width as f32, s.height as f32);
-                    if let Ok(out) = crate::render::render_with_progress(&scene, bvh, &full, &|_| {}) {
+                    if let Ok(out) = wavepath::render_with_progress(&scene, bvh, &full, &|_| {}) {
                         seq += 1;
                         let info = Self::info(&st, &scene, bvh, &totals, s.spp, (s.width, s.height));
                         self.publish(frame(seq, shown, out.film, s.spp, true, false, info));
@@ -218,10 +218,10 @@ impl Session {
             // coherent rays; two samples per pixel over the whole image run 28% slower).
             let end = (taken + PASS_SAMPLES).min(s.spp);
             let (y0, y1) = (band * s.height / bands, (band + 1) * s.height / bands);
-            let cell = crate::settings::Cell { x: 0, y: y0, w: s.width, h: y1 - y0 };
+            let cell = wavepath::Cell { x: 0, y: y0, w: s.width, h: y1 - y0 };
             let part = Settings { adaptive: None, cell: Some(cell), sample_range: Some((taken, end)), ..s.clone() };
             let t = Instant::now();
-            let Ok((sums, stats)) = crate::render::render_sums(&scene, bvh, &part, &|_| {}) else {
+            let Ok((sums, stats)) = wavepath::render_sums(&scene, bvh, &part, &|_| {}) else {
                 taken = s.spp;
                 continue;
             };
@@ -301,7 +301,7 @@ struct Totals {
 }
 
 impl Totals {
-    fn add(&mut self, st: &crate::stats::RenderStats, dt: Duration) {
+    fn add(&mut self, st: &wavepath::RenderStats, dt: Duration) {
         self.rays += st.total_rays();
         self.seconds += dt.as_secs_f64();
         if let Ok(serde_json::Value::Object(m)) = serde_json::to_value(st.stages) {

@@ -45,7 +45,7 @@ fn default_scene_normals_show_the_floor_and_walls() {
     // coloured n * 0.5 + 0.5 with the triangle's normal as wound (the walls face into the box)
     // or the sphere's outward normal; black where nothing is hit. Pixels whose answer changes
     // within 1e-3 of a pixel (silhouettes) are skipped.
-    let mut scene = wavepath::load::default_scene();
+    let mut scene = wavepath::default_scene();
     scene.camera.whole_frame();
     scene.camera.fit_to(w as f32, h as f32);
     let reference = |fx: f64, fy: f64| -> [f32; 3] {

@@ -6,11 +6,11 @@ use crate::common::meshgen::icosphere;
 use crate::common::{self, render, run_wavepath, temp_dir};
 use glam::{DVec3, Vec3, vec3};
 use std::path::Path;
-use wavepath::accel::BruteForce;
-use wavepath::film::{Film, Tonemap, write_image};
-use wavepath::load::{LoadOptions, load};
-use wavepath::scene::{Camera, FovFit, Light, Material, Mesh, Scene, cs184_vertex_normals};
-use wavepath::settings::{Settings, Shading};
+use wavepath::BruteForce;
+use wavepath::{Camera, FovFit, Light, Material, Mesh, Scene};
+use wavepath::{Film, Tonemap, write_image};
+use wavepath::{LoadOptions, load};
+use wavepath::{Settings, Shading};
 
 // ---------------------------------------------------------------------------------------
 // The reference's camera, computed here from the file's own numbers
@@ -95,9 +95,9 @@ fn hit_bounds(film: &Film) -> [i64; 4] {
 }
 
 fn normals_film(scene: &Scene, w: usize, h: usize) -> Film {
-    let accel = wavepath::accel::build(scene, &Default::default()).0;
+    let accel = wavepath::build_accel(scene, &Default::default()).0;
     let s = Settings { width: w, height: h, shading: Shading::Normals, ..Settings::default() };
-    wavepath::render::render(scene, accel.as_ref(), &s).unwrap().0
+    wavepath::render(scene, accel.as_ref(), &s).unwrap().0
 }
 
 fn all_points(scene: &Scene) -> Vec<DVec3> {
@@ -186,7 +186,7 @@ fn read_pfm(path: &Path) -> Vec<Vec3> {
 #[test]
 fn camera_files_keep_their_fields_of_view_and_drop_their_lens() {
     let dump = "30 50 0.6 0.1 100\n0 1 4 0 1 0\n1.5708 0 4 0.3 60\n1 0 0 0 1 0 0 0 1\n480 800 868.6\n2.5 0.25\n";
-    let mut cam = wavepath::scene::parse_camera_settings(dump).unwrap();
+    let mut cam = wavepath::parse_camera_settings(dump).unwrap();
     for (w, h) in [(800.0, 600.0), (64.0, 48.0), (100.0, 300.0)] {
         cam.fit_to(w, h);
         assert_eq!((cam.hfov_deg, cam.vfov_deg), (30.0, 50.0));
@@ -336,7 +336,7 @@ fn files_without_a_camera_see_their_largest_face() {
                 m.triangles.extend([[a, a + 1, b + 1], [a, b + 1, b]]);
             }
         }
-        m.material_ids = wavepath::scene::MaterialIds::uniform(0, m.triangles.len());
+        m.material_ids = wavepath::MaterialIds::uniform(0, m.triangles.len());
         m
     };
     let cases: [(&str, Mesh, Vec3); 3] = [
@@ -423,27 +423,6 @@ fn maya_like_file() -> String {
         .to_string()
 }
 
-// ---------------------------------------------------------------------------------------
-// Normal view and bytes
-// ---------------------------------------------------------------------------------------
-
-/// The reference's half-edge normals: an open quad (all four corners on the boundary) gets
-/// its face normal reversed at every corner; on a closed mesh they are the area-weighted
-/// normals; an edge shared by three triangles is a mesh the reference refuses.
-#[test]
-fn half_edge_normals_as_the_reference_computes_them() {
-    let quad = [vec3(0.0, 0.0, 0.0), vec3(2.0, 0.0, 0.0), vec3(2.0, 1.0, 0.0), vec3(0.0, 1.0, 0.0)];
-    let n = cs184_vertex_normals(&quad, &[[0, 1, 2], [0, 2, 3]]).unwrap();
-    assert!(n.iter().all(|v| (*v - vec3(0.0, 0.0, -1.0)).length() < 1e-6), "{n:?}");
-    let ico = icosphere(2);
-    let a = cs184_vertex_normals(&ico.positions, &ico.triangles).unwrap();
-    let b = wavepath::scene::area_weighted_vertex_normals(&ico.positions, &ico.triangles);
-    assert!(a.iter().zip(&b).all(|(x, y)| (*x - *y).length() < 1e-5));
-    let fin =
-        [vec3(0.0, 0.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0), vec3(0.0, -1.0, 0.0), vec3(0.0, 0.0, 1.0)];
-    assert!(cs184_vertex_normals(&fin, &[[0, 1, 2], [1, 0, 3], [0, 1, 4]]).is_none());
-}
-
 /// CBbunny's normal view: every wall, the floor and the ceiling show a normal pointing into
 /// the box, as in the reference's pictures (the file winds them facing out).
 #[test]
@@ -459,7 +438,7 @@ fn cornell_walls_show_normals_into_the_box() {
     for y in 0..h {
         for x in 0..w {
             let ray = scene.camera.generate_ray((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
-            let Some(hit) = wavepath::accel::Intersector::closest_hit(&accel, &ray, &mut Default::default()) else {
+            let Some(hit) = wavepath::Intersector::closest_hit(&accel, &ray, &mut Default::default()) else {
                 continue;
             };
             let p = ray.at(hit.t);

@@ -1,18 +1,15 @@
-//! The integration tests as one crate, so the library is linked into one test binary rather
-//! than one per file. A module per area, a file per subject; the big renders and ray counts
-//! that take seconds each sit in submodules named `slow`, so `cargo test --profile quick --
-//! --skip slow` is the edit loop and plain `cargo test --release` runs everything.
+//! The root package's tests as one crate: the `wavepath` command through its binary and the
+//! applications (split renders, studies, the viewer, ray files) through their library, all
+//! on the engine's face. The engine's own tests are inside it (`crates/wavepath/src/tests`).
+//! Cases that take seconds each sit in submodules named `slow`: `cargo test --profile quick
+//! -- --skip slow` is the edit loop, `cargo test --release` runs everything.
 
 mod accel;
 mod cli;
 mod common;
 mod cs184;
-pub mod integrator;
-mod isa;
-mod layers;
+mod integrator;
 mod load;
-mod materials;
 mod parts;
-mod sampling;
 mod study;
 mod view;

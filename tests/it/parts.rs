@@ -5,10 +5,9 @@
 use crate::common::{self, run_wavepath, temp_dir};
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use wavepath::accel;
-use wavepath::load::default_scene;
-use wavepath::parts::{PartSpec, Split, merge_files, render_part};
-use wavepath::settings::Settings;
+use wavepath::Settings;
+use wavepath::default_scene;
+use wavepath_apps::parts::{PartSpec, Split, merge_files, render_part};
 
 fn ok(args: &[&str]) {
     let o = run_wavepath(args);
@@ -89,20 +88,20 @@ fn sample_parts_merge_within_the_summation_order_bound() {
     let dir = temp_dir("parts-samples");
     let scene = default_scene();
     let mut st = Settings { width: 48, height: 36, spp: 24, max_depth: 4, ..Settings::default() };
-    st.shading = wavepath::settings::Shading::Global;
-    let (bvh, _) = accel::build(&scene, &Settings::default());
-    let (single, _) = wavepath::render::render_sums(&scene, bvh.as_ref(), &st, &|_| {}).unwrap();
+    st.shading = wavepath::Shading::Global;
+    let (bvh, _) = wavepath::build_accel(&scene, &Settings::default());
+    let (single, _) = wavepath::render_sums(&scene, bvh.as_ref(), &st, &|_| {}).unwrap();
     let n = 5;
     let mut files = Vec::new();
     for i in 0..n {
         let spec = PartSpec::new(i, n, Split::Samples).unwrap();
         let (acc, stats) = render_part(&scene, bvh.as_ref(), &st, &spec, &|_| {}).unwrap();
-        let meta = wavepath::parts::PartMeta {
-            format: wavepath::parts::file::FORMAT,
+        let meta = wavepath_apps::parts::PartMeta {
+            format: wavepath_apps::parts::file::FORMAT,
             part: spec,
             scene: scene.name.clone(),
-            scene_hash: wavepath::parts::identity::scene_hash(&scene),
-            settings: wavepath::parts::identity::settings_key(&st),
+            scene_hash: wavepath_apps::parts::identity::scene_hash(&scene),
+            settings: wavepath_apps::parts::identity::settings_key(&st),
             width: st.width,
             height: st.height,
             spp: st.spp,
@@ -110,7 +109,7 @@ fn sample_parts_merge_within_the_summation_order_bound() {
             pixels: String::new(),
         };
         let p = dir.join(format!("s{i}.exr"));
-        wavepath::parts::file::write(&p, &meta, &acc).unwrap();
+        wavepath_apps::parts::file::write(&p, &meta, &acc).unwrap();
         files.push(p);
     }
     let merged = merge_files(&files).unwrap();
@@ -274,7 +273,7 @@ impl std::io::Write for FailsAfter {
 /// part there intact, and leaves no temporary file; a re-run replaces a part in one step.
 #[test]
 fn failed_part_writes_leave_nothing_and_reruns_replace_atomically() {
-    use wavepath::parts::file::{read, write_via};
+    use wavepath_apps::parts::file::{read, write_via};
     let dir = temp_dir("parts-kill");
     let out = dir.join("p0.exr");
     ok(&["-s", "2", "-r", "16", "12", "--part", "0/2", "-f", s(&out)]);
@@ -368,7 +367,7 @@ fn parts_rendered_with_different_thread_counts_merge_bit_for_bit() {
 /// file whose header is another render's): the checksum refuses it, naming the part.
 #[test]
 fn parts_with_damaged_pixels_are_refused() {
-    use wavepath::parts::file::{read, write};
+    use wavepath_apps::parts::file::{read, write};
     let dir = temp_dir("parts-damaged");
     let out = dir.join("p0.exr");
     ok(&["-s", "2", "-r", "16", "12", "--part", "0/2", "-f", s(&out)]);
@@ -378,7 +377,7 @@ fn parts_with_damaged_pixels_are_refused() {
     other.pixels[7].sum.x += 0.25;
     let changed = dir.join("changed.exr");
     write(&changed, &part.meta, &other).unwrap();
-    let hash = |acc| wavepath::parts::identity::pixels_hash(acc);
+    let hash = |acc| wavepath_apps::parts::identity::pixels_hash(acc);
     let (good, bad) = (hash(&part.acc), hash(&other));
     assert_ne!(good, bad);
     // The changed pixels under the original header's checksum.

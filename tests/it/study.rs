@@ -5,12 +5,12 @@
 use crate::common::render;
 use crate::common::{self, temp_dir};
 use std::path::PathBuf;
-use wavepath::accel::{Intersector, build};
-use wavepath::load::default_scene;
-use wavepath::sampling::SamplerKind;
-use wavepath::scene::Scene;
-use wavepath::settings::Settings;
-use wavepath::study::{self, StudyConfig, SweepKind, log_log_slope};
+use wavepath::SamplerKind;
+use wavepath::Scene;
+use wavepath::Settings;
+use wavepath::default_scene;
+use wavepath::{Intersector, build_accel as build};
+use wavepath_apps::study::{self, StudyConfig, SweepKind, log_log_slope};
 
 const W: usize = 32;
 const H: usize = 24;
@@ -41,7 +41,7 @@ fn run(scene: &Scene, accel: &dyn Intersector, cfg: &StudyConfig) -> study::Stud
 #[test]
 fn rmse_falls_as_one_over_sqrt_spp() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
+    let (accel, _) = build(&scene, &wavepath::Settings::default());
     for depth in [1, 3] {
         let b = base(depth);
         let ref_s = study::reference::reference_settings(&b, 8192);
@@ -55,7 +55,7 @@ fn rmse_falls_as_one_over_sqrt_spp() {
             predicted = 0.0;
             for seed in 0..4 {
                 let s = Settings { spp, seed: 1000 * seed + spp as u64, ..b.clone() };
-                let p = study::measure(&scene, accel.as_ref(), &s, None, 0, &reference);
+                let p = study::measure(&scene, accel.as_ref(), &s, None, 0, &reference).unwrap();
                 assert_eq!(p.invalid_samples, 0);
                 mse += p.error.rmse * p.error.rmse / 4.0;
                 predicted += p.error.predicted_rmse * p.error.predicted_rmse / 4.0;
@@ -92,7 +92,7 @@ fn importance_sampling_beats_hemisphere_sampling() {
         scenes.push(s);
     }
     for scene in scenes {
-        let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
+        let (accel, _) = build(&scene, &wavepath::Settings::default());
         let cfg = config(SweepKind::Sampling, base(1), 32, 2048, temp_dir("study-sampling"));
         let r = run(&scene, accel.as_ref(), &cfg);
         assert_eq!(r.curves.len(), 2);
@@ -114,7 +114,7 @@ fn importance_sampling_beats_hemisphere_sampling() {
 #[test]
 fn sampler_sweep_shows_what_patterns_buy() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
+    let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cfg = config(SweepKind::Sampler, base(3), 32, 2048, temp_dir("study-sampler"));
     let r = run(&scene, accel.as_ref(), &cfg);
     let kinds: Vec<SamplerKind> = r.curves.iter().map(|c| c.settings.sampler).collect();
@@ -132,9 +132,9 @@ fn sampler_sweep_shows_what_patterns_buy() {
 /// every spp from 4 (measured a tenth to a fifth: the fireflies next to the emitter).
 #[test]
 fn mis_sweep_shows_what_mis_buys() {
-    let mut scene = crate::integrator::mis::scene();
+    let mut scene = crate::common::meshgen::emitter_above_floor(W as f32 / H as f32);
     scene.camera.fit_aspect(W as f32 / H as f32);
-    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
+    let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cfg = config(SweepKind::Mis, base(2), 32, 4096, temp_dir("study-mis"));
     let r = run(&scene, accel.as_ref(), &cfg);
     assert_eq!(r.curves.iter().map(|c| c.settings.mis).collect::<Vec<_>>(), [true, false]);
@@ -150,7 +150,7 @@ fn mis_sweep_shows_what_mis_buys() {
 #[test]
 fn reference_is_cached_and_keyed_by_settings() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
+    let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cache = temp_dir("study-cache");
     let cfg = config(SweepKind::Spp, base(1), 2, 64, cache.clone());
     let a = run(&scene, accel.as_ref(), &cfg);
@@ -177,14 +177,14 @@ fn reference_is_cached_and_keyed_by_settings() {
 #[test]
 fn depth_sweep_shows_truncation_bias() {
     let scene = cornell_box();
-    let (accel, _) = build(&scene, &wavepath::settings::Settings::default());
+    let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cfg = config(SweepKind::Depth, base(5), 16, 512, temp_dir("study-depth"));
     let r = run(&scene, accel.as_ref(), &cfg);
     assert_eq!(r.reference_settings.max_depth, study::sweep::DEEP);
     // Pixels that see the light (radiance 10) are left out: their jittered coverage noise
     // would swamp the mean of a 16-spp image.
     let lit: Vec<bool> = r.reference.mean.pixels.iter().map(|p| p.max_element() < 2.0).collect();
-    let mean = |f: &wavepath::film::Film| {
+    let mean = |f: &wavepath::Film| {
         f.pixels.iter().zip(&lit).filter(|(_, k)| **k).map(|(p, _)| p.element_sum() as f64).sum::<f64>()
     };
     let reference = mean(&r.reference.mean);

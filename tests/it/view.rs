@@ -240,7 +240,7 @@ fn view_refuses_bad_requests_and_serves_several_clients() {
         line
     };
     let mut idle = Vec::new();
-    for _ in 0..wavepath::view::server::MAX_STREAMS {
+    for _ in 0..wavepath_apps::view::server::MAX_STREAMS {
         let mut s = view.events();
         assert!(status(&mut s).contains(" 200 "));
         idle.push(s);

@@ -1,10 +1,4 @@
-//! Ray traversal: the BVH against brute force, every instruction set against the scalar
-//! path (single rays, batches, packets), both leaf layouts, watertightness, and ray files.
+//! Ray files: dumping the renderer's rays and tracing a file, through the library and the
+//! command line.
 
-mod batch_closest;
-mod bvh;
-mod coherent;
-mod layouts;
-mod packets;
 mod rays;
-mod watertight;

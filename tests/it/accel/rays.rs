@@ -4,10 +4,11 @@ use crate::common::meshgen::{icosphere, scene_of};
 use crate::common::{self, temp_dir};
 use glam::Vec3;
 use std::process::Command;
-use wavepath::accel::{Bvh, Intersector, TraceCounters};
-use wavepath::geometry::Ray;
-use wavepath::rayfile::file::{HitRecord, parse_rays, read_hits, read_rays, write_rays};
-use wavepath::rayfile::{diffuse_rays, primary_rays, trace_all};
+use wavepath::Ray;
+use wavepath::{Bvh, Intersector, TraceCounters};
+use wavepath::{diffuse_rays, primary_rays};
+use wavepath_apps::rayfile::file::{HitRecord, parse_rays, read_hits, read_rays, write_rays};
+use wavepath_apps::rayfile::trace_all;
 
 #[test]
 fn ray_file_round_trip_and_layout() {
@@ -80,7 +81,7 @@ fn primary_rays_follow_the_renderer_camera() {
 fn diffuse_rays_leave_a_convex_surface() {
     let mut scene = scene_of(icosphere(24), vec![]);
     // Put the camera outside, looking at the sphere, so most primary rays hit.
-    scene.camera = wavepath::scene::Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0, 1.0);
+    scene.camera = wavepath::Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0, 1.0);
     let bvh = Bvh::build(&scene);
     let primary = primary_rays(&scene, 64, 64);
     let diffuse = diffuse_rays(&scene, &bvh, &primary, 5);
@@ -102,11 +103,11 @@ fn diffuse_rays_leave_a_convex_surface() {
 fn trace_all_matches_single_rays_for_any_thread_count() {
     let scene = scene_of(icosphere(10), vec![]);
     let bvh = Bvh::build(&scene);
-    let mut s = wavepath::sampling::Sampler::for_sample(9, 9, 9);
+    let mut s = common::Xorshift(9);
     let rays: Vec<Ray> = (0..5000)
         .map(|_| {
-            let o = Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, 3.0);
-            Ray::new(o, Vec3::new(s.next_f32() - 0.5, s.next_f32() - 0.5, -1.0))
+            let o = Vec3::new(s.unit() - 0.5, s.unit() - 0.5, 3.0);
+            Ray::new(o, Vec3::new(s.unit() - 0.5, s.unit() - 0.5, -1.0))
         })
         .collect();
     let mut c = TraceCounters::default();
@@ -118,27 +119,6 @@ fn trace_all_matches_single_rays_for_any_thread_count() {
         assert_eq!(got, want, "{threads} threads");
         assert_eq!(counters.rays, rays.len() as u64);
     }
-}
-
-/// The diffuse rays of a plane facing the camera: directions by chi-square against
-/// cos(theta) / pi about its normal (p-value threshold 1e-3 of `common::chi2`, fixed seed).
-#[test]
-fn diffuse_rays_follow_the_cosine_density() {
-    let mut mesh = wavepath::scene::Mesh::default();
-    let h = 10.0;
-    crate::common::meshgen::quad(
-        &mut mesh,
-        [Vec3::new(-h, -h, 0.0), Vec3::new(h, -h, 0.0), Vec3::new(h, h, 0.0), Vec3::new(-h, h, 0.0)],
-        0,
-    );
-    let mut scene = scene_of(mesh, vec![]);
-    scene.camera = wavepath::scene::Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 40.0, 1.0);
-    let bvh = Bvh::build(&scene);
-    let primary = primary_rays(&scene, 640, 640);
-    let diffuse = diffuse_rays(&scene, &bvh, &primary, 11);
-    assert_eq!(diffuse.len(), primary.len(), "the plane fills the view");
-    let mut dirs = diffuse.iter().map(|r| r.dir.normalize().as_dvec3());
-    common::chi2::chi_square("diffuse rays", 0, |_| dirs.next(), &|d| d.z.max(0.0) / std::f64::consts::PI);
 }
 
 /// End to end through the CLI.

@@ -1,15 +1,4 @@
-//! Rendering: closed-form answers, the wavefront integrator against the recursive
-//! reference, effects and stages, environment maps, the thin lens, ray offsets and
-//! numerical stability.
+//! Rendering through the command line: Russian roulette's options and environment maps.
 
-mod analytic;
-mod effects;
-mod emitter_sides;
 mod envmap;
-mod lens;
-pub mod mis;
-mod offsets;
 mod roulette;
-mod stability;
-mod transport;
-mod wavefront;

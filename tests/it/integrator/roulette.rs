@@ -3,9 +3,9 @@
 //! roulette at all on a scene where deep paths carry most of the light.
 
 use crate::common::{agree, render};
-use wavepath::effects::Effects;
-use wavepath::load::default_scene;
-use wavepath::settings::Settings;
+use wavepath::Effects;
+use wavepath::Settings;
+use wavepath::default_scene;
 
 /// The embedded Cornell box at depth 8, 32x24, 64 spp: per 8x8 region, each roulette's mean
 /// against no roulette's (the shared z-test of `common::agree`: false failures below 1e-6,
@@ -44,7 +44,7 @@ fn roulette_runs_only_where_paths_reach_its_depth() {
 #[test]
 fn the_default_roulette_follows_the_format() {
     let dir = crate::common::temp_dir("roulette-default");
-    let scenes = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let scenes = crate::common::repo_root().join("scenes");
     for (file, want) in [("cornell_mesh.dae", "--rr 0.65"), ("cornell_mesh.obj", "throughput from depth 5")] {
         let stats = dir.join("s.json");
         let path = scenes.join(file);

@@ -8,7 +8,7 @@
 //! and its kind are in the message.
 
 use crate::common::{self, Xorshift, temp_dir};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Cases per source file, cycling through the four kinds of damage.
 const CASES: usize = 64;
@@ -139,7 +139,7 @@ fn run_cases(f: &Format, root: &Path, seed: u64) -> (usize, usize) {
 }
 
 fn authored(name: &str) -> Vec<u8> {
-    std::fs::read(PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes").join(name)).unwrap()
+    std::fs::read(crate::common::repo_root().join("scenes").join(name)).unwrap()
 }
 
 fn args(list: &[&str]) -> Vec<String> {
@@ -148,11 +148,9 @@ fn args(list: &[&str]) -> Vec<String> {
 
 /// The authored Cornell box's triangles as PLY, ascii or binary little endian.
 fn ply(binary: bool) -> Vec<u8> {
-    let scene = wavepath::load::load(
-        &PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell_mesh.obj"),
-        &wavepath::load::LoadOptions::default(),
-    )
-    .unwrap();
+    let scene =
+        wavepath::load(&crate::common::repo_root().join("scenes/cornell_mesh.obj"), &wavepath::LoadOptions::default())
+            .unwrap();
     let m = &scene.mesh;
     let format = if binary { "binary_little_endian" } else { "ascii" };
     let mut out = format!(

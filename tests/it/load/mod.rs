@@ -1,12 +1,5 @@
-//! Scene loaders: COLLADA, OBJ, PLY and glTF, on the shared scenes and on hand-written
-//! files, and one scene written in three formats loading alike.
+//! Loading through the command line: damaged files, and PLY meshes the `subdivide` command
+//! writes.
 
-mod collada;
 mod damaged;
-mod exporters;
-mod formats_agree;
-mod gltf_materials;
-mod mesh_loaders;
-mod obj_bulk;
-mod other_tools;
 mod ply_bulk;

@@ -1,0 +1,158 @@
+//! Scattering models behind one interface, all in a local shading frame: +Z is the shading
+//! normal turned toward the side the path arrived from (`wo.z > 0` for every model but a
+//! refracting one seen from a grazing shading normal), X and Y from [`Frame`].
+//!
+//! Conventions (pbrt's): `eval` returns f (no cosine); `sample` returns f |cos wi| / pdf as
+//! `weight`; delta lobes (mirror, smooth glass) have `eval = pdf = 0` and set `delta`, with
+//! `pdf` in the sample holding the discrete probability of the lobe chosen. No function
+//! returns NaN or Inf for any unit input (grazing or below-surface directions give zero or
+//! `None`).
+
+mod dielectric;
+mod lambert;
+mod microfacet;
+mod mirror;
+mod pbr;
+
+pub use dielectric::Dielectric;
+#[cfg(test)]
+pub use dielectric::fresnel_dielectric;
+pub use lambert::Lambert;
+pub use microfacet::{Distribution, Microfacet};
+pub use mirror::Mirror;
+pub use pbr::Pbr;
+
+use crate::sampling::Frame;
+use crate::scene::Bsdf;
+use glam::Vec3;
+
+/// One sampled direction and what it carries.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BsdfSample {
+    /// Incident direction, local frame.
+    pub wi: Vec3,
+    /// f |cos wi| / pdf (the throughput factor).
+    pub weight: Vec3,
+    /// Solid-angle density of `wi` (for delta lobes: the probability of choosing the lobe).
+    pub pdf: f32,
+    pub delta: bool,
+}
+
+/// A material's scattering model, ready to shade (the file's parameters turned into what
+/// the formulas need, once per render).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Model {
+    Lambert(Lambert),
+    Mirror(Mirror),
+    Dielectric(Dielectric),
+    Microfacet(Microfacet),
+    Pbr(Pbr),
+}
+
+/// How a model's light is best estimated: which integrator strategy it needs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kind {
+    /// Lambertian: light sampling only (the fast path).
+    Diffuse,
+    /// Glossy: light sampling and BSDF sampling combined by multiple importance sampling.
+    Glossy,
+    /// Delta lobes only: no light sampling, emission along the sampled ray counts.
+    Delta,
+}
+
+impl Model {
+    /// The model of a material as the file states it. Phong (no loader produces it yet) is
+    /// shaded by its diffuse part; glass roughness is ignored, as the CS184 reference does.
+    pub fn new(b: &Bsdf) -> Model {
+        match *b {
+            Bsdf::Diffuse { albedo } => Model::Lambert(Lambert { albedo }),
+            Bsdf::Phong { diffuse, .. } => Model::Lambert(Lambert { albedo: diffuse }),
+            Bsdf::Mirror { reflectance } => Model::Mirror(Mirror { reflectance }),
+            Bsdf::Glass { reflectance, transmittance, ior, .. } => {
+                Model::Dielectric(Dielectric { reflectance, transmittance, eta: ior, reflect: true })
+            }
+            Bsdf::Refraction { transmittance, ior, .. } => {
+                Model::Dielectric(Dielectric { reflectance: Vec3::ZERO, transmittance, eta: ior, reflect: false })
+            }
+            Bsdf::Microfacet { alpha, eta, k } => {
+                Model::Microfacet(Microfacet { alpha, eta, k, distribution: Distribution::Beckmann })
+            }
+            Bsdf::MetallicRoughness { base, metallic, roughness } => {
+                Model::Pbr(Pbr::metallic_roughness(base, metallic, roughness))
+            }
+            Bsdf::SpecularGlossiness { diffuse, specular, glossiness } => {
+                Model::Pbr(Pbr::specular_glossiness(diffuse, specular, glossiness))
+            }
+        }
+    }
+
+    pub fn kind(&self) -> Kind {
+        match self {
+            Model::Lambert(_) => Kind::Diffuse,
+            Model::Mirror(_) | Model::Dielectric(_) => Kind::Delta,
+            Model::Microfacet(_) | Model::Pbr(_) => Kind::Glossy,
+        }
+    }
+
+    /// This model at a hit on the `front` (outer) side or the back side: a dielectric's
+    /// relative index of refraction (transmitted over incident side) flips inside.
+    #[inline]
+    pub fn oriented(self, front: bool) -> Model {
+        match self {
+            Model::Dielectric(d) if !front => Model::Dielectric(Dielectric { eta: 1.0 / d.eta, ..d }),
+            m => m,
+        }
+    }
+
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        match self {
+            Model::Lambert(m) => m.eval(wo, wi),
+            Model::Mirror(_) | Model::Dielectric(_) => Vec3::ZERO,
+            Model::Microfacet(m) => m.eval(wo, wi),
+            Model::Pbr(m) => m.eval(wo, wi),
+        }
+    }
+
+    /// `u`: three uniform numbers (the third chooses between lobes).
+    #[inline]
+    pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BsdfSample> {
+        match self {
+            Model::Lambert(m) => m.sample(wo, [u[0], u[1]]),
+            Model::Mirror(m) => m.sample(wo),
+            Model::Dielectric(m) => m.sample(wo, u[2]),
+            Model::Microfacet(m) => m.sample(wo, [u[0], u[1]]),
+            Model::Pbr(m) => m.sample(wo, u),
+        }
+    }
+
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Model::Lambert(m) => m.pdf(wo, wi),
+            Model::Mirror(_) | Model::Dielectric(_) => 0.0,
+            Model::Microfacet(m) => m.pdf(wo, wi),
+            Model::Pbr(m) => m.pdf(wo, wi),
+        }
+    }
+}
+
+/// `v` in the frame's coordinates (the inverse of [`Frame::to_world`]).
+#[inline]
+pub fn to_local(f: &Frame, v: Vec3) -> Vec3 {
+    Vec3::new(v.dot(f.t), v.dot(f.b), v.dot(f.n))
+}
+
+/// Power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`
+/// (each already multiplied by its sample count); 0 when both are 0.
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}

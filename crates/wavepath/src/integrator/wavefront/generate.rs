@@ -1,0 +1,143 @@
+//! Stage 1: camera rays for every (pixel, sample) slot of a wave.
+
+use super::queues::PathQueue;
+use crate::cpu::Avx2;
+use crate::integrator::Transport;
+use crate::sampling::{Sampler, rng8};
+use glam::Vec3;
+
+/// Which samples of which pixels a wave takes: slot s is sample `base + s % batch` of pixel
+/// `pixels[s / batch]`.
+#[derive(Clone, Copy, Debug)]
+pub struct Wave<'p> {
+    pub pixels: &'p [u32],
+    pub base: u32,
+    pub batch: u32,
+}
+
+impl Wave<'_> {
+    pub fn len(&self) -> usize {
+        self.pixels.len() * self.batch as usize
+    }
+
+    #[cfg(test)]
+    #[inline]
+    pub fn pixel_sample(&self, slot: u32) -> (u32, u32) {
+        (self.pixels[(slot / self.batch) as usize], self.base + slot % self.batch)
+    }
+}
+
+/// Fills the path queue with the wave's camera rays, in slot order. A pixel's samples are
+/// consecutive slots, so the pixel's coordinates and the pixel part of the path key
+/// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
+/// With `lanes` (a pinhole camera, independent numbers and AVX2: `super::Lanes`), the rays of eight samples are
+/// set up lane-parallel (keys and jitters one by one, the directions' normalisations together).
+pub fn generate(
+    t: &Transport,
+    lanes: Option<Avx2>,
+    q: &mut PathQueue,
+    wave: &Wave,
+    width: usize,
+    height: usize,
+    spp: u32,
+) {
+    q.clear();
+    let n = wave.len();
+    q.ray.reserve(n);
+    q.key.reserve(n);
+    // Eight lanes hold eight samples of one pixel: with fewer per pixel (a viewer's or a
+    // part's small batches) most lanes would be wasted, and the one-by-one loop is cheaper.
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = lanes.filter(|_| wave.batch as usize >= L) {
+        // SAFETY: the token proves the CPU has AVX2 and FMA.
+        unsafe { pinhole_lanes(avx, t, q, wave, width, height, spp) };
+        q.start_camera_paths(n);
+        return;
+    }
+    for &pixel in wave.pixels {
+        let (x, y) = (pixel % width as u32, pixel / width as u32);
+        let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
+        for sample in wave.base..wave.base + wave.batch {
+            let key = t.pattern.sample_key(pixel_key, sample as u64);
+            q.ray.push(t.camera_ray_keyed(x, y, width, height, key, spp));
+            q.key.push(key);
+        }
+    }
+    // The fields every camera path starts with are the same: filled field by field.
+    q.start_camera_paths(n);
+}
+
+/// Lanes per group of camera rays.
+const L: usize = 8;
+
+/// The pinhole camera's rays of the wave, eight samples of a pixel at a time; the same rays
+/// as [`Transport::camera_ray_keyed`] (the same functions, per lane).
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+    for &pixel in wave.pixels {
+        let (x, y) = (pixel % width as u32, pixel / width as u32);
+        let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
+        let mut sample = wave.base;
+        let end = wave.base + wave.batch;
+        while sample < end {
+            let m = ((end - sample) as usize).min(L);
+            // The keys and jitters of `Sampler::sample_key` and `Transport::camera_ray_keyed`,
+            // hashed eight at a time (lanes past `m` are computed and dropped).
+            let mut inputs = [0u64; L];
+            for (j, input) in inputs.iter_mut().enumerate() {
+                *input = Sampler::sample_input(pixel_key, (sample + j as u32) as u64);
+            }
+            let keys = rng8::splitmix64_x8(avx, &inputs);
+            let (jx, jy) = if spp <= 1 {
+                ([0.5f32; L], [0.5f32; L])
+            } else {
+                for j in 0..L {
+                    inputs[j] = Sampler::vertex_input(keys[j], 0);
+                }
+                let streams = rng8::for_vertex_x8(avx, &inputs);
+                rng8::next_2d_x8(avx, &streams, 0)
+            };
+            let mut rays = [crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
+            for j in 0..L {
+                rays[j] = t.pinhole_ray(x, y, width, height, jx[j], jy[j]);
+            }
+            q.ray.extend_from_slice(&rays[..m]);
+            q.key.extend_from_slice(&keys[..m]);
+            sample += m as u32;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::settings::Settings;
+
+    /// The lane-parallel camera rays (when the CPU runs them) are bit for bit the rays of
+    /// `Transport::camera_ray_keyed`, for batches that fill 8 lanes and batches that do not.
+    #[test]
+    fn wave_rays_are_the_single_camera_rays() {
+        let scene = crate::load::default_scene();
+        let (w, h) = (13, 7);
+        for (spp, batch) in [(16, 16), (16, 5), (1, 1), (64, 11)] {
+            let s = Settings { width: w, height: h, spp, ..Settings::default() };
+            let t = Transport::new(&scene, &s);
+            let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
+            let wave = Wave { pixels: &pixels, base: 2, batch };
+            for lanes in [None, crate::cpu::Avx2::new()] {
+                let mut q = PathQueue::default();
+                generate(&t, lanes, &mut q, &wave, w, h, spp);
+                assert_eq!(q.len(), wave.len());
+                for slot in 0..wave.len() as u32 {
+                    let (pixel, sample) = wave.pixel_sample(slot);
+                    let key = t.path_key(pixel, sample);
+                    let (x, y) = (pixel % w as u32, pixel / w as u32);
+                    assert_eq!(q.key[slot as usize], key);
+                    assert_eq!(q.ray[slot as usize], t.camera_ray_keyed(x, y, w, h, key, spp), "slot {slot}");
+                    assert_eq!(q.ray[slot as usize], t.camera_ray(x, y, w, h, sample, spp));
+                }
+            }
+        }
+    }
+}

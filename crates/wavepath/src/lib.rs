@@ -1,0 +1,81 @@
+//! wavepath: a physically based, data-oriented wavefront path tracer for the CPU.
+//!
+//! This is the engine's whole face; every module behind it is private, so the applications
+//! (the `wavepath` command, the viewer, studies, split renders, ray files) and any other
+//! caller see exactly what is listed here. A render is four steps:
+//!
+//! ```no_run
+//! # fn main() -> anyhow::Result<()> {
+//! use wavepath::{LoadOptions, Settings, Tonemap, build_accel, load, render, write_image};
+//!
+//! // 1. A scene: from a file (.dae, .obj, .ply, .gltf, .glb), `default_scene()`, or built
+//! //    from arrays (`Scene { mesh: Mesh { positions, triangles, .. }, .. }`).
+//! let scene = load("dragon.ply".as_ref(), &LoadOptions::default())?;
+//! // 2. Settings: the defaults for the scene's dialect, then what the caller changes.
+//! let mut settings = Settings::for_scene(&scene);
+//! settings.image.width = 320;
+//! settings.image.height = 240;
+//! // 3. The acceleration structure (a BVH, or brute force), which also answers ray queries.
+//! let (accel, _info) = build_accel(&scene, &settings);
+//! // 4. The render: an image and what it cost.
+//! let (film, stats) = render(&scene, accel.as_ref(), &settings)?;
+//! write_image(&film, "dragon.png".as_ref(), Tonemap::Cs184)?;
+//! println!("{:.1} Mrays/s", stats.mrays_per_s());
+//! # Ok(()) }
+//! ```
+//!
+//! Inside, modules form layers, lowest first: each uses only layers before it
+//! (ARCHITECTURE.md; the layer test in `tests/layers.rs` checks it).
+
+// 0: run-time CPU features; rays, error bounds, offsets.
+mod cpu;
+mod geometry;
+// 1: random streams and warps.
+mod sampling;
+// 2: plain data.
+mod scene;
+mod settings;
+// 3: what the integrators are built from.
+mod accel;
+mod bsdf;
+mod effects;
+mod film;
+mod lights;
+mod load;
+// 4: what a render measured.
+mod stats;
+// 5: light transport: the shared vertex logic, the wavefront stages, the recursive reference.
+mod integrator;
+// 6: a whole render; the standard ray sets of a scene.
+mod raysets;
+mod render;
+
+// The tests' shared helpers name the face as `wavepath::`, in this crate as in the
+// applications' tests that include them.
+#[cfg(test)]
+extern crate self as wavepath;
+#[cfg(test)]
+mod tests;
+
+// Scenes: load one, or build one from plain data.
+pub use load::{CameraMode, LoadOptions, MAX_FILE_BYTES, default_scene, load, load_collada_str, write_ply};
+pub use scene::{
+    Bsdf, CS184_FOCAL_DISTANCE, Camera, EnvMap, Environment, FovFit, Light, Material, MaterialIds, Mesh, Scene, Sphere,
+    Texture, format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
+};
+
+// What a render does.
+pub use cpu::Isa;
+pub use sampling::SamplerKind;
+pub use settings::{BvhBuild, BvhOptions, Cell, IntegratorKind, LeafLayout, Settings, Shading};
+
+// Rays: the acceleration structures and their queries.
+pub use accel::{BruteForce, BuildInfo, Bvh, Intersector, TraceCounters, build as build_accel};
+pub use geometry::{Hit, Ray};
+pub use raysets::{cosine_direction, diffuse_rays, primary_rays};
+
+// Renders and what they produce.
+pub use effects::{Effect, Effects};
+pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
+pub use render::{RenderOutput, render, render_sums, render_with_progress, with_threads};
+pub use stats::{RenderStats, StageTimes, to_json as stats_json};

@@ -1,0 +1,211 @@
+use super::{LightSample, area_to_solid_angle};
+use crate::geometry::error_bound::gamma;
+use crate::geometry::illuminance;
+use crate::sampling::warp;
+use crate::scene::Scene;
+use crate::scene::texture::{Texture, Wrap, wrap_index};
+use glam::{Vec2, Vec3};
+
+/// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
+/// power (area x mean emitted illuminance) and a point uniformly on it, so a dim emitter
+/// takes few samples and a bright one many. A triangle emits from both faces or from its
+/// front only, as its material says (a two-sided emitter has twice the power). A triangle under an emission texture emits factor x texel at each
+/// point: its mean is estimated from a grid of lookups, floored at a tenth of its brightest
+/// texel so that no point that emits has zero density (the estimator stays unbiased
+/// whatever the estimate); one whose texels are all black over its uv footprint emits
+/// nothing anywhere and is left out.
+#[derive(Clone, Debug)]
+pub struct EmissiveTriangles {
+    /// Corner 0 and the two edges from it.
+    corners: Vec<[Vec3; 3]>,
+    emission: Vec<Vec3>,
+    /// Per triangle, whether it emits from its front face only.
+    one_sided: Vec<bool>,
+    /// For a textured triangle: its material's emission texture and its corners' uvs.
+    textured: Vec<Option<(u32, [Vec2; 3])>>,
+    /// Per material, the decoded emission texture (when the mesh has uvs).
+    textures: Vec<Option<Texture>>,
+    /// Running sum of powers (the last entry is the total).
+    cdf: Vec<f32>,
+    /// Per triangle, the density of sampled points per unit area: power / (area x total).
+    density: Vec<f32>,
+    /// Per triangle, its index in the mesh (ascending).
+    prims: Vec<u32>,
+    /// Largest error bound of a sampled point over all triangles (see
+    /// [`point_error`](Self::point_error)).
+    max_error: Vec3,
+}
+
+impl EmissiveTriangles {
+    pub fn new(scene: &Scene) -> Option<Self> {
+        let textures: Vec<Option<Texture>> = scene
+            .materials
+            .iter()
+            .map(|m| m.emission_texture.clone().filter(|t| t.image.is_some() && scene.mesh.uvs.is_some()))
+            .collect();
+        let mut textured = Vec::new();
+        let mut corners = Vec::new();
+        let mut emission = Vec::new();
+        let mut one_sided = Vec::new();
+        let mut cdf = Vec::new();
+        let mut powers = Vec::new();
+        let mut prims = Vec::new();
+        let mut total = 0.0f32;
+        let mut max_error = Vec3::ZERO;
+        for (i, m) in scene.mesh.material_ids.iter().enumerate() {
+            let mat = &scene.materials[m as usize];
+            if !mat.is_emissive() {
+                continue;
+            }
+            let [a, b, c] = scene.mesh.corners(i);
+            let area = 0.5 * (b - a).cross(c - a).length();
+            let tex = textures[m as usize].as_ref().zip(scene.mesh.uvs.as_ref()).map(|(t, uvs)| {
+                let [ia, ib, ic] = scene.mesh.triangles[i];
+                (t, [uvs[ia as usize], uvs[ib as usize], uvs[ic as usize]])
+            });
+            let brightness = match tex {
+                Some((t, uv)) => {
+                    let brightest = illuminance(t.factor * brightest_texel(t, uv));
+                    if brightest <= 0.0 {
+                        continue;
+                    }
+                    mean_illuminance(t, uv).max(0.1 * brightest)
+                }
+                None => illuminance(mat.emission),
+            };
+            let brightness = if mat.two_sided_emission { 2.0 * brightness } else { brightness };
+            let power = area * brightness;
+            if area > 0.0 && power > 0.0 && power.is_finite() {
+                total += power;
+                let (e1, e2) = (b - a, c - a);
+                // a + bu e1 + bv e2 with bu, bv in [0, 1]: two products and two sums, plus
+                // the rounding of the edges themselves (up to eps |e|, scaled by bu, bv <= 1).
+                max_error = max_error.max(gamma(4) * (a.abs() + e1.abs() + e2.abs()));
+                corners.push([a, e1, e2]);
+                emission.push(mat.emission);
+                one_sided.push(!mat.two_sided_emission);
+                textured.push(tex.map(|(_, uv)| (m, uv)));
+                cdf.push(total);
+                powers.push(brightness);
+                prims.push(i as u32);
+            }
+        }
+        let density = powers.iter().map(|&b| b / total).collect();
+        (total > 0.0).then_some(EmissiveTriangles {
+            corners,
+            emission,
+            one_sided,
+            textured,
+            textures,
+            cdf,
+            density,
+            prims,
+            max_error,
+        })
+    }
+
+    /// Per-component bound on the distance of any sampled point from its triangle: one
+    /// bound for all triangles (the largest), since a light sample does not say which
+    /// triangle it came from; it only shortens shadow rays by a few ulps of the largest
+    /// emitter's coordinates.
+    pub fn point_error(&self) -> Vec3 {
+        self.max_error
+    }
+
+    /// The density per unit area with which [`sample_pdf`](Self::sample_pdf) draws points
+    /// of mesh triangle `prim` (0 for a triangle it never draws).
+    pub fn area_density(&self, prim: u32) -> f32 {
+        self.prims.binary_search(&prim).map_or(0.0, |i| self.density[i])
+    }
+
+    #[cfg(test)]
+    pub fn len(&self) -> usize {
+        self.corners.len()
+    }
+
+    #[inline]
+    pub fn sample(&self, p: Vec3, u: [f32; 3]) -> Option<LightSample> {
+        self.sample_pdf(p, u).map(|(ls, _)| ls)
+    }
+
+    /// [`sample`](Self::sample) and the solid-angle density of the drawn direction.
+    #[inline]
+    pub fn sample_pdf(&self, p: Vec3, u: [f32; 3]) -> Option<(LightSample, f32)> {
+        let total = *self.cdf.last()?;
+        let x = u[2] * total;
+        let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1);
+        let [a, e1, e2] = self.corners[i];
+        let (bu, bv) = warp::uniform_triangle(u[0], u[1]);
+        let q = a + bu * e1 + bv * e2;
+        let n = e1.cross(e2).try_normalize()?;
+        // Area density `density[i]`.
+        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, 1.0 / self.density[i], self.one_sided[i])?;
+        let le = match self.textured[i] {
+            Some((m, [ua, ub, uc])) => {
+                let uv = ua + bu * (ub - ua) + bv * (uc - ua);
+                self.textures[m as usize].as_ref().and_then(|t| t.albedo(uv)).unwrap_or(self.emission[i])
+            }
+            None => self.emission[i],
+        };
+        Some((LightSample { wi, target: Some(q), weight: le * inv_pdf }, 1.0 / inv_pdf))
+    }
+}
+
+/// Mean illuminance of `t` over the triangle with these uvs, from lookups at the centres of
+/// a grid of 64 equal-area cells of the triangle.
+fn mean_illuminance(t: &Texture, uv: [Vec2; 3]) -> f32 {
+    const N: usize = 8;
+    let mut sum = 0.0;
+    for i in 0..N {
+        for j in 0..N {
+            let (bu, bv) = warp::uniform_triangle((i as f32 + 0.5) / N as f32, (j as f32 + 0.5) / N as f32);
+            let p = uv[0] + bu * (uv[1] - uv[0]) + bv * (uv[2] - uv[0]);
+            sum += t.albedo(p).map_or(0.0, illuminance);
+        }
+    }
+    sum / (N * N) as f32
+}
+
+/// The brightest texel a lookup anywhere in the triangle with these uvs can reach: the texels
+/// of its uv box as the filter reads them (nearest: the texel containing each point;
+/// bilinear: also the next one), wrapped as the sampler wraps; the whole image when the box
+/// is larger.
+fn brightest_texel(t: &Texture, uv: [Vec2; 3]) -> Vec3 {
+    let Some(img) = t.image.as_deref() else { return Vec3::ZERO };
+    let (w, h) = (img.width, img.height);
+    let v = |p: Vec2| if t.flip_v { 1.0 - p.y } else { p.y };
+    let (u0, u1) = (uv.iter().map(|p| p.x).fold(f32::MAX, f32::min), uv.iter().map(|p| p.x).fold(f32::MIN, f32::max));
+    let (v0, v1) =
+        (uv.iter().map(|&p| v(p)).fold(f32::MAX, f32::min), uv.iter().map(|&p| v(p)).fold(f32::MIN, f32::max));
+    let all = || img.texels.iter().fold(Vec3::ZERO, |m, &c| m.max(c));
+    if !(u0.is_finite() && u1.is_finite() && v0.is_finite() && v1.is_finite()) {
+        return all();
+    }
+    let (shift, extra) = match t.filter {
+        crate::scene::texture::Filter::Nearest => (0.0, 0),
+        crate::scene::texture::Filter::Linear => (0.5, 1),
+    };
+    let span = |a: f32, b: f32, n: usize| {
+        ((a * n as f32 - shift).floor() as i64, (b * n as f32 - shift).floor() as i64 + extra)
+    };
+    // The texel indices a span reaches once wrapped: clamped, or every index when a
+    // repeating span is as long as the image.
+    let indices = |(a, b): (i64, i64), n: usize, wrap: Wrap| -> Vec<usize> {
+        match wrap {
+            Wrap::ClampToEdge => (a.clamp(0, n as i64 - 1)..=b.clamp(0, n as i64 - 1)).map(|i| i as usize).collect(),
+            _ if b - a + 1 >= n as i64 => (0..n).collect(),
+            _ => (a..=b).map(|i| wrap_index(i, n, wrap)).collect(),
+        }
+    };
+    let (xs, ys) = (indices(span(u0, u1, w), w, t.wrap[0]), indices(span(v0, v1, h), h, t.wrap[1]));
+    if xs.len() * ys.len() >= w * h {
+        return all();
+    }
+    let mut m = Vec3::ZERO;
+    for &y in &ys {
+        for &x in &xs {
+            m = m.max(img.texels[y * w + x]);
+        }
+    }
+    m
+}

@@ -1,0 +1,14 @@
+//! Rendering: closed-form answers, the wavefront integrator against the recursive
+//! reference, effects and stages, environment maps, the thin lens, ray offsets and
+//! numerical stability.
+
+mod analytic;
+mod effects;
+mod emitter_sides;
+mod envmap;
+mod lens;
+pub mod mis;
+mod offsets;
+mod stability;
+mod transport;
+mod wavefront;

@@ -1,0 +1,95 @@
+//! One switch forces every SIMD kernel onto its scalar path (`Settings::isa`, `--isa`): the
+//! BVH's box tests and leaf filter, the eight-lane camera rays, shading lanes and random
+//! streams. Every path gives the same bits, so whole renders are compared here.
+
+use crate::accel::build;
+use crate::cpu::Isa;
+use crate::load::default_scene;
+use crate::render::render;
+use crate::scene::Scene;
+use crate::settings::{Settings, Shading};
+
+fn image(scene: &Scene, s: &Settings) -> Vec<[u32; 3]> {
+    let (accel, _) = build(scene, s);
+    let (film, stats) = render(scene, accel.as_ref(), s).unwrap();
+    assert_eq!(stats.invalid_samples, 0);
+    film.pixels.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
+}
+
+/// Diffuse scenes (the shading-lanes kernel), mirrors and glass (the per-path kernel), a
+/// pinhole (camera lanes) and with the default scene's spheres: each instruction set the CPU
+/// offers gives the scalar image bit for bit, with enough light in it to mean something.
+#[test]
+fn every_instruction_set_renders_the_scalar_image() {
+    let mut scenes = vec![("default", default_scene())];
+    for name in ["CBbunny.dae", "CBspheres.dae"] {
+        if let Some(scene) = crate::tests::common::load_scene(&format!("cs184/sky/{name}")) {
+            scenes.push((name, scene));
+        }
+    }
+    for (name, scene) in &scenes {
+        let base = Settings {
+            width: 40,
+            height: 30,
+            spp: 4,
+            light_samples: 2,
+            max_depth: 4,
+            shading: Shading::Global,
+            threads: 1,
+            ..Settings::default()
+        };
+        let mut scene = scene.clone();
+        scene.camera.fit_aspect(40.0 / 30.0);
+        let scalar = image(&scene, &Settings { isa: Isa::Scalar, ..base.clone() });
+        let lit = scalar.iter().filter(|p| p.iter().any(|&b| f32::from_bits(b) > 0.0)).count();
+        assert!(lit > scalar.len() / 4, "{name}: only {lit} lit pixels");
+        // Each path the CPU runs, once: a request this CPU cannot honour falls back to one
+        // already compared.
+        let mut ran = vec![Isa::Scalar];
+        for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+            if ran.contains(&isa.effective()) {
+                eprintln!("{name}: {} runs as {}, compared already", isa.name(), isa.effective().name());
+                continue;
+            }
+            ran.push(isa.effective());
+            let got = image(&scene, &Settings { isa, ..base.clone() });
+            let differ = got.iter().zip(&scalar).filter(|(a, b)| a != b).count();
+            assert_eq!(
+                differ,
+                0,
+                "{name}: {} ({}) differs from scalar in {differ} pixels",
+                isa.name(),
+                isa.effective().name()
+            );
+        }
+    }
+}
+
+/// The comparisons above mean something only where the SIMD paths run: on a CPU that has
+/// AVX2 (with FMA, BMI1, POPCNT) or SSE4.1, by the standard library's own detection, the
+/// requests resolve to them, and the default request takes the widest.
+#[test]
+fn simd_paths_run_where_the_cpu_has_them() {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let avx2 = std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("fma")
+            && std::is_x86_feature_detected!("bmi1")
+            && std::is_x86_feature_detected!("popcnt");
+        if avx2 {
+            assert_eq!(Isa::Avx2.effective(), Isa::Avx2);
+            assert_eq!(Isa::default().effective(), Isa::Avx2);
+            assert!(Isa::Avx512.avx2().is_some());
+        } else {
+            eprintln!("skipped the AVX2 check: this CPU has no AVX2");
+        }
+        if std::is_x86_feature_detected!("sse4.1") {
+            assert_eq!(Isa::Sse.effective(), Isa::Sse);
+            assert!(Isa::Sse.sse().is_some() && Isa::Sse.avx2().is_none());
+        } else {
+            eprintln!("skipped the SSE4.1 check: this CPU has no SSE4.1");
+        }
+    }
+    assert_eq!(Isa::Scalar.effective(), Isa::Scalar);
+    assert!(Isa::Scalar.sse().is_none() && Isa::Scalar.avx2().is_none());
+}
