@@ -392,7 +392,7 @@ def md_renders(args, part, scenes_dir):
                "(rendering only: no load, no BVH build). Stage times are thread-seconds summed over the "
                "workers (of the best run); tests and nodes are per ray (all rays). Scenes with "
                "`non-diffuse-shading` shade one path at a time (the 8-lane kernel is for Lambertian "
-               "scenes: docs/decisions.md, Shade in lanes).\n")
+               "scenes: docs/decisions.md, \"Shade in lanes\").\n")
     out.append("| scene | flags | other effects | rays (M) | render s | Mrays/s | " + " | ".join(STAGES) +
                " | tests / ray | nodes / ray | BVH build s |")
     out.append("|---|---|---|--:|--:|--:|" + "--:|" * len(STAGES) + "--:|--:|--:|")
