@@ -823,7 +823,11 @@ def main(argv):
     with open(args.bin, "rb") as f:
         digest = hashlib.sha256(f.read()).hexdigest()[:12]
     MACHINE.update(cpu=model, flags=flags)
-    head = sh(["git", "-C", REPO, "rev-parse", "--short", "HEAD"])
+    # The commit of the checkout the binary was built in (its target/ folder's parent), else this one's.
+    src = os.path.dirname(os.path.abspath(args.bin))
+    while src != os.path.dirname(src) and not os.path.exists(os.path.join(src, ".git")):
+        src = os.path.dirname(src)
+    head = sh(["git", "-C", src if os.path.exists(os.path.join(src, ".git")) else REPO, "rev-parse", "--short", "HEAD"])
     built = datetime.datetime.fromtimestamp(os.path.getmtime(args.bin), datetime.timezone.utc)
     t0 = time.monotonic()
     start = {"load": os.getloadavg(), "date": now_utc()}
