@@ -4,6 +4,7 @@
 //! --skip slow` is the edit loop and plain `cargo test --release` runs everything.
 
 mod accel;
+mod citations;
 mod cli;
 mod common;
 mod cs184;
