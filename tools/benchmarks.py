@@ -639,6 +639,7 @@ VIEWER = ("cs184/sky/CBbunny.dae", "-r 640 480 -m 5 -s 64")
 def part_viewer(args, scenes_dir):
     """`wavepath view` timed by tools/view_timing.py against offline renders of the same settings."""
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    sys.dont_write_bytecode = True
     import view_timing
     scene, flags = VIEWER
     path = os.path.join(scenes_dir, scene)
