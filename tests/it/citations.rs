@@ -318,12 +318,10 @@ impl Repo {
             for d in ["src", "tests", "benches"] {
                 walk(&c.join(d), &mut files);
             }
-            if c != &self.root {
-                if let Ok(entries) = std::fs::read_dir(c) {
-                    files.extend(
-                        entries.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "md")),
-                    );
-                }
+            if c != &self.root
+                && let Ok(entries) = std::fs::read_dir(c)
+            {
+                files.extend(entries.flatten().map(|e| e.path()).filter(|p| p.extension().is_some_and(|e| e == "md")));
             }
         }
         for d in ["tools", ".ci"] {
