@@ -1,7 +1,12 @@
 #!/usr/bin/env python3
 """Regenerate BENCHMARKS.md: current results of wavepath on this machine.
 
-    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e] [--quick] [options]
+    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,viewer,large] [--quick] [options]
+
+The page is one section per part, each between `<!-- part:NAME -->` and `<!-- /part:NAME -->`
+and each with the date, machine, binary and command it was measured with. A run replaces the
+sections of the parts it ran and keeps the others as they are (`merge_page`; tested by
+`python3 tools/test_benchmarks.py`).
 
 Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
   renders  a few fixed renders, each run as wavefront and as `--integrator recursive`,
@@ -13,6 +18,8 @@ Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
            6.4M triangles (100k converted and 25.6M with --large-levels 0,2,3,4): load, BVH build and peak memory
            beside Embree's build (medium and high quality) on the same triangles, alternating
            fresh processes
+  viewer   `wavepath view` timed by tools/view_timing.py (a client on the frame stream posting
+           moves) against offline renders of the same settings
 
 The peers folder is copied to a scratch folder (--work) first: its scripts write build
 products beside themselves, and the shared copy must stay untouched.
@@ -26,6 +33,7 @@ import hashlib
 import json
 import os
 import platform
+import re
 import resource
 import shlex
 import shutil
@@ -209,7 +217,6 @@ def part_large(args, scenes_dir, peers_dir):
         part["rows"].append(row)
     part["renders"] = large_renders(args, scenes_dir, work)
     part["load_after"] = loadavg()
-    part["busy_mean"] = part["busy_max"] = 0.0
     if peers_dir and os.path.isfile(os.path.join(peers_dir, "run.sh")):
         plys = [r["ply"] for r in part["rows"]]
         part["peers"] = run_harness(args, peers_dir, plys, 1, 5, "peers-large.log")
@@ -385,7 +392,7 @@ def md_renders(args, part, scenes_dir):
                "(rendering only: no load, no BVH build). Stage times are thread-seconds summed over the "
                "workers (of the best run); tests and nodes are per ray (all rays). Scenes with "
                "`non-diffuse-shading` shade one path at a time (the 8-lane kernel is for Lambertian "
-               "scenes: docs/decisions.md, Shade in lanes).\n")
+               "scenes: docs/decisions.md, \"Shade in lanes\").\n")
     out.append("| scene | flags | other effects | rays (M) | render s | Mrays/s | " + " | ".join(STAGES) +
                " | tests / ray | nodes / ray | BVH build s |")
     out.append("|---|---|---|--:|--:|--:|" + "--:|" * len(STAGES) + "--:|--:|--:|")
@@ -625,6 +632,135 @@ def md_e2e(args, part):
     return out
 
 
+# ------------------------------------------------------------------ viewer ----
+VIEWER = ("cs184/sky/CBbunny.dae", "-r 640 480 -m 5 -s 64")
+
+
+def part_viewer(args, scenes_dir):
+    """`wavepath view` timed by tools/view_timing.py against offline renders of the same settings."""
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    sys.dont_write_bytecode = True
+    import view_timing
+    scene, flags = VIEWER
+    path = os.path.join(scenes_dir, scene)
+    if not os.path.exists(path):
+        raise SystemExit(f"viewer: no {path}")
+    part = {"load_before": loadavg(), "date": now_utc(), "scene": scene, "flags": flags}
+    res = view_timing.measure(args.bin, path, flags.split() + ["-t", str(args.threads)],
+                              moves=3 if args.quick else 5, offline_runs=args.rounds, log=log)
+    part.update(res)
+    part["load_after"] = loadavg()
+    busy = [m.get("other_busy", 0.0) for m in res["moves"]] + [r.get("other_busy", 0.0) for r in res["offline"]]
+    part["busy_mean"], part["busy_max"] = statistics.mean(busy or [0.0]), max(busy or [0.0])
+    return part
+
+
+def md_viewer(args, part):
+    def rng(xs, f):
+        return "-" if not xs else (f.format(min(xs)) if min(xs) == max(xs) else f.format(min(xs)) + "-" + f.format(max(xs)))
+
+    mv, off = part["moves"], part["offline"]
+    out = ["## Interactive viewer\n"]
+    out.append(f"`wavepath view {args.scenes_shown}/{part['scene']} {part['flags']} -t {args.threads}` timed by "
+               f"`tools/view_timing.py`: a client on the frame stream (`/events`) that posts {len(mv)} moves to "
+               f"`/control` (alternately `m=5`, a new generation of the same view, and `reset=1`), each once the "
+               f"previous one has converged, and times the frames; against {len(off)} offline renders of the same "
+               f"settings (`wavepath SCENE {part['flags']} -t {args.threads} --stats`). Ranges over the moves and "
+               f"the offline runs.\n")
+    out.append("| figure | viewer | offline |")
+    out.append("|---|--:|--:|")
+    out.append(f"| page (`/`) served in | {rng([1e3 * part['page_s']], '{:.1f}')} ms | - |")
+    out.append(f"| first image after a move | {rng([1e3 * m['first_s'] for m in mv], '{:.1f}')} ms | - |")
+    out.append(f"| updates per second while converging | {rng([m['updates_per_s'] for m in mv], '{:.1f}')} | - |")
+    out.append(f"| Mrays/s in render calls | {rng([m['mrays_per_s'] for m in mv], '{:.1f}')} | "
+               f"{rng([r['mrays_per_s'] for r in off], '{:.1f}')} |")
+    out.append(f"| seconds to {mv[0]['spp'] if mv else '?'} spp | {rng([m['converge_s'] for m in mv], '{:.2f}')} | "
+               f"{rng([r['render_s'] for r in off], '{:.2f}')} |")
+    out.append("")
+    out.append(f"Command: `tools/view_timing.py --bin {args.bin_shown} {args.scenes_shown}/{part['scene']} "
+               f"{part['flags']} -t {args.threads}` (what `tools/benchmarks.sh --parts viewer` runs).  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
+# ------------------------------------------------------------------ page ----
+# The page's parts in order, with the title a part has before it was ever run.
+PART_ORDER = ["renders", "peers", "e2e", "viewer", "large"]
+PART_TITLES = {"renders": "Renders", "peers": "Ray throughput against the peers",
+               "e2e": "End to end against Mitsuba 3", "viewer": "Interactive viewer",
+               "large": "Large meshes"}
+NOT_RUN = {
+    "e2e": "`tools/benchmarks.sh --parts e2e` adds whole renders against Mitsuba 3 at equal error "
+           "(`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args '" + E2E_QUICK + "'` under a minute).",
+    "viewer": "`tools/benchmarks.sh --parts viewer` times `wavepath view` (tools/view_timing.py), about a minute.",
+}
+SECTION = re.compile(r"^<!-- part:([a-z0-9_-]+) -->\n(.*?)^<!-- /part:\1 -->[ \t]*\n?", re.S | re.M)
+PAGE_HEAD = """# Benchmarks
+
+Generated by `tools/benchmarks.sh`; rerun it rather than editing this page. Each section is one
+part (`--parts renders,peers,e2e,viewer,large`) and says when, on what machine, with which binary
+and command it was measured: a run replaces the sections of the parts it ran and keeps the others
+as they were, with their dates, so sections of one page may come from different days and
+builds. Why the code is as it is, with the figures of past experiments:
+[docs/decisions.md](docs/decisions.md). Ratios come from fresh processes run side by side;
+absolute times move with the machine's load.
+"""
+
+
+def section(name, body):
+    """A part's section: its Markdown between the markers `merge_page` finds again."""
+    return f"<!-- part:{name} -->\n{body.strip()}\n<!-- /part:{name} -->\n"
+
+
+def split_sections(text):
+    """The sections of a page: {name: section text with its markers}, in page order."""
+    return {m.group(1): m.group(0) if m.group(0).endswith("\n") else m.group(0) + "\n"
+            for m in SECTION.finditer(text)}
+
+
+def merge_page(old, new):
+    """The page after a run: `new` ({part: Markdown}) replaces those parts' sections, every other
+    section of `old` stays verbatim (parts this script no longer knows at the end, so nothing is
+    lost), and a part never run gets a note saying how to run it."""
+    kept = split_sections(old or "")
+    out = [PAGE_HEAD]
+    for name in PART_ORDER + [n for n in kept if n not in PART_ORDER]:
+        if name in new:
+            out.append(section(name, new[name]))
+        elif name in kept:
+            out.append(kept[name])
+        else:
+            out.append(f"## {PART_TITLES[name]}\n\nNot run yet: " +
+                       NOT_RUN.get(name, f"`tools/benchmarks.sh --parts {name}`.") + "\n")
+    return "\n".join(out)
+
+
+def measured_line(run, part):
+    """The line under a section's title: when, where, with what and how it was measured."""
+    load0, load1 = part.get("load_before", 0.0), part.get("load_after", 0.0)
+    busy_mean, busy_max = part.get("busy_mean", 0.0), part.get("busy_max", 0.0)
+    noisy = busy_mean > 0.10 or load0 > 0.5 * NCPU
+    if "busy_mean" not in part:  # the part does not measure other processes' share
+        note = ("**noisy machine** (the load was high at the start): absolute figures are lower bounds"
+                if noisy else "other processes' share of the CPUs not measured")
+    elif noisy:
+        how = ("ratios can be off by tens of percent, and two-thread figures mean little (no free second core)"
+               if busy_mean > 0.3 else "ratios carry several percent of noise")
+        note = (f"**noisy machine** (other processes used {100 * busy_mean:.0f}% of the CPUs on average, max "
+                f"{100 * busy_max:.0f}%, or the load was high at the start): absolute figures are lower bounds, {how}")
+    else:
+        note = (f"quiet machine (other processes used {100 * busy_mean:.0f}% of the CPUs on average, "
+                f"max {100 * busy_max:.0f}%)")
+    return (f"Measured on {part['date']} by `{run['cmdline']}` on {run['machine']}; wavepath `{run['bin']}` "
+            f"(sha256 {run['digest']}, built {run['built']}), repository at {run['head']}, {run['rustc']}. "
+            f"Load average {load0:.2f} at the start, {load1:.2f} at the end; {note}.\n")
+
+
+def with_measured(lines, run, part):
+    """A part's Markdown lines with the measured line under its title."""
+    return "\n".join(lines[:1] + [measured_line(run, part)] + lines[1:])
+
+
 # ------------------------------------------------------------------ main ----
 MACHINE = {}
 
@@ -634,7 +770,7 @@ def main(argv):
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
     ap.add_argument("--bin", default=os.environ.get("WAVEPATH", "target/release/wavepath"),
                     help="wavepath binary (default: $WAVEPATH or target/release/wavepath)")
-    ap.add_argument("--parts", default="renders,peers", help="comma list of renders, peers, e2e, large")
+    ap.add_argument("--parts", default="renders,peers", help="comma list of " + ", ".join(PART_ORDER))
     ap.add_argument("--large-levels", default="2,3", help="large: subdivision levels of Lucy 100k (0: converted as it is; 4: 25.6M)")
     ap.add_argument("--e2e", action="store_true", help="also run the e2e part (same as adding it to --parts)")
     ap.add_argument("--quick", action="store_true",
@@ -667,7 +803,7 @@ def main(argv):
     args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:
-        if p not in ("renders", "peers", "e2e", "large"):
+        if p not in PART_ORDER:
             ap.error(f"unknown part {p}")
 
     os.chdir(REPO)
@@ -688,7 +824,11 @@ def main(argv):
     with open(args.bin, "rb") as f:
         digest = hashlib.sha256(f.read()).hexdigest()[:12]
     MACHINE.update(cpu=model, flags=flags)
-    head = sh(["git", "-C", REPO, "rev-parse", "--short", "HEAD"])
+    # The commit of the checkout the binary was built in (its target/ folder's parent), else this one's.
+    src = os.path.dirname(os.path.abspath(args.bin))
+    while src != os.path.dirname(src) and not os.path.exists(os.path.join(src, ".git")):
+        src = os.path.dirname(src)
+    head = sh(["git", "-C", src if os.path.exists(os.path.join(src, ".git")) else REPO, "rev-parse", "--short", "HEAD"])
     built = datetime.datetime.fromtimestamp(os.path.getmtime(args.bin), datetime.timezone.utc)
     t0 = time.monotonic()
     start = {"load": os.getloadavg(), "date": now_utc()}
@@ -701,53 +841,35 @@ def main(argv):
         results["peers"] = part_peers(args, scenes_dir, peers_dir)
     if "e2e" in parts:
         results["e2e"] = part_e2e(args, scenes_dir, peers_dir)
+    if "viewer" in parts:
+        results["viewer"] = part_viewer(args, scenes_dir)
     if "large" in parts:
         results["large"] = part_large(args, scenes_dir, peers_dir)
     took = time.monotonic() - t0
     with open(os.path.join(args.work, "results.json"), "w") as f:
         json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)
 
-    busy_max = max((r["busy_max"] for r in results.values()), default=0.0)
-    busy_mean = max((r["busy_mean"] for r in results.values()), default=0.0)
-    noisy = busy_mean > 0.10 or start["load"][0] > 0.5 * NCPU
-    cmdline = "tools/benchmarks.sh " + shlex.join(argv) if argv else "tools/benchmarks.sh"
-    md = ["# Benchmarks\n",
-          f"Current results, generated by `{cmdline}` on {start['date']} in {took / 60:.1f} min; rerun it "
-          f"rather than editing this page. Why the code is as it is, with the figures of past "
-          f"experiments: [docs/decisions.md](docs/decisions.md). Ratios come from fresh processes "
-          f"run side by side; absolute times move with the machine's load.\n",
-          f"- Machine: {model} ({', '.join(flags) or 'no AVX2'}), {NCPU} cores, {mem_gib()}, "
-          f"Linux {platform.release()}.",
-          f"- wavepath: `{args.bin_shown}` (sha256 {digest}, built {built.strftime('%Y-%m-%d %H:%M UTC')}); "
-          f"repository at {head or '?'}; {sh(['rustc', '-V']) or 'rustc ?'}.",
-          f"- Load average (1/5/15 min) at the start: {' / '.join(f'{x:.2f}' for x in start['load'])}; "
-          f"at the end: {' / '.join(f'{x:.2f}' for x in os.getloadavg())}."]
-    if noisy:
-        how = ("ratios can be off by tens of percent (see the per-round ranges), and two-thread figures "
-               "mean little (no free second core)") if busy_mean > 0.3 else "ratios carry several percent of noise"
-        md.append(f"- **Noisy machine**: other processes used {100 * busy_mean:.0f}% of the CPUs on average "
-                  f"during the runs (max {100 * busy_max:.0f}%), or the load was already high at the start: "
-                  f"absolute figures are lower bounds, {how}. Rerun on a quiet machine before drawing "
-                  f"conclusions.")
-    else:
-        md.append(f"- Quiet machine: other processes used {100 * busy_mean:.0f}% of the CPUs on average "
-                  f"during the runs (max {100 * busy_max:.0f}%).")
-    md.append("")
+    run = {"cmdline": "tools/benchmarks.sh " + shlex.join(argv) if argv else "tools/benchmarks.sh",
+           "machine": f"{model} ({', '.join(flags) or 'no AVX2'}), {NCPU} cores, {mem_gib()}, Linux {platform.release()}",
+           "bin": args.bin_shown, "digest": digest, "built": built.strftime("%Y-%m-%d %H:%M UTC"),
+           "head": head or "?", "rustc": sh(["rustc", "-V"]) or "rustc ?"}
+    md = {}
     if "renders" in results:
-        md += md_renders(args, results["renders"], scenes_dir)
+        md["renders"] = with_measured(md_renders(args, results["renders"], scenes_dir), run, results["renders"])
     if "peers" in results:
-        md += md_peers(args, results["peers"], scenes_dir)
+        md["peers"] = with_measured(md_peers(args, results["peers"], scenes_dir), run, results["peers"])
     if "e2e" in results:
-        md += md_e2e(args, results["e2e"])
-    else:
-        md.append("## End to end against Mitsuba 3\n")
-        md.append("Not run this time: `tools/benchmarks.sh --e2e` adds whole renders against Mitsuba 3 at "
-                  "equal error (`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args "
-                  f"'{E2E_QUICK}'` under a minute).\n")
+        md["e2e"] = with_measured(md_e2e(args, results["e2e"]), run, results["e2e"])
+    if "viewer" in results:
+        md["viewer"] = with_measured(md_viewer(args, results["viewer"]), run, results["viewer"])
     if "large" in results:
-        md += md_large(args, results["large"])
+        md["large"] = with_measured(md_large(args, results["large"]), run, results["large"])
+    old = ""
+    if os.path.exists(args.out):
+        with open(args.out) as f:
+            old = f.read()
     with open(args.out, "w") as f:
-        f.write("\n".join(md).rstrip() + "\n")
+        f.write(merge_page(old, md).rstrip() + "\n")
     log(f"wrote {args.out} ({took / 60:.1f} min)")
     return 0
 

@@ -5,6 +5,7 @@
 //! -- --skip slow` is the edit loop, `cargo test --release` runs everything.
 
 mod accel;
+mod citations;
 mod cli;
 mod common;
 mod cs184;

@@ -1,7 +1,7 @@
 //! Light sampling: every light of a scene as something a shading point can draw a
 //! direction toward, with the radiance that arrives and its density.
 //!
-//! Semantics follow the CS184 reference (see DESIGN.md):
+//! Semantics follow the CS184 reference renderer:
 //! - point and spot lights have no distance falloff (the reference ignores COLLADA
 //!   attenuation and divides by nothing); a directional light is a radiance along a direction;
 //! - an area light is one-sided, emitting toward `direction`;

@@ -5,7 +5,7 @@ use crate::scene::Scene;
 use crate::settings::Settings;
 use serde_json::{Value, json};
 
-/// The `--stats` JSON object (schema in DESIGN.md).
+/// The `--stats` JSON object; the `json!` literal below is its schema.
 pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo, st: &RenderStats) -> Value {
     let (mean, min, max) = st.spp_summary();
     json!({

@@ -80,7 +80,7 @@ fn shadow_like_rays(scene: &Scene, n_origins: usize) -> Vec<Ray> {
 
 /// Packets give each ray exactly its single-ray answer, and every instruction set gives the
 /// scalar path's answer (also on rays whose range ends exactly on a surface: see
-/// BENCHMARKS.md "Ties at shared vertices").
+/// docs/decisions.md, "Ties at shared vertices").
 fn check(scene: &Scene, what: &str) {
     let rays = shadow_like_rays(scene, 3000);
     let scalar = Bvh::build(scene).with_isa(Isa::Scalar);

@@ -1,4 +1,4 @@
-//! Ray origins offset by per-point error bounds (src/integrator/offset.rs): a ray leaving a
+//! Ray origins offset by per-point error bounds (src/geometry/offset.rs): a ray leaving a
 //! surface point never finds its own surface again, at any scale and any direction down to
 //! grazing, and the offset never steps over a thin feature.
 //!

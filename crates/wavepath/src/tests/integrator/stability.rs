@@ -234,10 +234,9 @@ fn cornell_box_at_extreme_scales_renders_the_same() {
     assert_transform_invariant(&[(1e-3, Vec3::ZERO), (1e4, Vec3::ZERO), (1e-3, Vec3::splat(1.0))]);
 }
 
-/// Fails on main: src/integrator/offset.rs lifts ray origins by |p| * 2^-18 (32 ulps of the
-/// largest coordinate), which at 1e5 is 0.38, more than the spheres' radius 0.3, so floor
-/// points beside a sphere start their shadow rays inside it (region means 17% darker).
-/// With 2^-21 (4 ulps) this test and the scaled ones pass.
+/// Ray origins lifted by a fixed |p| * 2^-18 (32 ulps of the largest coordinate: 0.38 at 1e5,
+/// more than the spheres' radius 0.3) started floor points' shadow rays inside a sphere beside
+/// them (region means 17% darker); src/geometry/offset.rs lifts them by per-point error bounds.
 #[test]
 fn cornell_box_far_from_the_origin_renders_the_same() {
     assert_transform_invariant(&[(1.0, Vec3::splat(1e5))]);
