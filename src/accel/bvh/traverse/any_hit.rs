@@ -54,12 +54,12 @@ impl WithKernels for AnyHits<'_> {
     }
 }
 
-impl<K: BoxTest, const N: usize> Walker<'_, K, &mut Stack<N>> {
+impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, &mut Stack<N, X>> {
     /// Whether `ray` hits anything, on a stack that [`Stack::holds`] the tree's
     /// `stack_need`.
     #[inline(always)]
     pub fn any(&mut self, ray: &Ray) -> bool {
-        debug_assert!(Stack::<N>::holds(self.t.bvh.stack_need));
+        debug_assert!(Stack::<N, X>::holds(self.t.bvh.stack_need));
         let br = &self.t.isa.box_ray(ray);
         self.counters.rays += 1;
         if !br.live {
@@ -96,7 +96,7 @@ impl<K: BoxTest, const N: usize> Walker<'_, K, &mut Stack<N>> {
                 mask &= mask - 1;
                 let child = node.child[i];
                 if child & LEAF_BIT == 0 {
-                    stack.nodes[sp & Stack::<N>::MASK] = child;
+                    stack.nodes[sp & Stack::<N, X>::MASK] = child;
                     sp += 1;
                     continue;
                 }
@@ -110,7 +110,7 @@ impl<K: BoxTest, const N: usize> Walker<'_, K, &mut Stack<N>> {
                 break false;
             }
             sp -= 1;
-            cur = stack.nodes[sp & Stack::<N>::MASK];
+            cur = stack.nodes[sp & Stack::<N, X>::MASK];
         };
         self.counters.nodes += visited;
         self.counters.prim_tests += tests;

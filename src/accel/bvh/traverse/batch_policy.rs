@@ -35,10 +35,11 @@ impl WithKernels for ClosestBatch<'_> {
     #[inline(always)]
     fn run<K: PacketTest>(self, isa: K) {
         let ClosestBatch { bvh, rays, hits, counters } = self;
-        let mut stack = BigStack::<()>::boxed();
+        // One stack for every loop (a packet's rays per entry, unused by single rays): a
+        // stack of its own for the packets cost each batch its allocation.
+        let mut stack = BigStack::<Rays>::boxed();
         // The stacks of the second and third ray in flight (trees beyond the caches only).
-        let mut more: Option<Box<[BigStack; 2]>> = None;
-        let mut packets: Option<Box<BigStack<Rays>>> = None;
+        let mut more: Option<Box<[BigStack<Rays>; 2]>> = None;
         // Filled per group (not cleared: every entry read was just written).
         let mut prep = [BoxRay::DEAD; SETUP_GROUP];
         // Per group, eight rays at a time: which may enter the tree at all (most primary
@@ -69,8 +70,7 @@ impl WithKernels for ClosestBatch<'_> {
                     }
                     let mut out = [None; COHERENT];
                     let f = Frustum::of(slot[k..k + len].iter().map(|&i| &prep[i as usize]));
-                    let packets = packets.get_or_insert_with(BigStack::boxed);
-                    Walker::new(bvh, isa, &mut **packets, &mut *counters).coherent(&rays[..len], &f, &mut out[..len]);
+                    Walker::new(bvh, isa, &mut *stack, &mut *counters).coherent(&rays[..len], &f, &mut out[..len]);
                     for (&i, h) in slot[k..k + len].iter().zip(out) {
                         hs[i as usize] = h;
                     }

@@ -33,12 +33,12 @@ impl WithKernels for ClosestHit<'_> {
     }
 }
 
-impl<K: BoxTest, const N: usize> Walker<'_, K, &mut Stack<N>> {
+impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, &mut Stack<N, X>> {
     /// Closest hit of `ray`, whose box-test values are `br` (`BoxRay::new(ray)`), on a stack
     /// that [`Stack::holds`] the tree's `stack_need`.
     #[inline(always)]
     pub fn closest(&mut self, ray: &Ray, br: &BoxRay) -> Option<Hit> {
-        debug_assert!(Stack::<N>::holds(self.t.bvh.stack_need));
+        debug_assert!(Stack::<N, X>::holds(self.t.bvh.stack_need));
         self.counters.rays += 1;
         if !br.live {
             return None;
@@ -80,7 +80,11 @@ impl<'r> Flight<'r> {
     /// that can still hold something closer; true when the ray is done. `fma` is `br.fma`
     /// (a constant where the caller's loop is compiled once per form).
     #[inline(always)]
-    pub fn step<K: BoxTest, const N: usize>(&mut self, w: &mut Walker<'_, K, &mut Stack<N>>, fma: bool) -> bool {
+    pub fn step<K: BoxTest, const N: usize, X: Copy + Default>(
+        &mut self,
+        w: &mut Walker<'_, K, &mut Stack<N, X>>,
+        fma: bool,
+    ) -> bool {
         let t = w.t;
         let (bvh, isa) = (t.bvh, t.isa);
         let stack = &mut *w.stack;
@@ -116,7 +120,7 @@ impl<'r> Flight<'r> {
                 return true;
             }
             self.sp -= 1;
-            let at = self.sp & Stack::<N>::MASK;
+            let at = self.sp & Stack::<N, X>::MASK;
             if stack.dists[at] <= self.best.t * TIE_SCALE {
                 self.cur = stack.nodes[at];
                 return false;
@@ -127,7 +131,10 @@ impl<'r> Flight<'r> {
     /// [`Flight::step`] with the form of the ray's box test chosen per step (a branch that
     /// follows the ray: the fused form nearly always).
     #[inline(always)]
-    pub fn step_any_form<K: BoxTest, const N: usize>(&mut self, w: &mut Walker<'_, K, &mut Stack<N>>) -> bool {
+    pub fn step_any_form<K: BoxTest, const N: usize, X: Copy + Default>(
+        &mut self,
+        w: &mut Walker<'_, K, &mut Stack<N, X>>,
+    ) -> bool {
         if self.br.fma { self.step(w, true) } else { self.step(w, false) }
     }
 }

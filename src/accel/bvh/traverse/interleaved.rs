@@ -8,13 +8,13 @@ use crate::accel::TraceCounters;
 use crate::accel::bvh::simd::{BoxRay, BoxTest};
 use crate::geometry::{Hit, Ray};
 
-impl<K: BoxTest, const N: usize> Walker<'_, K, [&mut Stack<N>; 3]> {
+impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, [&mut Stack<N, X>; 3]> {
     /// Closest hits of the rays `rays[i]` (box-test values `prep[i]`) for each `i` of
     /// `which`, into `hits[i]`, one stack per ray in flight.
     #[inline(always)]
     pub fn interleaved(&mut self, rays: &[Ray], prep: &[BoxRay], which: &[u8], hits: &mut [Option<Hit>]) {
         let t = self.t;
-        debug_assert!(Stack::<N>::holds(t.bvh.stack_need));
+        debug_assert!(Stack::<N, X>::holds(t.bvh.stack_need));
         let [sa, sb, sc] = &mut self.stack;
         let counters = &mut *self.counters;
         let mut pending = Pending { rays, prep, which: which.iter() };
@@ -55,9 +55,9 @@ impl<'r> Pending<'r, '_> {
 /// One step of a ray in flight (on its own stack, in `w`); a ray done gives its place to the
 /// next.
 #[inline(always)]
-fn advance<'r, K: BoxTest, const N: usize>(
+fn advance<'r, K: BoxTest, const N: usize, X: Copy + Default>(
     flight: &mut Option<Flight<'r>>,
-    w: &mut Walker<'_, K, &mut Stack<N>>,
+    w: &mut Walker<'_, K, &mut Stack<N, X>>,
     pending: &mut Pending<'r, '_>,
     hits: &mut [Option<Hit>],
 ) {

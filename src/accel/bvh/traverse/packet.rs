@@ -41,15 +41,15 @@ impl WithKernels for ShadowPackets<'_> {
     #[inline(always)]
     fn run<K: PacketTest>(self, isa: K) {
         let ShadowPackets { bvh, rays, occluded, counters } = self;
-        let mut packets = BigStack::<u32>::boxed();
-        let mut single = BigStack::<()>::boxed();
+        // One stack for the packets and the rays alone.
+        let mut stack = BigStack::<u32>::boxed();
         let mut i = 0;
         while i < rays.len() {
             let n = run_len(&rays[i..]);
             if n == 1 {
-                occluded[i] = Walker::new(bvh, isa, &mut *single, &mut *counters).any(&rays[i]);
+                occluded[i] = Walker::new(bvh, isa, &mut *stack, &mut *counters).any(&rays[i]);
             } else {
-                Walker::new(bvh, isa, &mut *packets, &mut *counters)
+                Walker::new(bvh, isa, &mut *stack, &mut *counters)
                     .shadow_packet(&rays[i..i + n], &mut occluded[i..i + n]);
             }
             i += n;

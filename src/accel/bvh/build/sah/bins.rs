@@ -26,11 +26,13 @@ impl Box3 {
         self.hi = self.hi.max(hi);
     }
 
+    #[inline]
     pub(super) fn union(mut self, o: Box3) -> Box3 {
         self.grow(o.lo, o.hi);
         self
     }
 
+    #[inline]
     pub(super) fn area(&self) -> f32 {
         area(self.lo.into(), self.hi.into())
     }
@@ -64,6 +66,7 @@ impl Bins {
         }
     }
 
+    #[inline]
     pub(super) fn merge(&mut self, o: &Bins) {
         for ax in 0..3 {
             for k in 0..BINS {
@@ -74,6 +77,7 @@ impl Bins {
     }
 
     /// Empties the bins, in place (building a new set moved it through `memcpy` twice).
+    #[inline]
     pub(super) fn clear(&mut self) {
         for ax in 0..3 {
             self.cnt[ax] = [0; BINS];
@@ -86,6 +90,7 @@ impl Bins {
     /// Fills these bins with `refs` (`odd`: scratch for the second set). Bins are filled in
     /// place, not returned: a set is 1.7 KB, and making and moving one per split was a
     /// twentieth of the build's instructions, in `memcpy`.
+    #[inline]
     pub(super) fn gather(&mut self, refs: &[PrimRef], clo: Vec3, scale: Vec3, odd: &mut Bins) {
         let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
         self.clear();
@@ -106,6 +111,7 @@ impl Bins {
     /// The cheapest split of `n` primitives: (SAH cost, axis, first bin on the right), the
     /// first minimum in axis then bin order; infinite when every split leaves a side empty
     /// (a flat axis has all its primitives in bin 0, so it offers none).
+    #[inline]
     pub(super) fn cheapest(&self, n: usize) -> (f32, usize, usize) {
         let mut best = (f32::INFINITY, 0usize, 0usize);
         for ax in 0..3 {
@@ -146,6 +152,7 @@ impl Bins {
     /// Fills these bins with [`SAMPLE`] of `refs`: one from each of [`SAMPLE`] equal runs, at
     /// a place hashed from the run's index (not every `k`-th: a mesh's order can repeat with a
     /// period, a grid's rows, and a fixed stride would then see one column of it).
+    #[inline]
     pub(super) fn gather_sample(&mut self, refs: &[PrimRef], big: &Largest, clo: Vec3, scale: Vec3, odd: &mut Bins) {
         let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
         let run = refs.len() / SAMPLE;
@@ -162,6 +169,7 @@ impl Bins {
     }
 
     /// Box of the primitives in bins `range` of axis `ax`.
+    #[inline]
     pub(super) fn union(&self, ax: usize, range: std::ops::Range<usize>) -> Box3 {
         self.bin[ax][range].iter().fold(Box3::EMPTY, |a, &b| a.union(b))
     }

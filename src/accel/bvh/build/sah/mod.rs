@@ -124,7 +124,7 @@ fn build_into(
     let split = if refs.len() < PARALLEL_MIN { None } else { split_sides(refs, b, depth, &mut bins, &big) };
     drop(big);
     let Some((mid, lb, rb, [lbig, rbig])) = split else {
-        build_seq(refs, b, base, depth, nodes, at, &mut 0, &mut bins);
+        Seq { nodes, at, next: 0, bins: &mut bins }.build(refs, b, base, depth);
         return;
     };
     drop(bins);
@@ -140,30 +140,33 @@ fn build_into(
     );
 }
 
-/// Writes the subtree at `nodes[*next]` onwards; returns its root's absolute index. `bins`:
-/// scratch for [`split`].
-#[allow(clippy::too_many_arguments)]
-fn build_seq(
-    refs: &mut [PrimRef],
-    bnd: Bounds,
-    base: usize,
-    depth: usize,
-    nodes: &mut [Node2],
+/// The sequential build of a subtree into its range of the node array: nodes are written
+/// densely from the front of `nodes` (whose first is index `at` of the whole array), and
+/// `bins` is the scratch every [`split`] reuses.
+struct Seq<'a> {
+    nodes: &'a mut [Node2],
     at: usize,
-    next: &mut usize,
-    bins: &mut [Bins; 2],
-) -> u32 {
-    let (lo, hi, _, _) = bnd;
-    let me = *next;
-    *next += 1;
-    nodes[me] = Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 };
-    if let Some((mid, lb, rb)) = split(refs, bnd, depth, bins) {
-        let (l, r) = refs.split_at_mut(mid);
-        let a = build_seq(l, lb, base, depth + 1, nodes, at, next, bins);
-        let b = build_seq(r, rb, base + mid, depth + 1, nodes, at, next, bins);
-        nodes[me] = Node2 { lo, hi, a, b, count: 0 };
+    /// The next free node of the range.
+    next: usize,
+    bins: &'a mut [Bins; 2],
+}
+
+impl Seq<'_> {
+    /// Writes the subtree over `refs` (leaf-order places `base ..`, bounds `bnd`) at the next
+    /// free node onwards; returns its root's absolute index.
+    fn build(&mut self, refs: &mut [PrimRef], bnd: Bounds, base: usize, depth: usize) -> u32 {
+        let (lo, hi, _, _) = bnd;
+        let me = self.next;
+        self.next += 1;
+        self.nodes[me] = Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 };
+        if let Some((mid, lb, rb)) = split(refs, bnd, depth, self.bins) {
+            let (l, r) = refs.split_at_mut(mid);
+            let a = self.build(l, lb, base, depth + 1);
+            let b = self.build(r, rb, base + mid, depth + 1);
+            self.nodes[me] = Node2 { lo, hi, a, b, count: 0 };
+        }
+        (self.at + me) as u32
     }
-    (at + me) as u32
 }
 
 /// Chooses a split and partitions `refs` around it: the split point and the two sides'
@@ -361,9 +364,13 @@ mod tests {
         let nodes = build(&mut par);
         // The reference: the whole tree built on one thread, densely from the front.
         let mut reference: Vec<Node2> = bytemuck::zeroed_vec(node_bound(n));
-        let mut used = 0;
         let b = bounds(&seq);
-        build_seq(&mut seq, b, 0, 0, &mut reference, 0, &mut used, &mut [Bins::empty(), Bins::empty()]);
+        let mut bins = [Bins::empty(), Bins::empty()];
+        let used = {
+            let mut one = Seq { nodes: &mut reference, at: 0, next: 0, bins: &mut bins };
+            one.build(&mut seq, b, 0, 0);
+            one.next
+        };
         // Both walked from the root: the same nodes (boxes, leaf ranges, the same primitives
         // in each leaf: a parallel partition orders each side its own way); leaves covering
         // the references once, in order; a left child right after its parent; every node's

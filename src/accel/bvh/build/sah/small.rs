@@ -13,6 +13,7 @@ pub(super) const FEW: usize = 5;
 /// sweep. Every leaf is such a set (whether a block of large spread triangles is split is
 /// decided by its best split), and clearing and sweeping 3 x 16 bins cost far more than
 /// its few primitives: a tenth of the whole build.
+#[inline]
 pub(super) fn cheapest_of_few(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> (f32, usize, usize) {
     let n = refs.len();
     debug_assert!(n < FEW);
