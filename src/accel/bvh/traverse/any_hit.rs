@@ -74,6 +74,9 @@ impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, &mut Stack<N, 
     fn any_form(&mut self, ray: &Ray, br: &BoxRay, fma: bool) -> bool {
         let t = self.t;
         let (bvh, isa) = (t.bvh, t.isa);
+        // The node array in a local: the tree sits behind the walker, so the compiler would
+        // reload it after every store to the stack.
+        let nodes = &bvh.nodes[..];
         let stack = &mut *self.stack;
         let mut sr = None;
         let mut sp = 0usize;
@@ -82,7 +85,7 @@ impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, &mut Stack<N, 
         let (mut visited, mut tests) = (0u64, 0u64);
         let hit = 'trace: loop {
             visited += 1;
-            let node = &bvh.nodes[cur as usize];
+            let node = &nodes[cur as usize];
             let mut mask = isa.test_form(node, br, br.octant, fma, ray.tmax, &mut tnear);
             if !bvh.cached && mask.count_ones() > 1 {
                 let mut m = mask;

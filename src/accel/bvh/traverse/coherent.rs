@@ -74,6 +74,9 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<Rays>> {
     pub fn coherent(&mut self, rays: &[Ray], f: &Frustum, out: &mut [Option<Hit>]) {
         let t = self.t;
         let (bvh, isa) = (t.bvh, t.isa);
+        // The node array in a local: the tree sits behind the walker, not behind an argument
+        // of this function, so the compiler would reload it after every store to the stack.
+        let nodes = &bvh.nodes[..];
         let stack = &mut *self.stack;
         let counters = &mut *self.counters;
         let m = rays.len();
@@ -99,7 +102,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<Rays>> {
         loop {
             if cur & LEAF_BIT == 0 {
                 visited += 1;
-                let node = &bvh.nodes[cur as usize];
+                let node = &nodes[cur as usize];
                 let top: &mut [u32; WIDTH] = (&mut stack.nodes[sp..sp + WIDTH]).try_into().expect("eight entries");
                 let dists: &mut [f32; WIDTH] = (&mut stack.dists[sp..sp + WIDTH]).try_into().expect("eight entries");
                 let n = isa.visit_frustum(node, f, reach, &mut *top, &mut *dists, &mut slots) as usize;

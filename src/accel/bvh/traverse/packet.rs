@@ -108,6 +108,9 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
     pub fn shadow_packet(&mut self, rays: &[Ray], occluded: &mut [bool]) {
         let t = self.t;
         let (bvh, isa) = (t.bvh, t.isa);
+        // The node array in a local: the tree sits behind the walker, so the compiler would
+        // reload it after every store to the stack.
+        let nodes = &bvh.nodes[..];
         let stack = &mut *self.stack;
         let counters = &mut *self.counters;
         let n = rays.len().min(PACKET);
@@ -124,7 +127,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
         'trace: loop {
             let active = cur_rays & !hit;
             if active != 0 {
-                let node = &bvh.nodes[cur as usize];
+                let node = &nodes[cur as usize];
                 // Row k: the children ray k enters.
                 let (mut rows, mut any) = (0u64, 0u32);
                 visited += active.count_ones() as u64;

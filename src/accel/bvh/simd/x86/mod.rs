@@ -1,5 +1,5 @@
 //! The x86-64 kernels: the SSE4.1 and AVX2 implementations of the kernel traits. All the
-//! `unsafe` of the BVH lives below this module: each kernel can only be reached through a
+//! `unsafe` of the traversal lives below this module: each kernel can only be reached through a
 //! [`crate::cpu`] token whose constructor checked the CPU at run time.
 mod boxes;
 mod setup;
