@@ -1,7 +1,6 @@
 //! Ray and hit files in the format of the peers' harness, little-endian: a ray file is `RAYS`,
 //! u32 version 1, u64 count, then per ray 8 x f32 (origin, tmin, direction, tmax); a hit file is
 //! u64 count, then per ray f32 t (+inf on a miss) and u32 triangle index (u32::MAX on a miss).
-use wavepath::{Hit, Ray};
 use anyhow::{Context, Result, bail};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;

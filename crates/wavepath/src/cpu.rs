@@ -14,9 +14,6 @@ pub enum Isa {
     /// What the CPU has ([`Isa::detect`]) resolves to at most this.
     #[default]
     Avx2,
-    /// Accepted as a request; runs the AVX2 kernels (8 boxes or 8 paths fill one 256-bit
-    /// register, so 512-bit lanes would sit half empty).
-    Avx512,
 }
 
 impl Isa {
@@ -25,12 +22,14 @@ impl Isa {
         Isa::Avx2.effective()
     }
 
+    /// The instruction set a name asks for. `avx512` is accepted and means [`Isa::Avx2`]:
+    /// there is no AVX-512 kernel (8 boxes or 8 paths fill one 256-bit register, so 512-bit
+    /// lanes would sit half empty), and the best kernels there are run instead.
     pub fn parse(s: &str) -> Option<Isa> {
         match s.trim().to_ascii_lowercase().as_str() {
             "scalar" => Some(Isa::Scalar),
             "sse" | "sse4" | "sse4.1" => Some(Isa::Sse),
-            "avx2" => Some(Isa::Avx2),
-            "avx512" => Some(Isa::Avx512),
+            "avx2" | "avx512" => Some(Isa::Avx2),
             _ => None,
         }
     }
@@ -38,8 +37,8 @@ impl Isa {
     /// The path that actually runs for this request on this CPU (never one it lacks).
     pub fn effective(self) -> Isa {
         match self {
-            Isa::Avx512 | Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
-            Isa::Avx512 | Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
+            Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
+            Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
             _ => Isa::Scalar,
         }
     }
@@ -49,7 +48,6 @@ impl Isa {
             Isa::Scalar => "scalar",
             Isa::Sse => "sse",
             Isa::Avx2 => "avx2",
-            Isa::Avx512 => "avx512",
         }
     }
 
@@ -64,7 +62,7 @@ impl Isa {
     /// The AVX2 token, if this request allows it and the CPU has it.
     pub fn avx2(self) -> Option<Avx2> {
         match self.effective() {
-            Isa::Avx2 | Isa::Avx512 => Avx2::new(),
+            Isa::Avx2 => Avx2::new(),
             _ => None,
         }
     }

@@ -46,7 +46,7 @@ fn every_instruction_set_renders_the_scalar_image() {
         // Each path the CPU runs, once: a request this CPU cannot honour falls back to one
         // already compared.
         let mut ran = vec![Isa::Scalar];
-        for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+        for isa in [Isa::Sse, Isa::Avx2] {
             if ran.contains(&isa.effective()) {
                 eprintln!("{name}: {} runs as {}, compared already", isa.name(), isa.effective().name());
                 continue;
@@ -79,7 +79,7 @@ fn simd_paths_run_where_the_cpu_has_them() {
         if avx2 {
             assert_eq!(Isa::Avx2.effective(), Isa::Avx2);
             assert_eq!(Isa::default().effective(), Isa::Avx2);
-            assert!(Isa::Avx512.avx2().is_some());
+            assert!(Isa::parse("avx512").unwrap().avx2().is_some());
         } else {
             eprintln!("skipped the AVX2 check: this CPU has no AVX2");
         }

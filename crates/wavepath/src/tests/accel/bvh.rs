@@ -84,7 +84,7 @@ fn every_isa_gives_identical_hits() {
     }
     let mut c = TraceCounters::default();
     let want: Vec<_> = rays.iter().map(|r| reference.closest_hit(r, &mut c)).collect();
-    for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+    for isa in [Isa::Sse, Isa::Avx2] {
         let bvh = Bvh::build(&scene).with_isa(isa);
         let mut batch = vec![None; rays.len()];
         bvh.closest_hits(&rays, &mut batch, &mut c);
@@ -114,7 +114,7 @@ fn batches_of_every_isa_match_single_rays() {
     let want_any: Vec<_> = rays.iter().map(|r| reference.any_hit(r, &mut c)).collect();
     let occluded = want_any.iter().filter(|&&o| o).count();
     assert!(occluded > 200 && rays.len() - occluded > 200, "{occluded} of {} rays occluded", rays.len());
-    for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2, Isa::Avx512] {
+    for isa in [Isa::Scalar, Isa::Sse, Isa::Avx2] {
         let bvh = Bvh::build(&scene).with_isa(isa);
         let (mut hits, mut occluded) = (vec![None; rays.len()], vec![false; rays.len()]);
         let (mut c1, mut c2) = (TraceCounters::default(), TraceCounters::default());
@@ -219,7 +219,7 @@ fn every_isa_agrees_on_rays_ending_on_vertices() {
             let b = brute.closest_hit(r, &mut c);
             assert!(same_hit(b, *w), "{r:?}: bvh {w:?}, brute force {b:?}");
         }
-        for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+        for isa in [Isa::Sse, Isa::Avx2] {
             let bvh = Bvh::build(scene).with_isa(isa);
             let mut batch = vec![None; rays.len()];
             bvh.closest_hits(&rays, &mut batch, &mut c);

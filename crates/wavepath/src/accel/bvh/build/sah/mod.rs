@@ -7,19 +7,20 @@
 //! memory. They are left in place: closing them up wrote the nodes a second time into pages
 //! not yet touched while the old ones were still resident (at 25.6M triangles, 370 MB more
 //! at the build's peak, the peak of the whole run).
-use crate::sampling::splitmix64;
-use glam::{Vec3, Vec3A};
+mod bins;
+mod partition;
+mod sampled;
+mod small;
 
-/// Most primitives in one leaf (the wide leaves keep this bound).
-pub const MAX_LEAF: usize = 4;
-/// Bins per axis for the SAH sweep.
-const BINS: usize = 16;
-/// Subtrees with fewer primitives are built on the current thread.
-pub(super) const PARALLEL_MIN: usize = 4096;
+use super::binary::{C_TRAV, MAX_LEAF, Node2, PARALLEL_MIN, area, join_subtrees, node_bound};
+use bins::{BINS, Bins};
+use glam::{Vec3, Vec3A};
+use partition::{Cut, Sides, partition_par};
+use sampled::{Largest, SAMPLE, SAMPLED_MIN};
+use small::{FEW, cheapest_of_few};
+
 /// Below this many levels SAH splits are used; deeper, object-median splits bound the depth.
 const SAH_MAX_DEPTH: usize = 48;
-/// Cost of a node visit relative to one primitive test.
-pub const C_TRAV: f32 = 1.0;
 
 /// A set of up to [`MAX_LEAF`] triangles (one SIMD block) is split when the two halves' areas
 /// sum to less than this fraction of the set's area. Measured (docs/decisions.md, "Leaf cost
@@ -70,23 +71,6 @@ impl PrimRef {
     }
 }
 
-/// A binary node: leaf when `count > 0` (prims `a .. a + count` of the reordered refs),
-/// else inner with children `a` and `b`.
-#[derive(Clone, Copy, Debug, bytemuck::Pod, bytemuck::Zeroable)]
-#[repr(C)]
-pub struct Node2 {
-    pub lo: Vec3,
-    pub hi: Vec3,
-    pub a: u32,
-    pub b: u32,
-    pub count: u32,
-}
-
-pub fn area(lo: Vec3, hi: Vec3) -> f32 {
-    let d = (hi - lo).max(Vec3::ZERO);
-    2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
-}
-
 /// A node's box and the box of its primitives' centroids.
 type Bounds = (Vec3, Vec3, Vec3, Vec3);
 
@@ -121,80 +105,6 @@ pub fn build(refs: &mut [PrimRef]) -> Vec<Node2> {
     nodes
 }
 
-/// Most references a set keeps as its largest (see [`Largest`]).
-const LARGEST: usize = 32;
-
-/// The largest references of a set by box area, up to [`LARGEST`]: a sampled split (see
-/// [`SAMPLED_MIN`]) bins them beside its sample. A sample misses a scene's few large
-/// primitives (the walls of a room around a scanned statue), and their boxes decide where a
-/// good split is: without them the Cornell box around the 25.6M-triangle Lucy took 8.5 nodes
-/// per ray instead of 6.0 (full binning: 5.9). Even a few of the largest do it: there the
-/// walls are 3,072 triangles. The partition of a sampled set keeps each side's largest, so no
-/// pass but the root's looks for them.
-#[derive(Clone, Debug)]
-struct Largest {
-    /// (half the box's area, reference), in no order.
-    refs: Vec<(f32, PrimRef)>,
-    /// The smallest area kept once full (a reference must beat it), else -inf.
-    floor: f32,
-}
-
-impl Largest {
-    /// The largest references of `refs`, over chunks in parallel.
-    fn of_par(refs: &[PrimRef]) -> Largest {
-        use rayon::prelude::*;
-        refs.par_chunks(SPLIT_PAR_MIN)
-            .map(|c| {
-                let mut l = Largest::default();
-                c.iter().for_each(|r| l.offer(r));
-                l
-            })
-            .reduce(Largest::default, Largest::merge)
-    }
-
-    #[inline(always)]
-    fn offer(&mut self, r: &PrimRef) {
-        let d = r.hi - r.lo;
-        let key = d.x * d.y + d.y * d.z + d.z * d.x;
-        // A NaN area compares false: never kept.
-        if key > self.floor {
-            self.insert(key, r);
-        }
-    }
-
-    #[cold]
-    fn insert(&mut self, key: f32, r: &PrimRef) {
-        if self.refs.len() < LARGEST {
-            self.refs.push((key, *r));
-        } else if let Some(min) = self.refs.iter_mut().min_by(|a, b| a.0.total_cmp(&b.0)) {
-            *min = (key, *r);
-        }
-        if self.refs.len() == LARGEST {
-            self.floor = self.refs.iter().map(|e| e.0).fold(f32::INFINITY, f32::min);
-        }
-    }
-
-    fn merge(mut self, o: Largest) -> Largest {
-        for (key, r) in &o.refs {
-            if *key > self.floor {
-                self.insert(*key, r);
-            }
-        }
-        self
-    }
-}
-
-impl Default for Largest {
-    fn default() -> Largest {
-        Largest { refs: Vec::new(), floor: f32::NEG_INFINITY }
-    }
-}
-
-/// Most binary nodes over `n` primitives (every leaf holds one or more).
-pub(super) fn node_bound(n: usize) -> usize {
-    2 * n.max(1) - 1
-}
-
 /// Builds the subtree over `refs` into `nodes` (its root in `nodes[0]`, at index `at` of the
 /// whole array; child indices are absolute). `b`: the bounds of `refs` (known from the
 /// parent's split, so no pass computes them). Below [`PARALLEL_MIN`] primitives the subtree
@@ -214,7 +124,7 @@ fn build_into(
     let split = if refs.len() < PARALLEL_MIN { None } else { split_sides(refs, b, depth, &mut bins, &big) };
     drop(big);
     let Some((mid, lb, rb, [lbig, rbig])) = split else {
-        build_seq(refs, b, base, depth, nodes, at, &mut 0, &mut bins);
+        Seq { nodes, at, next: 0, bins: &mut bins }.build(refs, b, base, depth);
         return;
     };
     drop(bins);
@@ -230,303 +140,32 @@ fn build_into(
     );
 }
 
-/// Builds a node's two subtrees in parallel into their ranges of `nodes` (the node at
-/// `nodes[0]`, index `at` of the whole array; the left subtree, over `mid` primitives, from
-/// `at + 1`, the right one after the left's [`node_bound`]): `left` and `right` get their
-/// range and its absolute index. Then writes the node with the box `boxed` makes of the two
-/// results, and returns that box.
-pub(super) fn join_subtrees<A: Send, B: Send>(
-    nodes: &mut [Node2],
+/// The sequential build of a subtree into its range of the node array: nodes are written
+/// densely from the front of `nodes` (whose first is index `at` of the whole array), and
+/// `bins` is the scratch every [`split`] reuses.
+struct Seq<'a> {
+    nodes: &'a mut [Node2],
     at: usize,
-    mid: usize,
-    left: impl FnOnce(&mut [Node2], usize) -> A + Send,
-    right: impl FnOnce(&mut [Node2], usize) -> B + Send,
-    boxed: impl FnOnce(&A, &B) -> (Vec3, Vec3),
-) -> (Vec3, Vec3) {
-    let right_at = at + 1 + node_bound(mid);
-    let (me, rest) = nodes.split_first_mut().expect("a subtree has a node");
-    let (left_nodes, right_nodes) = rest.split_at_mut(node_bound(mid));
-    let (a, b) = rayon::join(|| left(left_nodes, at + 1), || right(right_nodes, right_at));
-    let (lo, hi) = boxed(&a, &b);
-    *me = Node2 { lo, hi, a: at as u32 + 1, b: right_at as u32, count: 0 };
-    (lo, hi)
+    /// The next free node of the range.
+    next: usize,
+    bins: &'a mut [Bins; 2],
 }
 
-/// Writes the subtree at `nodes[*next]` onwards; returns its root's absolute index. `bins`:
-/// scratch for [`split`].
-#[allow(clippy::too_many_arguments)]
-fn build_seq(
-    refs: &mut [PrimRef],
-    bnd: Bounds,
-    base: usize,
-    depth: usize,
-    nodes: &mut [Node2],
-    at: usize,
-    next: &mut usize,
-    bins: &mut [Bins; 2],
-) -> u32 {
-    let (lo, hi, _, _) = bnd;
-    let me = *next;
-    *next += 1;
-    nodes[me] = Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 };
-    if let Some((mid, lb, rb)) = split(refs, bnd, depth, bins) {
-        let (l, r) = refs.split_at_mut(mid);
-        let a = build_seq(l, lb, base, depth + 1, nodes, at, next, bins);
-        let b = build_seq(r, rb, base + mid, depth + 1, nodes, at, next, bins);
-        nodes[me] = Node2 { lo, hi, a, b, count: 0 };
-    }
-    (at + me) as u32
-}
-
-/// A box that grows (a bin's, or the centroids' of one side of a split); lo and hi side by
-/// side, so one cache line holds a bin of one axis.
-#[derive(Clone, Copy)]
-struct Box3 {
-    lo: Vec3A,
-    hi: Vec3A,
-}
-
-impl Box3 {
-    const EMPTY: Box3 = Box3 { lo: Vec3A::INFINITY, hi: Vec3A::NEG_INFINITY };
-
-    #[inline]
-    fn grow(&mut self, lo: Vec3A, hi: Vec3A) {
-        self.lo = self.lo.min(lo);
-        self.hi = self.hi.max(hi);
-    }
-
-    fn union(mut self, o: Box3) -> Box3 {
-        self.grow(o.lo, o.hi);
-        self
-    }
-
-    fn area(&self) -> f32 {
-        area(self.lo.into(), self.hi.into())
-    }
-}
-
-/// Per axis and bin: primitive count and box, gathered in one pass over the primitives (SIMD
-/// boxes: one min and one max per axis per primitive). The centroid bounds of the two sides
-/// are not binned: the partition sees every centroid anyway and takes them exactly there.
-struct Bins {
-    cnt: [[u32; BINS]; 3],
-    bin: [[Box3; BINS]; 3],
-}
-
-/// Sets of bins at least this large are gathered into two interleaved sets (even and odd
-/// primitives), merged at the end: neighbours in a mesh mostly fall into the same bin, and
-/// one set would make every primitive wait for the previous one's min/max to be stored.
-const TWO_SETS_MIN: usize = 64;
-
-impl Bins {
-    fn empty() -> Bins {
-        Bins { cnt: [[0; BINS]; 3], bin: [[Box3::EMPTY; BINS]; 3] }
-    }
-
-    #[inline]
-    fn add(&mut self, r: &PrimRef, clo: Vec3A, scale: Vec3A) {
-        let (lo, hi) = (Vec3A::from(r.lo), Vec3A::from(r.hi));
-        let k = bins_of(0.5 * (lo + hi), clo, scale);
-        for (ax, &k) in k.iter().enumerate() {
-            self.cnt[ax][k] += 1;
-            self.bin[ax][k].grow(lo, hi);
+impl Seq<'_> {
+    /// Writes the subtree over `refs` (leaf-order places `base ..`, bounds `bnd`) at the next
+    /// free node onwards; returns its root's absolute index.
+    fn build(&mut self, refs: &mut [PrimRef], bnd: Bounds, base: usize, depth: usize) -> u32 {
+        let (lo, hi, _, _) = bnd;
+        let me = self.next;
+        self.next += 1;
+        self.nodes[me] = Node2 { lo, hi, a: base as u32, b: 0, count: refs.len() as u32 };
+        if let Some((mid, lb, rb)) = split(refs, bnd, depth, self.bins) {
+            let (l, r) = refs.split_at_mut(mid);
+            let a = self.build(l, lb, base, depth + 1);
+            let b = self.build(r, rb, base + mid, depth + 1);
+            self.nodes[me] = Node2 { lo, hi, a, b, count: 0 };
         }
-    }
-
-    fn merge(&mut self, o: &Bins) {
-        for ax in 0..3 {
-            for k in 0..BINS {
-                self.cnt[ax][k] += o.cnt[ax][k];
-                self.bin[ax][k] = self.bin[ax][k].union(o.bin[ax][k]);
-            }
-        }
-    }
-
-    /// Empties the bins, in place (building a new set moved it through `memcpy` twice).
-    fn clear(&mut self) {
-        for ax in 0..3 {
-            self.cnt[ax] = [0; BINS];
-            for b in &mut self.bin[ax] {
-                *b = Box3::EMPTY;
-            }
-        }
-    }
-
-    /// Fills these bins with `refs` (`odd`: scratch for the second set). Bins are filled in
-    /// place, not returned: a set is 1.7 KB, and making and moving one per split was a
-    /// twentieth of the build's instructions, in `memcpy`.
-    fn gather(&mut self, refs: &[PrimRef], clo: Vec3, scale: Vec3, odd: &mut Bins) {
-        let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
-        self.clear();
-        if refs.len() < TWO_SETS_MIN {
-            refs.iter().for_each(|r| self.add(r, clo, scale));
-            return;
-        }
-        odd.clear();
-        let mut pairs = refs.chunks_exact(2);
-        for p in &mut pairs {
-            self.add(&p[0], clo, scale);
-            odd.add(&p[1], clo, scale);
-        }
-        pairs.remainder().iter().for_each(|r| self.add(r, clo, scale));
-        self.merge(odd);
-    }
-
-    /// The cheapest split of `n` primitives: (SAH cost, axis, first bin on the right), the
-    /// first minimum in axis then bin order; infinite when every split leaves a side empty
-    /// (a flat axis has all its primitives in bin 0, so it offers none).
-    fn cheapest(&self, n: usize) -> (f32, usize, usize) {
-        let mut best = (f32::INFINITY, 0usize, 0usize);
-        for ax in 0..3 {
-            let (cnt, bin) = (&self.cnt[ax], &self.bin[ax]);
-            // Only occupied bins are visited: an empty bin's boundary splits the primitives
-            // as the one below it does (the same cost, and the sweep keeps the first of
-            // equal costs), so small sets, which fill few of the bins, sweep few positions.
-            let occupied = (0..BINS).fold(0u32, |m, i| m | ((cnt[i] != 0) as u32) << i);
-            // Right-to-left: the cost of the right side from each occupied bin on.
-            let mut right_cost = [0f32; BINS];
-            let (mut side, mut c, mut m) = (Box3::EMPTY, 0u32, occupied);
-            while m != 0 {
-                let i = 31 - m.leading_zeros() as usize;
-                m &= !(1 << i);
-                side = side.union(bin[i]);
-                c += cnt[i];
-                right_cost[i] = side.area() * blocks(c);
-            }
-            let (mut side, mut c, mut m) = (Box3::EMPTY, 0u32, occupied);
-            while m != 0 {
-                let i = m.trailing_zeros() as usize;
-                m &= m - 1;
-                side = side.union(bin[i]);
-                c += cnt[i];
-                if c as usize == n {
-                    break;
-                }
-                // The right side starts at the next occupied bin; its boundary is `i + 1`.
-                let cost = side.area() * blocks(c) + right_cost[m.trailing_zeros() as usize];
-                if cost < best.0 {
-                    best = (cost, ax, i + 1);
-                }
-            }
-        }
-        best
-    }
-
-    /// Fills these bins with [`SAMPLE`] of `refs`: one from each of [`SAMPLE`] equal runs, at
-    /// a place hashed from the run's index (not every `k`-th: a mesh's order can repeat with a
-    /// period, a grid's rows, and a fixed stride would then see one column of it).
-    fn gather_sample(&mut self, refs: &[PrimRef], big: &Largest, clo: Vec3, scale: Vec3, odd: &mut Bins) {
-        let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
-        let run = refs.len() / SAMPLE;
-        debug_assert!(run >= 2);
-        let pick = |i: usize| &refs[i * run + (splitmix64(i as u64) % run as u64) as usize];
-        self.clear();
-        odd.clear();
-        for i in (0..SAMPLE).step_by(2) {
-            self.add(pick(i), clo, scale);
-            odd.add(pick(i + 1), clo, scale);
-        }
-        big.refs.iter().for_each(|(_, r)| self.add(r, clo, scale));
-        self.merge(odd);
-    }
-
-    /// Box of the primitives in bins `range` of axis `ax`.
-    fn union(&self, ax: usize, range: std::ops::Range<usize>) -> Box3 {
-        self.bin[ax][range].iter().fold(Box3::EMPTY, |a, &b| a.union(b))
-    }
-}
-
-/// `refs.swap(i, k)` field by field: the compiler copies a whole 28-byte reference through a
-/// stack slot with overlapping 16-byte moves, and reading back such a slot waits for both
-/// stores to retire (the wait was 5% of the build).
-#[inline(always)]
-fn swap_refs(refs: &mut [PrimRef], i: usize, k: usize) {
-    let (a, b) = (&refs[i], &refs[k]);
-    let (alo, ahi, akey) = (a.lo, a.hi, a.key);
-    let (blo, bhi, bkey) = (b.lo, b.hi, b.key);
-    refs[i].lo = blo;
-    refs[i].hi = bhi;
-    refs[i].key = bkey;
-    refs[k].lo = alo;
-    refs[k].hi = ahi;
-    refs[k].key = akey;
-}
-
-/// A side of a partition: the box of its primitives and the box of their centroids.
-type Sides = (Box3, Box3);
-
-/// Where a set is split: below or above bin boundary `bin` on axis `ax` of the binning frame
-/// (centroid lower corner `clo`, bins per unit `scale`).
-#[derive(Clone, Copy)]
-struct Cut {
-    ax: usize,
-    bin: usize,
-    clo: Vec3,
-    scale: Vec3,
-}
-
-/// Moves the primitives whose centroid falls in a bin below the cut to the front (Hoare's
-/// scheme: only misplaced pairs are swapped); returns how many they are and both sides'
-/// [`Sides`]: the centroid boxes always, the primitives' boxes and [`Largest`] references when
-/// `BOXES` (else empty: the bins of all the primitives already have them, and only a sampled
-/// set needs its largest).
-fn partition<const BOXES: bool>(refs: &mut [PrimRef], cut: Cut) -> (usize, Sides, Sides, [Largest; 2]) {
-    let Cut { ax, bin, clo, scale } = cut;
-    // `bins_of(c)[ax] < bin` on the split's one axis, by one compare instead of a clamp and a
-    // conversion of all three: the bin truncates `x = (c - clo) * scale` clamped to
-    // [0, BINS - 1] (a NaN to 0), and for a whole `bin` in 1..BINS that is below `bin`
-    // exactly when `x` is below `bin` or NaN (x below 0 or NaN: bin 0; x at BINS - 1 or
-    // above: the last bin). A NaN does occur: an extent so small that `scale` is infinite.
-    let (c0, s0, edge) = (clo[ax], scale[ax], bin as f32);
-    debug_assert!((1..BINS).contains(&bin));
-    let left = |c: Vec3A| {
-        let x = (c[ax] - c0) * s0;
-        x < edge || x.is_nan()
-    };
-    let (mut lc, mut rc) = (Box3::EMPTY, Box3::EMPTY);
-    let (mut lb, mut rb) = (Box3::EMPTY, Box3::EMPTY);
-    let (mut lbig, mut rbig) = (Largest::default(), Largest::default());
-    let grow = |b: &mut Box3, big: &mut Largest, r: &PrimRef| {
-        if BOXES {
-            b.grow(r.lo.into(), r.hi.into());
-            big.offer(r);
-        }
-    };
-    let (mut i, mut j) = (0, refs.len());
-    loop {
-        // The centroids that stopped each scan are kept for after the swap: read back from
-        // the references just swapped, they waited on the swap's stores.
-        let mut cr = Vec3A::ZERO;
-        while i < j {
-            cr = refs[i].centroid_a();
-            if !left(cr) {
-                break;
-            }
-            lc.grow(cr, cr);
-            grow(&mut lb, &mut lbig, &refs[i]);
-            i += 1;
-        }
-        let mut cl = Vec3A::ZERO;
-        while i < j {
-            cl = refs[j - 1].centroid_a();
-            if left(cl) {
-                break;
-            }
-            rc.grow(cl, cl);
-            grow(&mut rb, &mut rbig, &refs[j - 1]);
-            j -= 1;
-        }
-        if i == j {
-            return (i, (lb, lc), (rb, rc), [lbig, rbig]);
-        }
-        // refs[i] (centroid cr) belongs right and refs[j - 1] (centroid cl) left.
-        grow(&mut rb, &mut rbig, &refs[i]);
-        grow(&mut lb, &mut lbig, &refs[j - 1]);
-        swap_refs(refs, i, j - 1);
-        lc.grow(cl, cl);
-        rc.grow(cr, cr);
-        i += 1;
-        j -= 1;
+        (self.at + me) as u32
     }
 }
 
@@ -620,119 +259,15 @@ fn split_sides(
     Some((mid, side((bins.union(ax, 0..bin), lc)), side((bins.union(ax, bin..BINS), rc)), Default::default()))
 }
 
-/// Sets of at least this many primitives choose their split from the bins of a sample of
-/// [`SAMPLE`] of them, not of all: the top levels of a large mesh bin a sixteenth of their
-/// references or fewer, for the same SAH cost to a tenth of a percent (docs/decisions.md,
-/// "Build"). Smaller sets bin all: a sample misses the few large triangles of a scene's
-/// walls, and at 16k the top split of a dragon in a Cornell box changed enough to cost 2.5%
-/// more nodes per ray (or 0.6% fewer at 64k: the top split is sensitive either way), so
-/// scenes of up to 128k primitives keep the trees of full binning. Larger ones bin their
-/// [`Largest`] references beside the sample.
-const SAMPLED_MIN: usize = 1 << 17;
-/// References a sampled split bins.
-const SAMPLE: usize = 1 << 14;
-const _: () = assert!(SAMPLED_MIN >= 2 * SAMPLE && SAMPLE.is_multiple_of(2));
-
-/// Sets of at least this many primitives are partitioned by several threads.
+/// Sets of at least this many primitives are partitioned (and searched for their largest
+/// references) by several threads.
 const SPLIT_PAR_MIN: usize = 1 << 18;
-
-/// [`partition`] of halves in parallel, then the misplaced middle swapped into place: the
-/// shorter of the first half's right part and the second half's left part trades places
-/// with the far end of the other (the order within a side does not matter). The sides are
-/// the same sets as one pass would give.
-fn partition_par<const BOXES: bool>(refs: &mut [PrimRef], cut: Cut) -> (usize, Sides, Sides, [Largest; 2]) {
-    let n = refs.len();
-    if n < SPLIT_PAR_MIN {
-        return partition::<BOXES>(refs, cut);
-    }
-    let half = n / 2;
-    let (a, b) = refs.split_at_mut(half);
-    let ((ma, la, ra, [lbig, rbig]), (mb, lb, rb, [lbig_b, rbig_b])) =
-        rayon::join(|| partition_par::<BOXES>(a, cut), || partition_par::<BOXES>(b, cut));
-    // refs: [left of a: ma | right of a: half - ma | left of b: mb | right of b].
-    let moved = (half - ma).min(mb);
-    let (a, b) = refs.split_at_mut(half);
-    if half - ma <= mb {
-        a[ma..].swap_with_slice(&mut b[mb - moved..mb]);
-    } else {
-        a[ma..ma + moved].swap_with_slice(&mut b[..mb]);
-    }
-    let join = |a: Sides, b: Sides| (a.0.union(b.0), a.1.union(b.1));
-    (ma + mb, join(la, lb), join(ra, rb), [lbig.merge(lbig_b), rbig.merge(rbig_b)])
-}
-
-/// Sets of fewer primitives choose their split without bins (see [`cheapest_of_few`]).
-const FEW: usize = 5;
-
-/// [`Bins::cheapest`] for fewer than [`FEW`] primitives, with the same result. Each
-/// primitive's bin, plus one, is a candidate position; its two sides' boxes are unions of
-/// the primitives' (exact in any order, so the costs are the same numbers the bins give),
-/// and among equal costs the first axis and then the lowest position wins, as in the
-/// sweep. Every leaf is such a set (whether a block of large spread triangles is split is
-/// decided by its best split), and clearing and sweeping 3 x 16 bins cost far more than
-/// its few primitives: a tenth of the whole build.
-fn cheapest_of_few(refs: &[PrimRef], clo: Vec3, scale: Vec3) -> (f32, usize, usize) {
-    let n = refs.len();
-    debug_assert!(n < FEW);
-    let (clo, scale) = (Vec3A::from(clo), Vec3A::from(scale));
-    let (inf, ninf) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
-    let (mut lo, mut hi, mut k) = ([inf; FEW], [ninf; FEW], [[0usize; 3]; FEW]);
-    for (i, r) in refs.iter().enumerate() {
-        (lo[i], hi[i]) = (r.lo.into(), r.hi.into());
-        k[i] = bins_of(r.centroid_a(), clo, scale);
-    }
-    let mut best = (f32::INFINITY, 0usize, 0usize);
-    for ax in 0..3 {
-        for kp in &k[..n] {
-            let at = kp[ax] + 1;
-            // Branch-free: both sides' boxes as plain values (a `&mut` to one side was 4%
-            // of the build slower).
-            let (mut l, mut h, mut rl, mut rh, mut c) = (inf, ninf, inf, ninf, 0u32);
-            for ((kq, &plo), &phi) in k[..n].iter().zip(&lo).zip(&hi) {
-                if kq[ax] < at {
-                    (l, h, c) = (l.min(plo), h.max(phi), c + 1);
-                } else {
-                    (rl, rh) = (rl.min(plo), rh.max(phi));
-                }
-            }
-            let (left, right) = (Box3 { lo: l, hi: h }, Box3 { lo: rl, hi: rh });
-            if c as usize == n {
-                continue;
-            }
-            let cost = left.area() * blocks(c) + right.area() * blocks(n as u32 - c);
-            if cost < best.0 || (cost == best.0 && cost.is_finite() && (ax, at) < (best.1, best.2)) {
-                best = (cost, ax, at);
-            }
-        }
-    }
-    best
-}
-
-/// SAH weight of `c` primitives: the leaf blocks of [`MAX_LEAF`] they fill (the SIMD filter
-/// tests a block at about the cost of one primitive).
-#[inline]
-fn blocks(c: u32) -> f32 {
-    c.div_ceil(MAX_LEAF as u32) as f32
-}
-
-/// The bins of centroid `c` on the three axes (the same arithmetic for gathering and
-/// partitioning, so both put every primitive in the same bin).
-#[inline]
-fn bins_of(c: Vec3A, clo: Vec3A, scale: Vec3A) -> [usize; 3] {
-    // Clamped in SIMD, then truncated by one SSE2 conversion of all lanes (glam's casts go
-    // lane by lane with saturation checks, a tenth of the build). A NaN (0 x inf on a flat
-    // axis) is clamped to bin 0.
-    let x = ((c - clo) * scale).max(Vec3A::ZERO).min(Vec3A::splat(BINS as f32 - 1.0));
-    #[cfg(target_arch = "x86_64")]
-    // SAFETY: SSE2 is part of every x86-64 target.
-    let k: [i32; 4] = bytemuck::cast(unsafe { std::arch::x86_64::_mm_cvttps_epi32(x.into()) });
-    #[cfg(not(target_arch = "x86_64"))]
-    let k = [x.x as i32, x.y as i32, x.z as i32];
-    [k[0] as usize, k[1] as usize, k[2] as usize]
-}
 
 #[cfg(test)]
 mod tests {
+    use super::bins::{bins_of, blocks};
+    use super::partition::partition;
+    use super::sampled::LARGEST;
     use super::*;
 
     fn unit_box(at: Vec3, id: u32, sphere: bool) -> PrimRef {
@@ -829,9 +364,13 @@ mod tests {
         let nodes = build(&mut par);
         // The reference: the whole tree built on one thread, densely from the front.
         let mut reference: Vec<Node2> = bytemuck::zeroed_vec(node_bound(n));
-        let mut used = 0;
         let b = bounds(&seq);
-        build_seq(&mut seq, b, 0, 0, &mut reference, 0, &mut used, &mut [Bins::empty(), Bins::empty()]);
+        let mut bins = [Bins::empty(), Bins::empty()];
+        let used = {
+            let mut one = Seq { nodes: &mut reference, at: 0, next: 0, bins: &mut bins };
+            one.build(&mut seq, b, 0, 0);
+            one.next
+        };
         // Both walked from the root: the same nodes (boxes, leaf ranges, the same primitives
         // in each leaf: a parallel partition orders each side its own way); leaves covering
         // the references once, in order; a left child right after its parent; every node's

@@ -8,11 +8,10 @@
 //! would give NaN. Near and far planes are picked per axis by the sign of the direction, so
 //! each lane needs no min/max between the two planes and an empty slot (lo = +inf,
 //! hi = -inf) always gets entry +inf, exit -inf.
-use super::leaf::Tri4;
-use super::wide::{Node8, WIDTH, octant};
+use crate::accel::bvh::tree::{Node8, Tri4, octant};
 use crate::accel::triangle::ShearedRay;
 use crate::geometry::Ray;
-pub(super) use crate::geometry::error_bound::TIE_SCALE;
+pub use crate::geometry::error_bound::TIE_SCALE;
 
 /// 1 + 2 gamma(3) with gamma(n) = n u / (1 - n u), u = 2^-24, rounded up.
 pub const EXIT_SCALE: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5) + f32::EPSILON;
@@ -35,29 +34,29 @@ pub const fn far(oct: u32, axis: usize) -> usize {
 }
 
 /// Per-ray values for the box test. The layout is fixed (two 32-byte halves) so the AVX2
-/// set-up (`simd::box_ray`) writes each half with one store.
+/// set-up (`x86::setup::box_ray8`) writes each half with one store.
 #[derive(Clone, Copy, Debug)]
 #[repr(C, align(32))]
 pub struct BoxRay {
-    pub(super) org: [f32; 3],
-    pub(super) inv: [f32; 3],
-    pub(super) tmin: f32,
+    pub org: [f32; 3],
+    pub inv: [f32; 3],
+    pub tmin: f32,
     /// Direction octant ([`octant`]): picks the near and far planes and the visiting order.
-    pub(super) octant: u32,
+    pub octant: u32,
     /// `origin * inv` per axis, rounded up (near) and down (far) by more than its own rounding
     /// error, for the fused form `fma(plane, inv, -oi)` of the slab distance (see [`fma_terms`]).
-    pub(super) oi_near: [f32; 3],
-    pub(super) oi_far: [f32; 3],
+    pub oi_near: [f32; 3],
+    pub oi_far: [f32; 3],
     /// Whether every `oi` term is finite (else the kernels use the unfused form).
-    pub(super) fma: bool,
+    pub fma: bool,
     /// Whether the ray can hit anything at all (finite origin, finite non-zero direction,
     /// ordered non-NaN range).
-    pub(super) live: bool,
+    pub live: bool,
     /// Byte offsets in `Node8::b` of the near planes (x, y, z) and then the far planes of
     /// the octant: `PLANES[octant]`, always. Set up with the ray, so the node loop does not
     /// recompute the plane indices at every node (the SIMD kernels load at these offsets
     /// unchecked: each is `32 * plane` with plane < 6).
-    pub(super) planes: [u8; 6],
+    pub planes: [u8; 6],
 }
 
 /// [`BoxRay::planes`] of each octant.
@@ -138,8 +137,8 @@ impl BoxRay {
 /// quarter of a node test plus the traversal's entry and exit.
 #[derive(Clone, Copy, Debug)]
 pub struct RootBox {
-    pub(super) lo: [f32; 3],
-    pub(super) hi: [f32; 3],
+    pub lo: [f32; 3],
+    pub hi: [f32; 3],
 }
 
 impl RootBox {
@@ -172,22 +171,22 @@ impl RootBox {
 }
 
 /// The box-test bounds of a packet of rays that leave one point with directions in one
-/// octant ([`crate::accel::bvh::coherent`]): each axis's reciprocal direction as an interval.
+/// octant (the coherent packets of the traversal): each axis's reciprocal direction as an interval.
 /// A ray's unfused slab distance is `fl(fl(plane - origin) * inv)`; with the origin shared,
 /// `plane - origin` is one value for the whole packet, and a rounded product is monotone in
 /// each factor, so the distances at the interval's ends bound every ray's own, exactly. The
 /// packet therefore enters every box any of its rays' unfused tests enters (tested against
-/// per-ray tests in `coherent`).
+/// per-ray tests in the coherent traversal).
 #[derive(Clone, Copy, Debug)]
 pub struct Frustum {
-    pub(super) org: [f32; 3],
-    pub(super) inv_lo: [f32; 3],
-    pub(super) inv_hi: [f32; 3],
+    pub org: [f32; 3],
+    pub inv_lo: [f32; 3],
+    pub inv_hi: [f32; 3],
     /// The smallest `tmin` of the packet.
-    pub(super) tmin: f32,
-    pub(super) octant: u32,
+    pub tmin: f32,
+    pub octant: u32,
     /// [`BoxRay::planes`] of the octant.
-    pub(super) planes: [u8; 6],
+    pub planes: [u8; 6],
 }
 
 impl Frustum {
@@ -248,163 +247,11 @@ impl Frustum {
     }
 }
 
-/// [`BoxTest::set_up`], one ray at a time with `isa`'s [`BoxTest::box_ray`].
-#[inline(always)]
-pub fn set_up_each<B: BoxTest>(isa: B, root: Option<&RootBox>, rays: &[Ray], out: &mut [BoxRay]) -> u32 {
-    let mut mask = 0;
-    for (i, (r, o)) in rays.iter().zip(out).enumerate() {
-        *o = isa.box_ray(r);
-        mask |= (root.is_none_or(|root| root.admits(o, r.tmax)) as u32) << i;
-    }
-    mask
-}
-
-/// The per-instruction-set kernels of the traversal.
-pub trait BoxTest: Copy {
-    /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
-    /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
-    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;
-
-    /// [`BoxTest::test`] told the ray's form of the test (`fma` is [`BoxRay::fma`]), so a
-    /// caller can compile its loop once per form instead of branching on it per node.
-    #[inline(always)]
-    fn test_form(self, node: &Node8, r: &BoxRay, oct: u32, fma: bool, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        debug_assert_eq!(fma, r.fma);
-        self.test(node, r, oct, tmax, tnear)
-    }
-
-    /// Tests the children of `node` (as [`BoxTest::test`]) and, when two or more are hit,
-    /// pushes them in the node's order for the ray's octant, farthest first, so the nearest
-    /// is on top: `nodes` their references, `dists` their entry distances (the eight free
-    /// stack entries above the top: the SIMD path stores whole vectors). Returns the number
-    /// hit and the nearest of them (when only one is hit, it is not pushed). `oct` and `fma`
-    /// as in [`BoxTest::test_form`].
-    #[inline(always)]
-    #[allow(clippy::too_many_arguments)]
-    fn visit(
-        self,
-        node: &Node8,
-        r: &BoxRay,
-        oct: u32,
-        fma: bool,
-        tmax: f32,
-        nodes: &mut [u32; WIDTH],
-        dists: &mut [f32; WIDTH],
-    ) -> (u32, u32) {
-        debug_assert_eq!(fma, r.fma);
-        let mut tnear = [0f32; WIDTH];
-        let mask = self.test(node, r, oct, tmax, &mut tnear);
-        let n = mask.count_ones();
-        if n == 1 {
-            return (1, node.child[mask.trailing_zeros() as usize]);
-        }
-        let mut top = 0;
-        if n > 1 {
-            for k in node.perm {
-                let slot = (k >> (3 * oct) & 7) as usize;
-                if mask >> slot & 1 != 0 {
-                    nodes[top] = node.child[slot];
-                    dists[top] = tnear[slot];
-                    top += 1;
-                }
-            }
-            return (n, nodes[top - 1]);
-        }
-        (n, 0)
-    }
-
-    /// [`BoxTest::visit`] for a packet's [`Frustum`], with `tmax` the largest closest-hit
-    /// distance of its rays: the children some ray of the packet may enter, pushed in the
-    /// octant's order with the packet's entry distances and their slots in the node, all of
-    /// them (also a single one, so the caller always finds the nearest's distance on the
-    /// stack). Returns the number.
-    #[inline(always)]
-    fn visit_frustum(
-        self,
-        node: &Node8,
-        f: &Frustum,
-        tmax: f32,
-        nodes: &mut [u32; WIDTH],
-        dists: &mut [f32; WIDTH],
-        slots: &mut [u32; WIDTH],
-    ) -> u32 {
-        let mut top = 0;
-        for k in node.perm {
-            let slot = (k >> (3 * f.octant) & 7) as usize;
-            let (enter, exit) = f.span(node, slot);
-            if enter <= exit && enter <= tmax * TIE_SCALE {
-                nodes[top] = node.child[slot];
-                dists[top] = enter;
-                slots[top] = slot as u32;
-                top += 1;
-            }
-        }
-        top as u32
-    }
-
-    /// The set-up of a group of a batch: the rays that may enter `root` at all (bit `i`:
-    /// [`RootBox::admits`] by the ray's box-test values; every ray when there is no root
-    /// box), and those values in `out` (each [`BoxTest::box_ray`]; only the admitted rays'
-    /// are read). The AVX2 path sets up eight rays at once, the same values, and leaves an
-    /// eight none of which is admitted unwritten (one ray at a time, the set-up was 7% of a
-    /// diffuse ray's instructions).
-    #[inline(always)]
-    fn set_up(self, root: Option<&RootBox>, rays: &[Ray], out: &mut [BoxRay]) -> u32 {
-        set_up_each(self, root, rays, out)
-    }
-
-    /// The box-test values of `ray` ([`BoxRay::new`]; the AVX2 path computes the same values
-    /// in one register).
-    #[inline(always)]
-    fn box_ray(self, ray: &Ray) -> BoxRay {
-        BoxRay::new(ray)
-    }
-
-    /// Asks the cache for the [`PREFETCH_BYTES`] at `p` (a node or leaf block the traversal
-    /// will read soon), so several misses overlap instead of following one another. No
-    /// effect on results; the reference path does nothing. `p` need not be valid.
-    #[inline(always)]
-    fn prefetch_at(self, p: *const u8) {
-        let _ = p;
-    }
-
-    /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in
-    /// `[tmin, tmax]`: a cleared bit is a certain miss. The reference keeps every lane.
-    #[inline(always)]
-    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
-        let _ = (blk, sr, tmin, tmax);
-        lanes
-    }
-}
-
-/// The plain reference path.
-#[derive(Clone, Copy, Debug)]
-pub struct Scalar;
-
-impl BoxTest for Scalar {
-    #[inline(always)]
-    fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32 {
-        let mut mask = 0;
-        for (i, tn) in tnear.iter_mut().enumerate() {
-            let t0 = (node.b[near(oct, 0)][i] - r.org[0]) * r.inv[0];
-            let t1 = (node.b[near(oct, 1)][i] - r.org[1]) * r.inv[1];
-            let t2 = (node.b[near(oct, 2)][i] - r.org[2]) * r.inv[2];
-            let u0 = (node.b[far(oct, 0)][i] - r.org[0]) * r.inv[0];
-            let u1 = (node.b[far(oct, 1)][i] - r.org[1]) * r.inv[1];
-            let u2 = (node.b[far(oct, 2)][i] - r.org[2]) * r.inv[2];
-            // Same operation order as the SIMD paths, so every path visits the same nodes.
-            let enter = t0.max(t1).max(t2).max(r.tmin);
-            let exit = (u0.min(u1).min(u2) * EXIT_SCALE).min(tmax * TIE_SCALE);
-            *tn = enter;
-            mask |= ((enter <= exit) as u32) << i;
-        }
-        mask
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::bvh::simd::{BoxTest, Scalar};
+    use crate::accel::bvh::tree::WIDTH;
     use glam::Vec3;
 
     /// The quick root test never rejects a ray the node test accepts for a child of the

@@ -10,20 +10,17 @@
 //! leaf tests cover every leaf its single-ray traversal could find a closer hit in; the
 //! closest hit does not depend on the order leaves are tested in (ties go to the lower
 //! primitive id at any order), so each ray's hit is its single-ray hit, bit for bit.
-use super::Bvh;
-use super::boxtest::{BoxRay, Frustum, TIE_SCALE};
-use super::leaf::Tri4;
-use super::packet::{PACKET, PacketBoxRays, PacketShear, PacketTest};
-use super::traverse::{Best, closest_in_block, lane_hit, prefetch_child};
-use super::wide::{LEAF_BIT, WIDTH, leaf_range};
-use crate::accel::TraceCounters;
+use super::leaf::Best;
+use super::{BigStack, Tracer, Walker};
+use crate::accel::bvh::simd::{BoxRay, Frustum, PACKET, PacketBoxRays, PacketShear, PacketTest, TIE_SCALE};
+use crate::accel::bvh::tree::{LEAF_BIT, Tri4, WIDTH, leaf_range};
 use crate::geometry::{Hit, Ray};
 
 /// Rays per packet at most (a 4 x 4 block of pixels, or two pixels of eight samples).
 pub const COHERENT: usize = 16;
 
 /// A set of a packet's rays (bit `k`: ray `k`).
-type Rays = u32;
+pub type Rays = u32;
 const _: () = assert!(COHERENT <= Rays::BITS as usize && COHERENT.is_multiple_of(PACKET));
 
 /// Groups of [`PACKET`] rays in a packet: the SIMD kernels take one group at a time.
@@ -42,7 +39,7 @@ const MIN_COS: f32 = 0.9995;
 /// a packet with the first one (at most [`COHERENT`]): live, from the same origin, in the same
 /// octant and within the cone of [`MIN_COS`].
 #[inline(always)]
-pub(super) fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
+pub fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
     let lead = &prep[slot[0] as usize];
     // Most rays of a batch are not coherent (diffuse bounces): they fail here, before any
     // arithmetic.
@@ -63,23 +60,6 @@ pub(super) fn packet_len(rays: &[Ray], slot: &[u8], prep: &[BoxRay]) -> usize {
     n
 }
 
-/// The stack of packets: node references, the packet's entry distances and the rays that
-/// may enter each (bit `k`: ray `k`).
-pub(super) struct PacketStack {
-    nodes: Vec<u32>,
-    dists: Vec<f32>,
-    rays: Vec<Rays>,
-    /// The block of the leaf being tested, when the tree's leaves index their corners.
-    leaf: Tri4,
-}
-
-impl PacketStack {
-    pub(super) fn new(bvh: &Bvh) -> PacketStack {
-        let n = bvh.stack_need + WIDTH;
-        PacketStack { nodes: vec![0; n], dists: vec![0.0; n], rays: vec![0; n], leaf: Tri4::default() }
-    }
-}
-
 /// Closest hits of a packet: `out[k]` for `rays[k]` (at most [`COHERENT`], all joined by
 /// [`packet_len`]), whose bounds are `f`.
 ///
@@ -89,138 +69,150 @@ impl PacketStack {
 /// on 100k-triangle meshes but a third of the speed on 25.6M triangles: there the triangles
 /// are smaller than the rays' spacing, and the frustum between the rays enters many subtrees
 /// none of them does.)
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-pub(super) fn closest_packet<B: PacketTest>(
-    bvh: &Bvh,
-    isa: B,
-    rays: &[Ray],
-    f: &Frustum,
-    out: &mut [Option<Hit>],
-    counters: &mut TraceCounters,
-    stack: &mut PacketStack,
-) {
-    let m = rays.len();
-    debug_assert!((1..=COHERENT).contains(&m) && out.len() == m);
-    debug_assert!(stack.nodes.len() >= bvh.stack_need + WIDTH);
-    counters.rays += m as u64;
-    let mut best: [Best; COHERENT] =
-        std::array::from_fn(|k| Best::new(rays.get(k).map_or(f32::NEG_INFINITY, |r| r.tmax)));
-    // The rays' shears are set up at the first leaf, eight at a time.
-    let mut shears: Option<[PacketShear; GROUPS]> = None;
-    // And their box-test values, eight rays at a time, at the first node the packet enters
-    // (many packets of camera rays enter the root's box and none of its children).
-    let mut boxes: Option<[PacketBoxRays; GROUPS]> = None;
-    // Each ray's closest-hit distance so far, kept beside `best` for the eight-ray kernels
-    // (-inf past the packet's rays: they enter nothing).
-    let mut closest: [f32; COHERENT] = std::array::from_fn(|k| best[k].t);
-    // The largest closest-hit distance of the packet: what a box must be entered within.
-    let mut reach = farthest(&closest);
-    let all = Rays::MAX >> (Rays::BITS as usize - m);
-    let (mut sp, mut cur, mut entry, mut act) = (0usize, 0u32, f.tmin, all);
-    let (mut visited, mut tests) = (0u64, 0u64);
-    let mut slots = [0u32; WIDTH];
-    loop {
-        if cur & LEAF_BIT == 0 {
-            visited += 1;
-            let node = &bvh.nodes[cur as usize];
-            let top: &mut [u32; WIDTH] = (&mut stack.nodes[sp..sp + WIDTH]).try_into().expect("eight entries");
-            let dists: &mut [f32; WIDTH] = (&mut stack.dists[sp..sp + WIDTH]).try_into().expect("eight entries");
-            let n = isa.visit_frustum(node, f, reach, &mut *top, &mut *dists, &mut slots) as usize;
-            if n > 0 {
-                // Rays per child, from each ray's own test, eight rays at a time.
-                if boxes.is_none() {
-                    let mut b = [PacketBoxRays::EMPTY; GROUPS];
-                    for (g, b) in b.iter_mut().enumerate() {
-                        *b = isa.packet_box_rays(eighth(rays, g));
+impl<K: PacketTest> Walker<'_, K, &mut BigStack<Rays>> {
+    #[inline(always)]
+    pub fn coherent(&mut self, rays: &[Ray], f: &Frustum, out: &mut [Option<Hit>]) {
+        let t = self.t;
+        let (bvh, isa) = (t.bvh, t.isa);
+        // The node array in a local: the tree sits behind the walker, not behind an argument
+        // of this function, so the compiler would reload it after every store to the stack.
+        let nodes = &bvh.nodes[..];
+        let stack = &mut *self.stack;
+        let counters = &mut *self.counters;
+        let m = rays.len();
+        debug_assert!((1..=COHERENT).contains(&m) && out.len() == m);
+        debug_assert!(BigStack::<Rays>::holds(bvh.stack_need));
+        counters.rays += m as u64;
+        let mut best: [Best; COHERENT] =
+            std::array::from_fn(|k| Best::new(rays.get(k).map_or(f32::NEG_INFINITY, |r| r.tmax)));
+        // The rays' shears are set up at the first leaf, eight at a time.
+        let mut shears: Option<[PacketShear; GROUPS]> = None;
+        // And their box-test values, eight rays at a time, at the first node the packet enters
+        // (many packets of camera rays enter the root's box and none of its children).
+        let mut boxes: Option<[PacketBoxRays; GROUPS]> = None;
+        // Each ray's closest-hit distance so far, kept beside `best` for the eight-ray kernels
+        // (-inf past the packet's rays: they enter nothing).
+        let mut closest: [f32; COHERENT] = std::array::from_fn(|k| best[k].t);
+        // The largest closest-hit distance of the packet: what a box must be entered within.
+        let mut reach = farthest(&closest);
+        let all = Rays::MAX >> (Rays::BITS as usize - m);
+        let (mut sp, mut cur, mut entry, mut act) = (0usize, 0u32, f.tmin, all);
+        let (mut visited, mut tests) = (0u64, 0u64);
+        let mut slots = [0u32; WIDTH];
+        loop {
+            if cur & LEAF_BIT == 0 {
+                visited += 1;
+                let node = &nodes[cur as usize];
+                let top: &mut [u32; WIDTH] = (&mut stack.nodes[sp..sp + WIDTH]).try_into().expect("eight entries");
+                let dists: &mut [f32; WIDTH] = (&mut stack.dists[sp..sp + WIDTH]).try_into().expect("eight entries");
+                let n = isa.visit_frustum(node, f, reach, &mut *top, &mut *dists, &mut slots) as usize;
+                if n > 0 {
+                    // Rays per child, from each ray's own test, eight rays at a time.
+                    if boxes.is_none() {
+                        let mut b = [PacketBoxRays::EMPTY; GROUPS];
+                        for (g, b) in b.iter_mut().enumerate() {
+                            *b = isa.packet_box_rays(eighth(rays, g));
+                        }
+                        boxes = Some(b);
                     }
-                    boxes = Some(b);
-                }
-                let Some(boxes) = &boxes else { unreachable!("set above") };
-                let sets = &mut stack.rays[sp..sp + n];
-                sets.fill(0);
-                for (h, p) in boxes.iter().enumerate() {
-                    let lanes = act >> (PACKET * h) & 0xff;
-                    if lanes != 0 {
-                        let closest = eighth_of(&closest, h);
-                        for (set, &slot) in sets.iter_mut().zip(&slots) {
-                            let rays = isa.slot_rays(node, slot as usize, p, f.octant, closest) & lanes;
-                            *set |= (rays as Rays) << (PACKET * h);
+                    let Some(boxes) = &boxes else { unreachable!("set above") };
+                    let sets = &mut stack.rays[sp..sp + n];
+                    sets.fill(0);
+                    for (h, p) in boxes.iter().enumerate() {
+                        let lanes = act >> (PACKET * h) & 0xff;
+                        if lanes != 0 {
+                            let closest = eighth_of(&closest, h);
+                            for (set, &slot) in sets.iter_mut().zip(&slots) {
+                                let rays = isa.slot_rays(node, slot as usize, p, f.octant, closest) & lanes;
+                                *set |= (rays as Rays) << (PACKET * h);
+                            }
                         }
                     }
+                    for &r in top.iter().take(n) {
+                        t.prefetch_child(r);
+                    }
+                    // The pending children go on the stack, the nearest is taken now.
+                    sp += n - 1;
+                    (cur, entry, act) = (top[n - 1], dists[n - 1], stack.rays[sp]);
+                    if act != 0 {
+                        continue;
+                    }
                 }
-                for &r in top.iter().take(n) {
-                    prefetch_child(bvh, isa, r);
+            } else {
+                let (first, count) = leaf_range(cur);
+                let blk = bvh.block(first, &mut stack.leaf);
+                let todo = act & within(entry, &closest);
+                tests += (todo.count_ones() as usize * count) as u64;
+                // (Not in a closure: one compiled out of line would leave the AVX2 context.)
+                if shears.is_none() {
+                    let mut p = [PacketShear::EMPTY; GROUPS];
+                    for (g, p) in p.iter_mut().enumerate() {
+                        *p = isa.packet_shear(eighth(rays, g));
+                    }
+                    shears = Some(p);
                 }
-                // The pending children go on the stack, the nearest is taken now.
-                sp += n - 1;
-                (cur, entry, act) = (top[n - 1], dists[n - 1], stack.rays[sp]);
-                if act != 0 {
-                    continue;
+                let Some(shears) = &shears else { unreachable!("set above") };
+                for (h, p) in shears.iter().enumerate() {
+                    let lanes = todo >> (PACKET * h) & 0xff;
+                    if lanes != 0 {
+                        let at = PACKET * h;
+                        let closest = (&mut closest[at..at + PACKET]).try_into().expect("eight values");
+                        leaf_rays(
+                            t,
+                            Leaf { blk, count, p, rays: &rays[at..] },
+                            lanes,
+                            &mut best[at..at + PACKET],
+                            closest,
+                        );
+                    }
                 }
+                reach = farthest(&closest);
             }
-        } else {
-            let (first, count) = leaf_range(cur);
-            let blk = bvh.block(first, &mut stack.leaf);
-            let todo = act & within(entry, &closest);
-            tests += (todo.count_ones() as usize * count) as u64;
-            // (Not in a closure: one compiled out of line would leave the AVX2 context.)
-            if shears.is_none() {
-                let mut p = [PacketShear::EMPTY; GROUPS];
-                for (g, p) in p.iter_mut().enumerate() {
-                    *p = isa.packet_shear(eighth(rays, g));
+            // Pop the nearest pending child that some ray may still find something closer in.
+            loop {
+                if sp == 0 {
+                    counters.nodes += visited;
+                    counters.prim_tests += tests;
+                    for (o, b) in out.iter_mut().zip(&best) {
+                        *o = b.hit();
+                    }
+                    return;
                 }
-                shears = Some(p);
-            }
-            let Some(shears) = &shears else { unreachable!("set above") };
-            for (h, p) in shears.iter().enumerate() {
-                let lanes = todo >> (PACKET * h) & 0xff;
-                if lanes != 0 {
-                    let at = PACKET * h;
-                    let closest = (&mut closest[at..at + PACKET]).try_into().expect("eight values");
-                    leaf_rays(bvh, isa, blk, count, p, lanes, &rays[at..], &mut best[at..at + PACKET], closest);
+                sp -= 1;
+                if stack.rays[sp] != 0 && stack.dists[sp] <= reach * TIE_SCALE {
+                    (cur, entry, act) = (stack.nodes[sp], stack.dists[sp], stack.rays[sp]);
+                    break;
                 }
-            }
-            reach = farthest(&closest);
-        }
-        // Pop the nearest pending child that some ray may still find something closer in.
-        loop {
-            if sp == 0 {
-                counters.nodes += visited;
-                counters.prim_tests += tests;
-                for (o, b) in out.iter_mut().zip(&best) {
-                    *o = b.hit();
-                }
-                return;
-            }
-            sp -= 1;
-            if stack.rays[sp] != 0 && stack.dists[sp] <= reach * TIE_SCALE {
-                (cur, entry, act) = (stack.nodes[sp], stack.dists[sp], stack.rays[sp]);
-                break;
             }
         }
     }
 }
 
+/// A leaf's block as a packet's eight rays test it: `count` primitives of `blk`, and the
+/// rays with their leaf set-up `p`.
+#[derive(Clone, Copy)]
+struct Leaf<'a> {
+    blk: &'a Tri4,
+    count: usize,
+    p: &'a PacketShear,
+    rays: &'a [Ray],
+}
+
 /// The leaf tests of the rays `lanes` (bit `k`: `rays[k]`, lane `k` of `p`) in `blk`, a leaf
 /// of `count` primitives, each ray with its own closest hit so far (`best[k]`). Where the
 /// instruction set has the kernel and the rays share their axes, each triangle is tested
-/// for all the rays at once ([`super::packet::TriRays`]: the kernel's hits are the scalar
+/// for all the rays at once ([`crate::accel::bvh::simd::TriRays`]: the kernel's hits are the scalar
 /// test's, and the rays it leaves undecided take the scalar test one by one), in any order
 /// (the closest hit does not depend on it). `closest[k]` follows `best[k].t`.
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn leaf_rays<B: PacketTest>(
-    bvh: &Bvh,
-    isa: B,
-    blk: &Tri4,
-    count: usize,
-    p: &PacketShear,
+fn leaf_rays<K: PacketTest>(
+    t: Tracer<'_, K>,
+    leaf: Leaf<'_>,
     lanes: u32,
-    rays: &[Ray],
     best: &mut [Best],
     closest: &mut [f32; PACKET],
 ) {
+    let Leaf { blk, count, p, rays } = leaf;
     let lead = lanes.trailing_zeros() as usize;
     let mut shared = true;
     let mut rest = lanes;
@@ -235,7 +227,7 @@ fn leaf_rays<B: PacketTest>(
         for lane in 0..count {
             let mut cand = lanes;
             if blk.tri_lanes >> lane & 1 != 0 {
-                let Some(r) = isa.tri_rays(blk, lane, &lead_shear, closest) else {
+                let Some(r) = t.isa.tri_rays(blk, lane, &lead_shear, closest) else {
                     break;
                 };
                 let mut exact = r.exact & lanes;
@@ -251,7 +243,7 @@ fn leaf_rays<B: PacketTest>(
                 let k = cand.trailing_zeros() as usize;
                 cand &= cand - 1;
                 let ray = &rays[k];
-                if let Some(h) = lane_hit(bvh, blk, lane, &p.sheared(k, ray), ray, best[k].t) {
+                if let Some(h) = t.lane_hit(blk, lane, &p.sheared(k, ray), ray, best[k].t) {
                     best[k].offer(h, blk.ids[lane]);
                     closest[k] = best[k].t;
                 }
@@ -266,7 +258,7 @@ fn leaf_rays<B: PacketTest>(
     while rest != 0 {
         let k = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        closest_in_block(bvh, isa, blk, count, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
+        t.closest_in_block(blk, count, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
         closest[k] = best[k].t;
     }
 }
@@ -311,8 +303,8 @@ fn eighth(rays: &[Ray], g: usize) -> &[Ray] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::boxtest::{BoxTest, Scalar};
-    use crate::accel::bvh::wide::Node8;
+    use crate::accel::bvh::simd::{BoxTest, Scalar};
+    use crate::accel::bvh::tree::Node8;
     use crate::accel::triangle::{ShearedRay, intersect_sheared};
     use glam::Vec3;
 

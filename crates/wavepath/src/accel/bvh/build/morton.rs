@@ -3,14 +3,14 @@
 //! Lauterbach et al. 2009), instead of by the SAH. One sort and one pass over the sorted
 //! codes replace the binned build's binning and partition of every level; the tree is worse
 //! (rays take 6-12% longer on the meshes measured, docs/decisions.md, "Fast build"). The
-//! result is the binary tree [`super::build::build`] makes (the same node array layout,
+//! result is the binary tree [`super::sah::build`] makes (the same node array layout,
 //! leaves of at most [`MAX_LEAF`]), so the collapse, the leaf store and every traversal are
 //! shared, and the closest hits are those of any other tree.
 //!
 //! No primitive references are made: a primitive's box is computed where it is needed, from
 //! the scene, so the build holds the sort keys (8 bytes a primitive) where the SAH build
 //! holds its references (28).
-use super::build::{MAX_LEAF, Node2, PARALLEL_MIN, join_subtrees, node_bound};
+use super::binary::{MAX_LEAF, Node2, PARALLEL_MIN, join_subtrees, node_bound};
 use glam::Vec3;
 use rayon::prelude::*;
 

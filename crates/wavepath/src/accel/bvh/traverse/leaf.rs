@@ -1,0 +1,112 @@
+//! The leaf tests every loop shares: the SIMD filter drops certain misses, then the exact
+//! (watertight) test decides each remaining lane; and the closest hit so far.
+use super::Tracer;
+use crate::accel::bvh::simd::BoxTest;
+use crate::accel::bvh::tree::{Tri4, leaf_range};
+use crate::accel::sphere;
+use crate::accel::triangle::{ShearedRay, intersect_sheared};
+use crate::geometry::{Hit, Ray};
+use glam::Vec3;
+
+/// The closest hit so far.
+pub struct Best {
+    pub t: f32,
+    prim: u32,
+    u: f32,
+    v: f32,
+    found: bool,
+}
+
+impl Best {
+    /// Nothing found yet within `[tmin, tmax]`.
+    #[inline(always)]
+    pub fn new(tmax: f32) -> Best {
+        Best { t: tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false }
+    }
+
+    /// Takes a hit at `t` (barycentrics `u`, `v`) on primitive `id` if it is closer, or as
+    /// close with a lower id: the same closest hit whatever order the hits come in.
+    #[inline(always)]
+    pub fn offer(&mut self, (t, u, v): (f32, f32, f32), id: u32) {
+        if !self.found || t < self.t || (t == self.t && id < self.prim) {
+            *self = Best { t, prim: id, u, v, found: true };
+        }
+    }
+
+    #[inline(always)]
+    pub fn hit(&self) -> Option<Hit> {
+        self.found.then_some(Hit { t: self.t, prim: self.prim, u: self.u, v: self.v })
+    }
+}
+
+/// The ray's shear, set up at its first leaf (many rays never reach one). Not
+/// `Option::get_or_insert_with`: its closure was compiled out of line, a call (and a leave
+/// of the AVX2 context) at every leaf.
+#[inline(always)]
+pub fn shear<'a>(sr: &'a mut Option<ShearedRay>, ray: &Ray) -> &'a ShearedRay {
+    match sr {
+        Some(sr) => sr,
+        None => sr.insert(ShearedRay::of(ray)),
+    }
+}
+
+impl<K: BoxTest> Tracer<'_, K> {
+    /// Lanes of a leaf's block of `count` primitives that need the scalar test.
+    #[inline(always)]
+    pub fn block_candidates(self, blk: &Tri4, count: usize, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 {
+        let all = (1u32 << count) - 1;
+        self.isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes)
+    }
+
+    /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the
+    /// filter just read (already in cache); spheres from the tree's sphere list.
+    #[inline(always)]
+    pub fn lane_hit(self, blk: &Tri4, lane: usize, sr: &ShearedRay, ray: &Ray, tmax: f32) -> Option<(f32, f32, f32)> {
+        let bvh = self.bvh;
+        if blk.tri_lanes >> lane & 1 != 0 {
+            let corner = |k: usize| Vec3::new(blk.c[k][0][lane], blk.c[k][1][lane], blk.c[k][2][lane]);
+            intersect_sheared(sr, ray.tmin, tmax, corner(0), corner(1), corner(2))
+        } else {
+            let (centre, radius) = bvh.spheres[(blk.ids[lane] - bvh.tri_count) as usize];
+            let r = Ray { tmax, ..*ray };
+            sphere::intersect(&r, centre, radius).map(|t| (t, 0.0, 0.0))
+        }
+    }
+
+    /// Offers `best` the hits of leaf `r` closer than it (`scratch` holds the leaf's block
+    /// when the leaves index their corners).
+    #[inline(always)]
+    pub fn leaf_closest(self, r: u32, sr: &ShearedRay, ray: &Ray, best: &mut Best, scratch: &mut Tri4) {
+        let (first, count) = leaf_range(r);
+        self.closest_in_block(self.bvh.block(first, scratch), count, sr, ray, best);
+    }
+
+    /// [`Tracer::leaf_closest`] in a leaf's block of `count` primitives, already at hand.
+    #[inline(always)]
+    pub fn closest_in_block(self, blk: &Tri4, count: usize, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
+        let mut cand = self.block_candidates(blk, count, sr, ray.tmin, best.t);
+        while cand != 0 {
+            let lane = cand.trailing_zeros() as usize;
+            cand &= cand - 1;
+            if let Some(h) = self.lane_hit(blk, lane, sr, ray, best.t) {
+                best.offer(h, blk.ids[lane]);
+            }
+        }
+    }
+
+    /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
+    #[inline(always)]
+    pub fn leaf_any(self, r: u32, sr: &ShearedRay, ray: &Ray, scratch: &mut Tri4) -> bool {
+        let (first, count) = leaf_range(r);
+        let blk = self.bvh.block(first, scratch);
+        let mut cand = self.block_candidates(blk, count, sr, ray.tmin, ray.tmax);
+        while cand != 0 {
+            let lane = cand.trailing_zeros() as usize;
+            cand &= cand - 1;
+            if self.lane_hit(blk, lane, sr, ray, ray.tmax).is_some() {
+                return true;
+            }
+        }
+        false
+    }
+}
