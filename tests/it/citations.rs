@@ -4,7 +4,7 @@
 //! `crates/*/*.md` (whole text); the comments of `src/**/*.rs`, `tests/**/*.rs`,
 //! `benches/**/*.rs` and of each `crates/*` crate's; `tools/*` and `.ci/*` (whole text).
 //! Cited: repository paths (`src/...`, `tests/...`, `tools/<name>.py`, `BENCHMARKS.md`, ...; a
-//! path whose first folder is a folder under a `src/`, such as `accel/bvh/traverse.rs`, is
+//! path whose first folder is a folder under a `src/`, such as `accel/bvh/query.rs`, is
 //! looked up under every `src/`), Markdown links with their anchors (relative to the document's
 //! folder; rustdoc's `Self::x` links are not files), and sections cited by name after a
 //! Markdown file, as in `docs/decisions.md, "Shadow packets"` or `BENCHMARKS.md "Renders"`.
