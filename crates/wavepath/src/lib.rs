@@ -58,10 +58,10 @@ extern crate self as wavepath;
 mod tests;
 
 // Scenes: load one, or build one from plain data.
-pub use load::{CameraMode, LoadOptions, MAX_FILE_BYTES, default_scene, load, load_collada_str, write_ply};
+pub use load::{CameraMode, LoadOptions, default_scene, load, write_ply};
 pub use scene::{
-    Bsdf, CS184_FOCAL_DISTANCE, Camera, EnvMap, Environment, FovFit, Light, Material, MaterialIds, Mesh, Scene, Sphere,
-    Texture, format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
+    Bsdf, Camera, EnvMap, Environment, FovFit, Light, Material, MaterialIds, Mesh, Scene, Sphere, Texture,
+    format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
 };
 
 // What a render does.
@@ -72,7 +72,7 @@ pub use settings::{BvhBuild, BvhOptions, Cell, IntegratorKind, LeafLayout, Setti
 // Rays: the acceleration structures and their queries.
 pub use accel::{BruteForce, BuildInfo, Bvh, Intersector, TraceCounters, build as build_accel};
 pub use geometry::{Hit, Ray};
-pub use raysets::{cosine_direction, diffuse_rays, primary_rays};
+pub use raysets::{diffuse_rays, primary_rays};
 
 // Renders and what they produce.
 pub use effects::{Effect, Effects};

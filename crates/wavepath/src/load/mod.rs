@@ -8,7 +8,6 @@ pub mod gltf;
 pub mod obj;
 pub mod ply;
 
-pub use collada::parse_str as load_collada_str;
 pub use defaults::{default_scene, finish_mesh_only};
 pub use ply::write_binary as write_ply;
 
