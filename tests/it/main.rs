@@ -8,6 +8,7 @@ mod accel;
 mod cli;
 mod common;
 mod cs184;
+mod flags;
 mod integrator;
 mod load;
 mod parts;
