@@ -9,6 +9,7 @@ mod citations;
 mod cli;
 mod common;
 mod cs184;
+mod flags;
 mod integrator;
 mod load;
 mod parts;

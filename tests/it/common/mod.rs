@@ -7,6 +7,7 @@ pub mod agree;
 pub mod cdp;
 #[path = "../../../crates/wavepath/src/tests/common/meshgen.rs"]
 pub mod meshgen;
+pub mod pfm;
 // Some helpers of these files only the engine's tests use.
 #[allow(dead_code)]
 #[path = "../../../crates/wavepath/src/tests/common/render.rs"]

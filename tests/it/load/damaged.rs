@@ -6,6 +6,11 @@
 //!
 //! The mutations come from a fixed-seed generator, so a failure reproduces; the case number
 //! and its kind are in the message.
+//!
+//! Scene files that load (`info` succeeds) are also rendered, a deterministic sample of
+//! them: per format, the first loading case of each kind of damage (at most four renders a
+//! format), tiny (8x6, 1 spp, depth 2, PFM). Each render succeeds and writes an 8x6 image
+//! with finite pixels, or fails with one line naming the file.
 
 use crate::common::{self, Xorshift, temp_dir};
 use std::path::Path;
@@ -101,9 +106,54 @@ struct Format {
     output: Option<(&'static str, Vec<u8>)>,
 }
 
-fn run_cases(f: &Format, root: &Path, seed: u64) -> (usize, usize) {
+/// The render of a loading scene case: `info`'s scene, tiny, into `{}/render.pfm`.
+fn render_args(f: &Format) -> Option<Vec<String>> {
+    (f.args.first().map(String::as_str) == Some("info")).then(|| {
+        let mut a = f.args[1..].to_vec();
+        a.extend(args(&["-r", "8", "6", "-s", "1", "-m", "2", "-f", "{}/render.pfm"]));
+        a
+    })
+}
+
+/// Renders a case that loaded (see the module comment): success with a finite 8x6 image, or
+/// one line naming the file. Returns whether it rendered.
+fn render_case(f: &Format, dir: &Path, what: &str) -> bool {
+    let Some(list) = render_args(f) else { return false };
+    let args: Vec<String> = list.iter().map(|a| a.replace("{}", dir.to_str().unwrap())).collect();
+    let out = common::run_wavepath(&args);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.code().is_some(), "{what}, rendered: killed by a signal; stderr: {err}");
+    assert!(!err.contains("panicked"), "{what}, rendered: {err}");
+    if out.status.success() {
+        let image = common::pfm::read_pfm(&dir.join("render.pfm"));
+        assert_eq!((image.width, image.height), (8, 6), "{what}, rendered");
+        assert!(image.pixels.iter().flatten().all(|c| c.is_finite()), "{what}, rendered: a NaN or Inf pixel");
+        true
+    } else {
+        let lines: Vec<&str> = err.lines().filter(|l| l.starts_with("error") || !l.starts_with("[wavepath]")).collect();
+        assert!(
+            lines.len() == 1 && f.names.iter().any(|n| lines[0].contains(n)),
+            "{what}, rendered: expected one error line naming one of {:?}, got:\n{err}",
+            f.names
+        );
+        false
+    }
+}
+
+/// What a format's cases did: refused, loaded, and of the loaded ones sampled for a render,
+/// how many rendered (the others failed with one line naming the file).
+#[derive(Default)]
+struct Outcome {
+    refused: usize,
+    loaded: usize,
+    sampled: usize,
+    rendered: usize,
+}
+
+fn run_cases(f: &Format, root: &Path, seed: u64) -> Outcome {
     let mut rng = Xorshift(seed);
-    let (mut failed, mut ok) = (0, 0);
+    let mut n = Outcome::default();
+    let mut render_kinds = [true; KINDS.len()];
     for case in 0..CASES {
         let kind = KINDS[case % KINDS.len()];
         let dir = root.join(format!("{}-{case}", f.what.replace(' ', "_")));
@@ -119,12 +169,16 @@ fn run_cases(f: &Format, root: &Path, seed: u64) -> (usize, usize) {
         assert!(out.status.code().is_some(), "{what}: killed by a signal; stderr: {err}");
         assert!(!err.contains("panicked"), "{what}: {err}");
         if out.status.success() {
-            ok += 1;
+            n.loaded += 1;
             if let Some((file, want)) = &f.output {
                 assert!(std::fs::read(dir.join(file)).unwrap() == *want, "{what}: loaded, but {file} differs");
             }
+            if render_args(f).is_some() && std::mem::take(&mut render_kinds[case % KINDS.len()]) {
+                n.sampled += 1;
+                n.rendered += usize::from(render_case(f, &dir, &what));
+            }
         } else {
-            failed += 1;
+            n.refused += 1;
             let lines: Vec<&str> = err.lines().filter(|l| !l.trim().is_empty()).collect();
             assert_eq!(lines.len(), 1, "{what}: expected one line, got:\n{err}");
             assert!(
@@ -135,7 +189,7 @@ fn run_cases(f: &Format, root: &Path, seed: u64) -> (usize, usize) {
         }
         let _ = std::fs::remove_dir_all(&dir);
     }
-    (failed, ok)
+    n
 }
 
 fn authored(name: &str) -> Vec<u8> {
@@ -344,7 +398,7 @@ fn damaged_environment_maps_and_part_files_fail_with_one_line_through_the_binary
 /// Runs every format's cases, the formats side by side; each format must have refused some
 /// of its damaged files (else the damage missed what the reader checks).
 fn check_all(formats: &[Format], root: &Path) {
-    let results: Vec<(usize, usize)> = std::thread::scope(|s| {
+    let results: Vec<Outcome> = std::thread::scope(|s| {
         let handles: Vec<_> = formats
             .iter()
             .enumerate()
@@ -352,8 +406,16 @@ fn check_all(formats: &[Format], root: &Path) {
             .collect();
         handles.into_iter().map(|h| h.join().unwrap()).collect()
     });
-    for (f, (failed, ok)) in formats.iter().zip(results) {
-        eprintln!("{}: {failed} refused, {ok} loaded", f.what);
-        assert!(failed >= CASES / 4, "{}: only {failed} of {CASES} damaged files refused", f.what);
+    let mut rendered_total = 0;
+    for (f, n) in formats.iter().zip(results) {
+        let Outcome { refused, loaded, sampled, rendered } = n;
+        eprintln!("{}: {refused} refused, {loaded} loaded; {sampled} of those rendered: {rendered} succeeded", f.what);
+        assert!(refused >= CASES / 4, "{}: only {refused} of {CASES} damaged files refused", f.what);
+        rendered_total += rendered;
+    }
+    // The scene formats load some damaged files (a changed number, a cut comment), and the
+    // sample renders them: a sample that renders nothing tests nothing.
+    if formats.iter().any(|f| render_args(f).is_some()) {
+        assert!(rendered_total >= 8, "only {rendered_total} damaged scenes rendered");
     }
 }

@@ -57,9 +57,11 @@ struct Region {
 /// Both renders estimate one image: every `size` x `size` region's mean agrees within the
 /// threshold, the variance of each side being the larger of the two estimates, plus
 /// `rel_tol` of the mean (for differences in rounding that are not noise). Returns the
-/// largest |z| seen.
-pub fn assert_regions_agree(a: &Accumulator, b: &Accumulator, size: usize, rel_tol: f64, what: &str) -> f64 {
-    assert_eq!((a.width, a.height), (b.width, b.height), "{what}: sizes differ");
+/// largest |z| seen, or the first region that fails (or why nothing could be compared).
+pub fn regions_agree(a: &Accumulator, b: &Accumulator, size: usize, rel_tol: f64, what: &str) -> Result<f64, String> {
+    if (a.width, a.height) != (b.width, b.height) {
+        return Err(format!("{what}: sizes differ"));
+    }
     let all = |_: usize, _: usize| true;
     let (nx, ny) = (a.width / size, a.height / size);
     let z_max = z_threshold(nx * ny * 3);
@@ -72,43 +74,52 @@ pub fn assert_regions_agree(a: &Accumulator, b: &Accumulator, size: usize, rel_t
                 let sd = (2.0 * ra.var[c].max(rb.var[c])).sqrt();
                 let tol = rel_tol * ra.mean[c].abs().max(rb.mean[c].abs()) + 1e-9 * ra.pixels as f64;
                 if sd == 0.0 {
-                    assert!(
-                        d <= tol,
-                        "{what}: region ({rx},{ry}) channel {c}: {} vs {} with zero variance",
-                        ra.mean[c],
-                        rb.mean[c]
-                    );
+                    if d > tol {
+                        return Err(format!(
+                            "{what}: region ({rx},{ry}) channel {c}: {} vs {} with zero variance",
+                            ra.mean[c], rb.mean[c]
+                        ));
+                    }
                     continue;
                 }
                 tested += 1;
                 let z = (d - tol).max(0.0) / sd;
                 worst = worst.max(z);
                 let n = ra.pixels as f64;
-                assert!(
-                    z < z_max,
-                    "{what}: region ({rx},{ry}) channel {c}: mean {} vs {} (sd {}, z = {z:.2} >= {z_max:.2})",
-                    ra.mean[c] / n,
-                    rb.mean[c] / n,
-                    sd / n
-                );
+                if z >= z_max {
+                    return Err(format!(
+                        "{what}: region ({rx},{ry}) channel {c}: mean {} vs {} (sd {}, z = {z:.2} >= {z_max:.2})",
+                        ra.mean[c] / n,
+                        rb.mean[c] / n,
+                        sd / n
+                    ));
+                }
             }
         }
     }
-    assert!(tested > 0, "{what}: nothing to compare");
-    worst
+    if tested == 0 {
+        return Err(format!("{what}: nothing to compare"));
+    }
+    Ok(worst)
+}
+
+/// [`regions_agree`], panicking with its message when the renders disagree.
+pub fn assert_regions_agree(a: &Accumulator, b: &Accumulator, size: usize, rel_tol: f64, what: &str) -> f64 {
+    regions_agree(a, b, size, rel_tol, what).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Every `size` x `size` region's mean, over the pixels that have an expected value, is
 /// within the threshold of the expected values' mean, plus `rel_tol` of it (for the error of
 /// the expectation itself: a quadrature, or f32 against f64); exactly equal where the
-/// estimate has no variance. Returns the largest |z| and the number of pixels checked.
-pub fn assert_regions_match(
+/// estimate has no variance. Returns the largest |z| and the number of pixels checked, or the
+/// first region that fails.
+pub fn regions_match(
     acc: &Accumulator,
     size: usize,
     expected: impl Fn(usize, usize) -> Option<DVec3>,
     rel_tol: f64,
     what: &str,
-) -> (f64, usize) {
+) -> Result<(f64, usize), String> {
     let (nx, ny) = (acc.width / size, acc.height / size);
     let z_max = z_threshold(nx * ny * 3);
     let mut want = vec![None; acc.width * acc.height];
@@ -145,18 +156,30 @@ pub fn assert_regions_match(
                     f64::INFINITY
                 };
                 worst = worst.max(z);
-                assert!(
-                    z < z_max,
-                    "{what}: region ({rx},{ry}) channel {c}, {} pixels: mean {} expected {} (sd {}, z = {z:.2})",
-                    r.pixels,
-                    r.mean[c] / n,
-                    e[c] / n,
-                    sd / n
-                );
+                if z >= z_max {
+                    return Err(format!(
+                        "{what}: region ({rx},{ry}) channel {c}, {} pixels: mean {} expected {} (sd {}, z = {z:.2})",
+                        r.pixels,
+                        r.mean[c] / n,
+                        e[c] / n,
+                        sd / n
+                    ));
+                }
             }
         }
     }
-    (worst, checked)
+    Ok((worst, checked))
+}
+
+/// [`regions_match`], panicking with its message when a region does not match.
+pub fn assert_regions_match(
+    acc: &Accumulator,
+    size: usize,
+    expected: impl Fn(usize, usize) -> Option<DVec3>,
+    rel_tol: f64,
+    what: &str,
+) -> (f64, usize) {
+    regions_match(acc, size, expected, rel_tol, what).unwrap_or_else(|e| panic!("{e}"))
 }
 
 #[test]

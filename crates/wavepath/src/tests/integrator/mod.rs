@@ -2,6 +2,7 @@
 //! reference, effects and stages, environment maps, the thin lens, ray offsets and
 //! numerical stability.
 
+mod agree_controls;
 mod analytic;
 mod effects;
 mod emitter_sides;
