@@ -310,7 +310,9 @@ fn tonemap_srgb_writes_the_srgb_curve() {
         255.0 * if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 }
     };
     let cs184 = |l: f64| 255.0 * (2f64.sqrt() * l.max(0.0)).powf(1.0 / 2.2).min(1.0);
-    let cases: [(&str, &[&str], &dyn Fn(f64) -> f64, fn(f64) -> f64, f64); 3] = [
+    // (name, flags, curve from linear to 0..255, rounding to a byte, where rounding flips)
+    type Case<'a> = (&'a str, &'a [&'a str], &'a dyn Fn(f64) -> f64, fn(f64) -> f64, f64);
+    let cases: [Case; 3] = [
         ("srgb", &["--tonemap", "srgb"], &srgb, f64::round, 0.5),
         ("cs184", &["--tonemap", "cs184"], &cs184, f64::floor, 0.0),
         ("default", &[], &cs184, f64::floor, 0.0),
