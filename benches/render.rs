@@ -46,11 +46,20 @@ fn main() {
     let (bvh, _) = wavepath::build_accel(&scene, &Default::default());
     let pool = rayon::ThreadPoolBuilder::new().num_threads(2).build().expect("thread pool");
     pool.install(|| {
-        let base = Settings { width: 240, height: 180, spp: 16, light_samples: 4, threads: 2, ..Settings::default() };
+        let mut base = Settings::default();
+        base.image.width = 240;
+        base.image.height = 180;
+        base.sampling.spp = 16;
+        base.sampling.light_samples = 4;
+        base.execution.threads = 2;
         for (name, depth, shading) in [("direct -m 1", 1, Shading::Direct), ("global -m 5", 5, Shading::Global)] {
-            let needed = Settings { max_depth: depth, shading, ..base.clone() };
-            let forced = Settings { all_effects: true, ..needed.clone() };
-            let recursive = Settings { integrator: IntegratorKind::Recursive, ..needed.clone() };
+            let mut needed = base.clone();
+            needed.paths.max_depth = depth;
+            needed.paths.shading = shading;
+            let mut forced = needed.clone();
+            forced.execution.all_effects = true;
+            let mut recursive = needed.clone();
+            recursive.execution.integrator = IntegratorKind::Recursive;
             let r = best(&scene, bvh.as_ref(), &[&needed, &forced, &recursive]);
             println!(
                 "{} {name} 240x180 -s 16 -l 4, 2 threads: needed {:.3} s ({:.2} Mrays/s), all effects {:.3} s \

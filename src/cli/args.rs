@@ -130,6 +130,7 @@ pub struct RenderArgs {
     #[arg(short = 'o', value_name = "0|1", default_value_t = 1)]
     pub accumulate: i64,
     /// Adaptive sampling: every B samples stop a pixel once 1.96 sigma/sqrt(n) <= T mu.
+    /// Also writes <out>_rate.png, each pixel's samples (written only with -a).
     #[arg(short = 'a', num_args = 2, value_names = ["B", "T"])]
     pub adaptive: Option<Vec<f64>>,
     /// Worker threads (default: all cores).

@@ -155,11 +155,20 @@ impl Fov {
     }
 }
 
-/// How Russian roulette decides (a command-line choice: it sets `Settings::rr_throughput`).
+/// How Russian roulette decides (a command-line choice: it sets `Roulette::kind`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum Roulette {
     /// Continue with the fixed probability `--rr` from the second bounce on (the seed's rule).
     Fixed,
     /// Continue with the path's throughput (its largest component, at most 1), as pbrt-v4.
     Throughput,
+}
+
+impl From<Roulette> for wavepath::RouletteKind {
+    fn from(r: Roulette) -> Self {
+        match r {
+            Roulette::Fixed => wavepath::RouletteKind::Fixed,
+            Roulette::Throughput => wavepath::RouletteKind::Throughput,
+        }
+    }
 }

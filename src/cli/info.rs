@@ -13,14 +13,20 @@ pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
     let mut scene = super::load_scene(&a.scene, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?;
     if let Some(e) = &a.envmap {
-        scene.env = Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?));
+        scene.set_environment(Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?)));
     }
     let load_s = t0.elapsed().as_secs_f64();
     // The camera as a render at the default resolution sees it.
     scene.camera.fit_to(800.0, 600.0);
-    let effects = Effects::of(&scene, &Settings::default());
-    let text =
-        if a.json { format!("{}\n", summary_json(&scene, &effects, load_s)) } else { text(&scene, &effects, load_s) };
+    // The settings a render of this file starts from (its dialect's defaults), as the
+    // command line uses them.
+    let settings = Settings::for_scene(&scene);
+    let effects = Effects::of(&scene, &settings);
+    let text = if a.json {
+        format!("{}\n", summary_json(&scene, &settings, &effects, load_s))
+    } else {
+        text(&scene, &settings, &effects, load_s)
+    };
     // A closed pipe (`wavepath info ... | head`) is not an error worth a panic.
     use std::io::Write;
     match std::io::stdout().lock().write_all(text.as_bytes()) {
@@ -42,7 +48,7 @@ fn environment(env: &Environment) -> String {
     }
 }
 
-pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json::Value {
+pub fn summary_json(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> serde_json::Value {
     let c = &scene.camera;
     let lights: Vec<_> = scene.lights.iter().map(|l| json!({ "kind": l.kind(), "detail": format!("{l:?}") })).collect();
     let materials: Vec<_> = scene
@@ -52,6 +58,12 @@ pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json
         .collect();
     json!({
         "scene": scene.name,
+        "reader": scene.source.reader,
+        "dialect": scene.source.dialect.name(),
+        "defaults": {
+            "sampler": settings.sampling.sampler.name(),
+            "roulette": wavepath::roulette_json(&settings.paths.roulette),
+        },
         "triangles": scene.mesh.triangle_count(),
         "vertices": scene.mesh.positions.len(),
         "has_normals": scene.mesh.normals.is_some(),
@@ -75,12 +87,21 @@ pub fn summary_json(scene: &Scene, effects: &Effects, load_s: f64) -> serde_json
     })
 }
 
-fn text(scene: &Scene, effects: &Effects, load_s: f64) -> String {
+fn text(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> String {
     use std::fmt::Write;
     let mut o = String::new();
     let c = &scene.camera;
     let _ = writeln!(o, "scene:      {}", scene.name);
     let _ = writeln!(o, "load time:  {load_s:.4} s");
+    let _ = writeln!(o, "read by:    {} ({} dialect)", scene.source.reader, scene.source.dialect.name());
+    let r = &settings.paths.roulette;
+    let _ = writeln!(
+        o,
+        "defaults:   --sampler {} --roulette {} --rr-depth {}",
+        settings.sampling.sampler.name(),
+        r.kind.name(),
+        r.start_depth
+    );
     let _ = writeln!(o, "triangles:  {}", scene.mesh.triangle_count());
     let _ = writeln!(o, "vertices:   {}", scene.mesh.positions.len());
     let _ = writeln!(o, "spheres:    {}", scene.spheres.len());
@@ -101,7 +122,7 @@ fn text(scene: &Scene, effects: &Effects, load_s: f64) -> String {
     for m in &scene.materials {
         let _ = writeln!(o, "  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
     }
-    let _ = writeln!(o, "effects (at the default settings):");
+    let _ = writeln!(o, "effects (at the scene's default settings):");
     for e in &effects.on {
         let _ = writeln!(o, "  {} ({})", e.name, e.reason);
     }

@@ -10,9 +10,11 @@ pub fn run(a: &MergeArgs) -> Result<()> {
     let m = &merged.parts[0];
     let film = merged.acc.to_film();
     wavepath::write_image(&film, &a.output, a.tonemap.into())?;
-    let rate = wavepath::rate_film(film.width, film.height, &merged.acc.samples_taken(), m.spp);
-    let rate_path = rate_image_path(&a.output);
-    wavepath::write_rate_image(&rate, &rate_path)?;
+    // As `wavepath -a`: the sample-rate image only for adaptive renders.
+    if m.adaptive {
+        let rate = wavepath::rate_film(film.width, film.height, &merged.acc.samples_taken(), m.spp);
+        wavepath::write_rate_image(&rate, &rate_image_path(&a.output))?;
+    }
     let stats = merged.stats_json();
     eprintln!(
         "[wavepath] Merged {} parts ({} split) of {} {}x{}: {} rays, slowest part {:.3} s render, {:.3} s wall",

@@ -6,25 +6,27 @@ use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::path::PathBuf;
 use std::time::Instant;
+use wavepath::Settings;
 use wavepath_apps::parts::{PartMeta, PartSpec, PartStats, identity};
 
 pub fn run(a: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
-    let s = settings(a)?;
+    let checked = settings(a, Settings::default())?;
     let text = a.part.as_deref().unwrap_or("auto");
     let spec = PartSpec::parse(text, a.parts, a.split.into(), &|k| std::env::var(k).ok())?;
-    spec.check(&s)?;
+    spec.check(&checked)?;
     let out: PathBuf = match &a.output {
         Some(p) if p.extension().and_then(|e| e.to_str()).is_some_and(|e| e.eq_ignore_ascii_case("exr")) => p.clone(),
         Some(p) => bail!("{}: a part is written as OpenEXR; give -f PART.exr", p.display()),
         None => bail!("--part needs -f PART.exr (where the part file goes)"),
     };
-    let scene = prepare_scene(a, &s)?;
-    if s.use_bvh {
-        super::check_build_memory(&scene, s.bvh.leaves, a.max_memory)?;
+    let scene = prepare_scene(a, &checked)?;
+    let s = settings(a, Settings::for_scene(&scene))?;
+    if s.accel.use_bvh {
+        super::check_build_memory(&scene, s.accel.bvh.leaves, a.max_memory)?;
     }
     let scene_hash = identity::scene_hash(&scene);
-    let (acc, mut stats) = wavepath::with_threads(s.threads, || -> Result<_> {
+    let (acc, mut stats) = wavepath::with_threads(s.execution.threads, || -> Result<_> {
         let (accel, build) = wavepath::build_accel(&scene, &s);
         let (acc, mut stats) = wavepath_apps::parts::render_part(&scene, accel.as_ref(), &s, &spec, &|_| {})?;
         stats.build_s = build.build_s;
@@ -39,9 +41,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         scene: scene.name.clone(),
         scene_hash,
         settings: identity::settings_key(&s),
-        width: s.width,
-        height: s.height,
-        spp: s.spp,
+        width: s.image.width,
+        height: s.image.height,
+        spp: s.sampling.spp,
+        adaptive: s.sampling.adaptive.is_some(),
         stats: stats.clone(),
         pixels: String::new(),
     };

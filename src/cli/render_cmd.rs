@@ -30,7 +30,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     if let Some(c) = &a.camera_file {
         scene.camera = read_camera_file(c)?;
     }
-    a.fov.apply(&mut scene.camera, s.width, s.height);
+    a.fov.apply(&mut scene.camera, s.image.width, s.image.height);
     if let Some(b) = a.lens_radius {
         scene.camera.lens_radius = b as f32;
     }
@@ -38,40 +38,45 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
         scene.camera.focal_distance = d as f32;
     }
     if let Some(e) = &a.envmap {
-        scene.env = wavepath::Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?));
+        scene.set_environment(wavepath::Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?)));
     }
     Ok(scene)
 }
 
 pub fn run(a: &RenderArgs) -> Result<()> {
-    let s = settings(a)?;
+    // The flags are checked before the (possibly long) load, then applied on top of the
+    // defaults of the dialect the loader found.
+    let checked = settings(a, Settings::default())?;
     let out: PathBuf = a.output.clone().unwrap_or_else(|| PathBuf::from("wavepath.png"));
     check_output_extension(&out)?;
     let t0 = Instant::now();
-    let scene = super::with_spinner("loading", || prepare_scene(a, &s))?;
+    let scene = super::with_spinner("loading", || prepare_scene(a, &checked))?;
+    let s = settings(a, Settings::for_scene(&scene))?;
     let load_s = t0.elapsed().as_secs_f64();
     eprintln!(
-        "[wavepath] Loaded {} in {:.3} s: {} triangles, {} spheres, {} lights",
+        "[wavepath] Loaded {} in {:.3} s ({} reader, {} dialect): {} triangles, {} spheres, {} lights",
         scene.name,
         load_s,
+        scene.source.reader,
+        scene.source.dialect.name(),
         scene.mesh.triangle_count(),
         scene.spheres.len(),
         scene.lights.len()
     );
-    if s.use_bvh {
-        super::check_build_memory(&scene, s.bvh.leaves, a.max_memory)?;
+    if s.accel.use_bvh {
+        super::check_build_memory(&scene, s.accel.bvh.leaves, a.max_memory)?;
     }
     let effects = Effects::of(&scene, &s);
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
     }
-    if s.cs184_light_pdf {
+    if s.cs184.light_pdf {
         eprintln!(
             "[wavepath] --cs184-light-pdf: area-light samples use the course renderer's pdf, dist / (area cos): \
              biased, each estimate times the distance to the light"
         );
     }
-    let (film, build) = wavepath::with_threads(s.threads, || -> Result<_> {
+    let (film, build) = wavepath::with_threads(s.execution.threads, || -> Result<_> {
         eprintln!("[wavepath] Collected {} primitives", scene.primitive_count());
         let (accel, build) = super::with_spinner("building the BVH", || wavepath::build_accel(&scene, &s));
         let mb = |b: usize| b as f64 / 1e6;
@@ -100,9 +105,11 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     })??;
     let wavepath::RenderOutput { film, stats, samples } = film;
     wavepath::write_image(&film, &out, a.tonemap.into())?;
-    if s.shading != wavepath::Shading::Normals {
+    // The sample-rate image shows where adaptive sampling spent its samples; a fixed-rate
+    // render's would be one flat grey nobody asked for.
+    if s.sampling.adaptive.is_some() && s.paths.shading != wavepath::Shading::Normals {
         let rate_path = rate_image_path(&out);
-        let rate = wavepath::rate_film(film.width, film.height, &samples, s.spp);
+        let rate = wavepath::rate_film(film.width, film.height, &samples, s.sampling.spp);
         wavepath::write_rate_image(&rate, &rate_path)?;
         eprintln!("[wavepath] Wrote sample-rate image {}", rate_path.display());
     }
@@ -127,11 +134,11 @@ pub fn rate_image_path(out: &Path) -> PathBuf {
 /// A progress bar over camera samples, only when stderr is a terminal.
 fn progress_bar(s: &Settings) -> Option<indicatif::ProgressBar> {
     use std::io::IsTerminal;
-    if !std::io::stderr().is_terminal() || s.shading == wavepath::Shading::Normals {
+    if !std::io::stderr().is_terminal() || s.paths.shading == wavepath::Shading::Normals {
         return None;
     }
     let r = s.region();
-    let total = (r.w * r.h) as u64 * s.spp.max(1) as u64;
+    let total = (r.w * r.h) as u64 * s.sampling.spp.max(1) as u64;
     let bar = indicatif::ProgressBar::new(total);
     bar.set_style(
         indicatif::ProgressStyle::with_template("[wavepath] {bar:40} {percent:>3}% {elapsed_precise} eta {eta}")

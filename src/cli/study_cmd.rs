@@ -91,21 +91,20 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
     if !(a.time_budget.is_finite() && a.time_budget > 0.0) {
         bail!("--time-budget must be a positive number of seconds, got {}", a.time_budget);
     }
-    let base = Settings {
-        width: w,
-        height: h,
-        spp: 1,
-        light_samples: in_range("-l", a.light_samples, 1, 1 << 16)? as u32,
-        max_depth,
-        rr_continue: a.rr as f32,
-        shading: if max_depth > 1 { Shading::Global } else { Shading::Direct },
-        seed: a.seed,
-        sampler: a.sampler.map(Into::into).unwrap_or(super::settings_from_args::default_sampler(a.scene.as_deref())),
-        threads: match a.threads {
-            Some(t) => in_range("-t", t, 1, 4096)? as usize,
-            None => 0,
-        },
-        ..Settings::default()
+    let mut base = Settings::default();
+    base.image.width = w;
+    base.image.height = h;
+    base.sampling.spp = 1;
+    base.sampling.light_samples = in_range("-l", a.light_samples, 1, 1 << 16)? as u32;
+    base.paths.max_depth = max_depth;
+    base.paths.roulette.continue_prob = a.rr as f32;
+    base.paths.shading = if max_depth > 1 { Shading::Global } else { Shading::Direct };
+    base.sampling.seed = a.seed;
+    // Without --sampler, the scene's dialect decides (in `run`, once it is loaded).
+    base.sampling.sampler = a.sampler.map(Into::into).unwrap_or_default();
+    base.execution.threads = match a.threads {
+        Some(t) => in_range("-t", t, 1, 4096)? as usize,
+        None => 0,
     };
     Ok(StudyConfig {
         sweep: a.sweep.into(),
@@ -118,19 +117,22 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
 }
 
 pub fn run(a: &StudyArgs) -> Result<()> {
-    let cfg = config(a)?;
+    let mut cfg = config(a)?;
     let mut scene = match &a.scene {
         Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
         None => default_scene(),
     };
-    a.fov.apply(&mut scene.camera, cfg.base.width, cfg.base.height);
+    if a.sampler.is_none() {
+        cfg.base.sampling.sampler = Settings::for_scene(&scene).sampling.sampler;
+    }
+    a.fov.apply(&mut scene.camera, cfg.base.image.width, cfg.base.image.height);
     let identity = wavepath_apps::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
     let camera_label = format!("{:?} {:?}", CameraMode::from(a.camera), a.fov);
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
-    let result = wavepath::with_threads(cfg.base.threads, || -> Result<_> {
+    let result = wavepath::with_threads(cfg.base.execution.threads, || -> Result<_> {
         let (accel, _) = wavepath::build_accel(&scene, &cfg.base);
         wavepath_apps::study::run(&scene, accel.as_ref(), &identity, &camera_label, &stem, &cfg, &log)
     })??;

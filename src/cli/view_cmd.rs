@@ -5,42 +5,47 @@ use super::render_cmd::prepare_scene;
 use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::net::SocketAddr;
-use wavepath::Bvh;
+use wavepath::{Bvh, Settings};
 use wavepath_apps::view::{ViewOptions, Viewer};
 
 /// The samples-per-pixel cap when `-s` is left at its default of 1.
 const DEFAULT_CAP: u32 = 1024;
 
 pub fn run(a: &ViewArgs) -> Result<()> {
-    let mut s = settings(&a.render)?;
-    if a.render.spp == 1 {
-        s.spp = DEFAULT_CAP;
-    }
+    let checked = settings(&a.render, Settings::default())?;
     if let Some(d) = &a.save_dir
         && !d.is_dir()
     {
         bail!("{}: --save-dir is not a folder", d.display());
     }
-    let scene = super::with_spinner("loading", || prepare_scene(&a.render, &s))?;
-    super::check_build_memory(&scene, s.bvh.leaves, a.render.max_memory)?;
-    let bvh = super::with_spinner("building the BVH", || Bvh::build_with(&scene, s.bvh).with_isa(s.isa));
+    let scene = super::with_spinner("loading", || prepare_scene(&a.render, &checked))?;
+    let mut s = settings(&a.render, Settings::for_scene(&scene))?;
+    if a.render.spp == 1 {
+        s.sampling.spp = DEFAULT_CAP;
+    }
+    super::check_build_memory(&scene, s.accel.bvh.leaves, a.render.max_memory)?;
+    let bvh =
+        super::with_spinner("building the BVH", || Bvh::build_with(&scene, s.accel.bvh).with_isa(s.execution.isa));
     let opts = ViewOptions {
         listen: SocketAddr::new(a.listen, a.port),
         save_dir: a.save_dir.clone(),
         scene_path: a.render.scene.as_ref().map(|p| p.display().to_string()),
         envmap_path: a.render.envmap.as_ref().map(|p| p.display().to_string()),
-        sampler: s.sampler.name().to_string(),
+        sampler: s.sampling.sampler.name().to_string(),
     };
     let viewer = Viewer::bind(&scene, s.clone(), &opts)?;
     // The URL on stdout (scripts and tests read it); everything else on stderr.
     println!("http://{}/", viewer.addr);
-    eprintln!("[wavepath view] {} at {}x{}, up to {} spp; Ctrl-C stops", scene.name, s.width, s.height, s.spp);
+    eprintln!(
+        "[wavepath view] {} at {}x{}, up to {} spp; Ctrl-C stops",
+        scene.name, s.image.width, s.image.height, s.sampling.spp
+    );
     if !a.listen.is_loopback() {
         eprintln!("[wavepath view] listening on {}: reachable from the network", a.listen);
     }
     let session = viewer.session.clone();
     ctrlc::set_handler(move || session.stop())?;
-    wavepath::with_threads(s.threads, || viewer.run(scene, &bvh, &opts))?;
+    wavepath::with_threads(s.execution.threads, || viewer.run(scene, &bvh, &opts))?;
     eprintln!("[wavepath view] stopped");
     // The render thread has been joined. Connections whose clients stopped reading may still
     // block their writers (and the server's drop on them): the process ends without waiting.

@@ -31,6 +31,10 @@ pub struct PartMeta {
     pub width: usize,
     pub height: usize,
     pub spp: u32,
+    /// The render sampled adaptively (`-a`): the merge then writes the sample-rate image, as
+    /// the render of the whole would (absent in older part files: false).
+    #[serde(default)]
+    pub adaptive: bool,
     pub stats: PartStats,
     /// [`super::identity::pixels_hash`] of the sums, set when the part is encoded and
     /// checked when it is read.

@@ -71,6 +71,10 @@ pub fn scene_hash(scene: &Scene) -> String {
 /// The settings that decide the image, as text: everything except what only decides how
 /// it is computed (threads) or which part is computed (cell, sample range).
 pub fn settings_key(s: &Settings) -> String {
-    let canonical = Settings { threads: 0, cell: None, sample_range: None, isa: Default::default(), ..s.clone() };
+    let mut canonical = s.clone();
+    canonical.execution.threads = 0;
+    canonical.image.cell = None;
+    canonical.sampling.sample_range = None;
+    canonical.execution.isa = Default::default();
     format!("{canonical:?}")
 }

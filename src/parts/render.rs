@@ -19,15 +19,17 @@ pub fn render_part(
 ) -> Result<(Accumulator, PartStats)> {
     spec.check(s)?;
     let mut stats = PartStats::default();
-    let (first, end) = spec.sample_range(s.spp);
-    let mut acc = Accumulator::new(s.width, s.height);
+    let (first, end) = spec.sample_range(s.sampling.spp);
+    let mut acc = Accumulator::new(s.image.width, s.image.height);
     // Each band is one ordinary render of a `-p` cell: the integrators give a pixel the same
     // sums whatever the cell, which is what makes the tile merge exact.
-    for cell in spec.cells(s.width, s.height) {
-        let part = Settings { cell: Some(cell), sample_range: Some((first, end)), ..s.clone() };
+    for cell in spec.cells(s.image.width, s.image.height) {
+        let mut part = s.clone();
+        part.image.cell = Some(cell);
+        part.sampling.sample_range = Some((first, end));
         let (sums, st) = wavepath::render_sums(scene, accel, &part, progress)?;
         stats.add_render(&st);
-        let rows = cell.y * s.width..(cell.y + cell.h) * s.width;
+        let rows = cell.y * s.image.width..(cell.y + cell.h) * s.image.width;
         acc.pixels[rows.clone()].copy_from_slice(&sums.pixels[rows]);
     }
     Ok((acc, stats))

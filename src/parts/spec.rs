@@ -101,25 +101,25 @@ impl PartSpec {
 
     /// Checks that the settings can be split this way.
     pub fn check(&self, s: &Settings) -> Result<()> {
-        if s.cell.is_some() {
+        if s.image.cell.is_some() {
             bail!("--part cannot be combined with -p (a part already chooses its own pixels)");
         }
-        if s.shading == wavepath::Shading::Normals {
+        if s.paths.shading == wavepath::Shading::Normals {
             bail!("--part renders light transport only; --shading normals has no sums to merge");
         }
         if self.split == Split::Samples {
-            if s.adaptive.is_some() {
+            if s.sampling.adaptive.is_some() {
                 bail!(
                     "--split samples cannot be used with adaptive sampling (-a): whether a pixel stops \
                      depends on all its earlier samples, which other parts take; use --split tiles"
                 );
             }
-            if s.spp < self.count {
+            if s.sampling.spp < self.count {
                 bail!(
                     "--split samples with {} parts needs at least {} samples per pixel (-s), got {}",
                     self.count,
                     self.count,
-                    s.spp
+                    s.sampling.spp
                 );
             }
         }

@@ -106,13 +106,17 @@ pub fn run(
     let curves = curves(cfg.sweep, &cfg.base);
     let mut ref_base = cfg.base.clone();
     if cfg.sweep.needs_deep_reference() {
-        ref_base.max_depth = ref_base.max_depth.max(sweep::DEEP);
-        ref_base.shading = wavepath::Shading::Global;
+        ref_base.paths.max_depth = ref_base.paths.max_depth.max(sweep::DEEP);
+        ref_base.paths.shading = wavepath::Shading::Global;
     }
     let ref_settings = reference::reference_settings(&ref_base, cfg.ref_spp);
     log(&format!(
         "reference: {}x{} at {} spp, -l {} -m {}",
-        ref_settings.width, ref_settings.height, ref_settings.spp, ref_settings.light_samples, ref_settings.max_depth
+        ref_settings.image.width,
+        ref_settings.image.height,
+        ref_settings.sampling.spp,
+        ref_settings.sampling.light_samples,
+        ref_settings.paths.max_depth
     ));
     let (reference, reference_info) =
         reference::reference(scene, accel, &ref_settings, identity, camera_label, &cfg.cache_dir, stem)?;
@@ -127,14 +131,21 @@ pub fn run(
     let mut points = Vec::new();
     for (ci, c) in curves.iter().enumerate() {
         let runs: Vec<(Settings, Option<f32>)> = match &c.ladder {
-            Ladder::Spp => {
-                spp_ladder(cfg.max_spp).into_iter().map(|s| (Settings { spp: s, ..c.settings.clone() }, None)).collect()
-            }
+            Ladder::Spp => spp_ladder(cfg.max_spp)
+                .into_iter()
+                .map(|s| (c.settings.clone().with(|t| t.sampling.spp = s), None))
+                .collect(),
             Ladder::Tolerances(ts) => ts
                 .iter()
                 .map(|&t| {
                     let batch = sweep::ADAPTIVE_BATCH.min(cfg.max_spp.max(1));
-                    (Settings { spp: cfg.max_spp.max(1), adaptive: Some((batch, t)), ..c.settings.clone() }, Some(t))
+                    (
+                        c.settings.clone().with(|s| {
+                            s.sampling.spp = cfg.max_spp.max(1);
+                            s.sampling.adaptive = Some((batch, t))
+                        }),
+                        Some(t),
+                    )
                 })
                 .collect(),
         };
@@ -143,7 +154,7 @@ pub fn run(
             log(&format!(
                 "{:<28} spp {:>5} {}{:>8.3} s  {:>10} rays  rmse {:.5}  relMSE {:.5}  ci95 {:.5}",
                 c.label,
-                s.spp,
+                s.sampling.spp,
                 tolerance.map(|t| format!("T {t:<5} mean spp {:>7.1} ", p.error.mean_spp)).unwrap_or_default(),
                 p.seconds,
                 p.rays,

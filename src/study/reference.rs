@@ -44,15 +44,14 @@ pub fn scene_identity(path: Option<&Path>) -> Result<Vec<u8>> {
 
 /// The settings of the reference: those of `base` with `spp` samples and its own seed.
 pub fn reference_settings(base: &Settings, spp: u32) -> Settings {
-    Settings {
-        spp,
-        adaptive: None,
-        hemisphere: false,
-        seed: base.seed.wrapping_add(REFERENCE_SEED_OFFSET),
-        sample_range: None,
-        cell: None,
-        ..base.clone()
-    }
+    base.clone().with(|s| {
+        s.sampling.spp = spp;
+        s.sampling.adaptive = None;
+        s.paths.hemisphere = false;
+        s.sampling.seed = base.sampling.seed.wrapping_add(REFERENCE_SEED_OFFSET);
+        s.sampling.sample_range = None;
+        s.image.cell = None
+    })
 }
 
 /// The cache key: scene content, camera choice and every setting that changes the image.
@@ -62,15 +61,15 @@ pub fn cache_key(identity: &[u8], camera_label: &str, s: &Settings) -> u64 {
     let text = format!(
         "v1 {} {camera_label} {}x{} spp {} l {} m {} o {} rr {} seed {} shading {:?}",
         env!("CARGO_PKG_VERSION"),
-        s.width,
-        s.height,
-        s.spp,
-        s.light_samples,
-        s.max_depth,
-        s.accumulate,
-        s.rr_continue,
-        s.seed,
-        s.shading
+        s.image.width,
+        s.image.height,
+        s.sampling.spp,
+        s.sampling.light_samples,
+        s.paths.max_depth,
+        s.paths.accumulate,
+        s.paths.roulette.continue_prob,
+        s.sampling.seed,
+        s.paths.shading
     );
     h.write(text.as_bytes());
     h.0
@@ -117,7 +116,8 @@ pub fn reference(
     if mean_p.is_file() && var_p.is_file() {
         let mean = read_exr(&mean_p)?;
         let variance = read_exr(&var_p)?;
-        if (mean.width, mean.height) == (settings.width, settings.height) && variance.pixels.len() == mean.pixels.len()
+        if (mean.width, mean.height) == (settings.image.width, settings.image.height)
+            && variance.pixels.len() == mean.pixels.len()
         {
             return Ok((Reference { mean, variance }, ReferenceInfo { path: mean_p, cached: true, seconds: 0.0 }));
         }
@@ -132,13 +132,13 @@ pub fn reference(
     write_image(&r.variance, &var_p, Tonemap::Cs184)?;
     let about = format!(
         "reference for {stem}: {}x{} at {} spp, -l {} -m {} --rr {} seed {}; {seconds:.2} s\n",
-        settings.width,
-        settings.height,
-        settings.spp,
-        settings.light_samples,
-        settings.max_depth,
-        settings.rr_continue,
-        settings.seed
+        settings.image.width,
+        settings.image.height,
+        settings.sampling.spp,
+        settings.sampling.light_samples,
+        settings.paths.max_depth,
+        settings.paths.roulette.continue_prob,
+        settings.sampling.seed
     );
     std::fs::write(&info_p, about).with_context(|| format!("{}: cannot write", info_p.display()))?;
     // Reading back what was written keeps cached and fresh runs bit-identical (EXR is f32).

@@ -21,11 +21,11 @@ pub fn csv(result: &StudyResult) -> String {
             "{},\"{}\",{},{},{},{},{},{},{:.6},{},{:.3},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{}",
             result.sweep.name(),
             result.curves[p.curve].label.replace('"', "'"),
-            s.spp,
-            s.light_samples,
-            s.max_depth,
-            s.rr_continue,
-            s.hemisphere,
+            s.sampling.spp,
+            s.sampling.light_samples,
+            s.paths.max_depth,
+            s.paths.roulette.continue_prob,
+            s.paths.hemisphere,
             p.tolerance.map(|t| t.to_string()).unwrap_or_default(),
             p.seconds,
             p.rays,
@@ -63,12 +63,12 @@ pub fn write_all(result: &StudyResult, dir: &Path, scene_label: &str, command: &
         "Reference: {}x{}, {} spp, -l {} -m {} --rr {} ({}). Errors are over linear RGB; \
          relMSE = mean (x - r)^2 / (r^2 + 0.01); ci95 is the mean per-pixel 95% confidence \
          half-width the render computes from its own samples.\n",
-        rs.width,
-        rs.height,
-        rs.spp,
-        rs.light_samples,
-        rs.max_depth,
-        rs.rr_continue,
+        rs.image.width,
+        rs.image.height,
+        rs.sampling.spp,
+        rs.sampling.light_samples,
+        rs.paths.max_depth,
+        rs.paths.roulette.continue_prob,
         if result.reference_info.cached {
             "from the cache".to_string()
         } else {
@@ -86,8 +86,8 @@ pub fn write_all(result: &StudyResult, dir: &Path, scene_label: &str, command: &
         let name = format!("equal_time_{}.png", c.slug);
         write_image(&p.film, &dir.join(&name), Tonemap::Cs184)?;
         let spp = match p.tolerance {
-            Some(t) => format!("T {t}: mean {:.1} of {}", p.error.mean_spp, p.settings.spp),
-            None => p.settings.spp.to_string(),
+            Some(t) => format!("T {t}: mean {:.1} of {}", p.error.mean_spp, p.settings.sampling.spp),
+            None => p.settings.sampling.spp.to_string(),
         };
         let _ = writeln!(
             md,
@@ -96,10 +96,10 @@ pub fn write_all(result: &StudyResult, dir: &Path, scene_label: &str, command: &
         );
         images.push((c.label.clone(), name));
         if matches!(c.ladder, Ladder::Tolerances(_)) {
-            let rate = rate_film(p.film.width, p.film.height, &p.samples, p.settings.spp);
+            let rate = rate_film(p.film.width, p.film.height, &p.samples, p.settings.sampling.spp);
             write_rate_image(&rate, &dir.join("adaptive_rate.png"))?;
             images.push((
-                format!("sample rate of {} (blue: few, red: all {})", c.label, p.settings.spp),
+                format!("sample rate of {} (blue: few, red: all {})", c.label, p.settings.sampling.spp),
                 "adaptive_rate.png".into(),
             ));
         }

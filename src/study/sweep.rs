@@ -81,16 +81,18 @@ fn curve(label: String, slug: String, settings: Settings) -> Curve {
 
 /// The curves of `kind` around `base` (whose `spp` is ignored; the ladder sets it).
 pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
-    let b = || Settings { adaptive: None, ..base.clone() };
+    let b = || base.clone().with(|s| s.sampling.adaptive = None);
     match kind {
-        SweepKind::Spp => vec![curve(format!("-l {} -m {}", base.light_samples, base.max_depth), "spp".into(), b())],
+        SweepKind::Spp => {
+            vec![curve(format!("-l {} -m {}", base.sampling.light_samples, base.paths.max_depth), "spp".into(), b())]
+        }
         SweepKind::LightSamples => [1u32, 2, 4, 8, 16, 32, 64]
             .iter()
-            .map(|&l| curve(format!("-l {l}"), format!("l{l}"), Settings { light_samples: l, ..b() }))
+            .map(|&l| curve(format!("-l {l}"), format!("l{l}"), b().with(|s| s.sampling.light_samples = l)))
             .collect(),
         SweepKind::Sampling => vec![
-            curve("light importance sampling".into(), "importance".into(), Settings { hemisphere: false, ..b() }),
-            curve("uniform hemisphere (-H)".into(), "hemisphere".into(), Settings { hemisphere: true, ..b() }),
+            curve("light importance sampling".into(), "importance".into(), b().with(|s| s.paths.hemisphere = false)),
+            curve("uniform hemisphere (-H)".into(), "hemisphere".into(), b().with(|s| s.paths.hemisphere = true)),
         ],
         SweepKind::Depth => {
             let mut out = Vec::new();
@@ -98,7 +100,7 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
                 out.push(curve(format!("-m {m}, no roulette"), format!("m{m}"), depth_settings(&b(), m, 1.0)));
             }
             for m in [4u32, DEEP] {
-                let rr = base.rr_continue;
+                let rr = base.paths.roulette.continue_prob;
                 out.push(curve(format!("-m {m}, --rr {rr}"), format!("m{m}-rr{rr}"), depth_settings(&b(), m, rr)));
             }
             out
@@ -112,11 +114,11 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
             .collect(),
         SweepKind::Sampler => SamplerKind::ALL
             .iter()
-            .map(|&k| curve(format!("--sampler {}", k.name()), k.name().into(), Settings { sampler: k, ..b() }))
+            .map(|&k| curve(format!("--sampler {}", k.name()), k.name().into(), b().with(|s| s.sampling.sampler = k)))
             .collect(),
         SweepKind::Mis => vec![
-            curve("MIS (light + BSDF samples)".into(), "mis".into(), Settings { mis: true, ..b() }),
-            curve("light sampling alone (--no-mis)".into(), "no-mis".into(), Settings { mis: false, ..b() }),
+            curve("MIS (light + BSDF samples)".into(), "mis".into(), b().with(|s| s.paths.mis = true)),
+            curve("light sampling alone (--no-mis)".into(), "no-mis".into(), b().with(|s| s.paths.mis = false)),
         ],
         SweepKind::Adaptive => vec![
             curve("fixed spp".into(), "fixed".into(), b()),
@@ -132,7 +134,11 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
 
 fn depth_settings(b: &Settings, m: u32, rr: f32) -> Settings {
     let shading = if m > 1 { wavepath::Shading::Global } else { wavepath::Shading::Direct };
-    Settings { max_depth: m, rr_continue: rr, shading, ..b.clone() }
+    b.clone().with(|s| {
+        s.paths.max_depth = m;
+        s.paths.roulette.continue_prob = rr;
+        s.paths.shading = shading
+    })
 }
 
 /// Sample counts of the spp ladder: powers of two up to `cap` (and `cap` itself).
@@ -158,7 +164,8 @@ mod tests {
 
     #[test]
     fn every_sweep_has_curves_with_distinct_slugs() {
-        let base = Settings { max_depth: 5, ..Settings::default() };
+        let mut base = Settings::default();
+        base.paths.max_depth = 5;
         for k in [
             SweepKind::Spp,
             SweepKind::LightSamples,

@@ -3,8 +3,8 @@
 
 use super::options::ViewOptions;
 use super::session::ViewState;
-use wavepath::Shading;
 use wavepath::format_camera_settings;
+use wavepath::{RouletteKind, Shading};
 
 /// The camera file's name in the command.
 pub const CAMERA_FILE: &str = "view-camera.txt";
@@ -15,7 +15,7 @@ pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
     // The fields of view as this image size has them, written out (the file's are kept as
     // written).
     let mut cam = st.orbit.camera;
-    cam.fit_to(s.width as f32, s.height as f32);
+    cam.fit_to(s.image.width as f32, s.image.height as f32);
     let quote = |p: &str| {
         if p.chars().all(|c| c.is_ascii_alphanumeric() || "/._-+".contains(c)) {
             p.to_string()
@@ -27,23 +27,29 @@ pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
     if let Some(p) = &opts.scene_path {
         args.push(quote(p));
     }
-    args.push(format!("-r {} {} -s {} -l {} -m {}", s.width, s.height, s.spp, s.light_samples, s.max_depth));
-    let shading = match s.shading {
+    args.push(format!(
+        "-r {} {} -s {} -l {} -m {}",
+        s.image.width, s.image.height, s.sampling.spp, s.sampling.light_samples, s.paths.max_depth
+    ));
+    let shading = match s.paths.shading {
         Shading::Normals => "normals",
         Shading::Direct => "direct",
         Shading::Global => "global",
     };
     args.push(format!("--shading {shading}"));
-    if s.rr_throughput {
-        args.push(format!("--roulette throughput --rr-depth {}", s.rr_depth));
+    if s.paths.roulette.kind == RouletteKind::Throughput {
+        args.push(format!("--roulette throughput --rr-depth {}", s.paths.roulette.start_depth));
     } else {
-        args.push(format!("--roulette fixed --rr {} --rr-depth {}", s.rr_continue, s.rr_depth));
+        args.push(format!(
+            "--roulette fixed --rr {} --rr-depth {}",
+            s.paths.roulette.continue_prob, s.paths.roulette.start_depth
+        ));
     }
-    args.push(format!("--sampler {} --seed {}", opts.sampler, s.seed));
-    if s.hemisphere {
+    args.push(format!("--sampler {} --seed {}", opts.sampler, s.sampling.seed));
+    if s.paths.hemisphere {
         args.push("-H".into());
     }
-    if !s.mis {
+    if !s.paths.mis {
         args.push("--no-mis".into());
     }
     if cam.lens_radius > 0.0 {
@@ -56,6 +62,6 @@ pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
     serde_json::json!({
         "command": args.join(" "),
         "camera_file_name": CAMERA_FILE,
-        "camera_file": format_camera_settings(&cam, s.width, s.height),
+        "camera_file": format_camera_settings(&cam, s.image.width, s.image.height),
     })
 }

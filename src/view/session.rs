@@ -12,6 +12,7 @@ use glam::Vec3;
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 use wavepath::Effects;
+use wavepath::RouletteKind;
 use wavepath::{Accumulator, Film, Tonemap};
 use wavepath::{Bvh, Intersector};
 use wavepath::{Environment, Scene};
@@ -95,27 +96,27 @@ impl Session {
                 Change::Reset => *orbit = st.home,
                 Change::Focus(x, y) => {
                     let mut cam = orbit.camera;
-                    cam.fit_to(s.width as f32, s.height as f32);
+                    cam.fit_to(s.image.width as f32, s.image.height as f32);
                     let ray = cam.generate_ray(x, 1.0 - y);
                     if let Some(h) = accel.closest_hit(&ray, &mut Default::default()) {
                         // The lens focuses at a distance along the view axis.
                         orbit.camera.focal_distance = (h.t * ray.dir.dot(-cam.c2w.z_axis)).max(1e-6);
                     }
                 }
-                Change::Spp(n) => s.spp = n,
-                Change::LightSamples(n) => s.light_samples = n,
-                Change::MaxDepth(m) => s.max_depth = m,
-                Change::Shading(sh) => s.shading = sh,
+                Change::Spp(n) => s.sampling.spp = n,
+                Change::LightSamples(n) => s.sampling.light_samples = n,
+                Change::MaxDepth(m) => s.paths.max_depth = m,
+                Change::Shading(sh) => s.paths.shading = sh,
                 Change::Roulette(p) => {
-                    s.rr_continue = p;
-                    s.rr_throughput = false;
+                    s.paths.roulette.continue_prob = p;
+                    s.paths.roulette.kind = RouletteKind::Fixed;
                 }
-                Change::Hemisphere(h) => s.hemisphere = h,
+                Change::Hemisphere(h) => s.paths.hemisphere = h,
                 Change::LensRadius(r) => orbit.camera.lens_radius = r,
                 Change::FocalDistance(d) => orbit.camera.focal_distance = d,
                 Change::Environment(on) => st.environment = on,
                 Change::BvhDepth(d) => st.bvh_depth = d,
-                Change::Resolution(w, h) => (s.width, s.height) = (w, h),
+                Change::Resolution(w, h) => (s.image.width, s.image.height) = (w, h),
             }
         }
         st.generation += 1;
@@ -165,7 +166,8 @@ impl Session {
             let st = {
                 let guard = self.state.lock().unwrap();
                 let done = |s: &ViewState| {
-                    s.generation == shown && (taken >= s.settings.spp || s.settings.shading == Shading::Normals)
+                    s.generation == shown
+                        && (taken >= s.settings.sampling.spp || s.settings.paths.shading == Shading::Normals)
                 };
                 let guard = self.changed.wait_while(guard, |s| !s.stop && done(s)).unwrap();
                 if guard.stop {
@@ -175,59 +177,70 @@ impl Session {
             };
             let s = &st.settings;
             scene.camera = st.orbit.camera;
-            scene.env = if st.environment { environment.clone() } else { Environment::None };
+            scene.set_environment(if st.environment { environment.clone() } else { Environment::None });
             let fresh = st.generation != shown;
             if fresh {
                 shown = st.generation;
-                acc = Accumulator::new(s.width, s.height);
+                acc = Accumulator::new(s.image.width, s.image.height);
                 (taken, band, pass_s, coarse) = (0, 0, 0.0, None);
                 totals = Totals::default();
                 // A coarse image at once: a quarter of the resolution, one sample.
-                let (w, h) = ((s.width / 4).max(1), (s.height / 4).max(1));
-                let quick = Settings { width: w, height: h, spp: 1, adaptive: None, sample_range: None, ..s.clone() };
+                let (w, h) = ((s.image.width / 4).max(1), (s.image.height / 4).max(1));
+                let mut quick = s.clone();
+                quick.image.width = w;
+                quick.image.height = h;
+                quick.sampling.spp = 1;
+                quick.sampling.adaptive = None;
+                quick.sampling.sample_range = None;
                 scene.camera.fit_to(w as f32, h as f32);
                 let t = Instant::now();
                 if let Ok(out) = wavepath::render_with_progress(&scene, bvh, &quick, &|_| {}) {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
-                    let estimate = t.elapsed().as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.spp) as f64;
-                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.height);
+                    let estimate = t.elapsed().as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.sampling.spp) as f64;
+                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
                     totals.add(&out.stats, t.elapsed());
                     seq += 1;
                     let info = Self::info(&st, &scene, bvh, &totals, 0, (w, h));
                     coarse = Some(out.film.clone());
                     self.publish(frame(seq, shown, out.film, 0, false, true, info));
                 }
-                if s.shading == Shading::Normals {
+                if s.paths.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
-                    let full = Settings { adaptive: None, sample_range: None, ..s.clone() };
+                    let mut full = s.clone();
+                    full.sampling.adaptive = None;
+                    full.sampling.sample_range = None;
                     scene.camera = st.orbit.camera;
-                    scene.camera.fit_to(s.width as f32, s.height as f32);
+                    scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
                     if let Ok(out) = wavepath::render_with_progress(&scene, bvh, &full, &|_| {}) {
                         seq += 1;
-                        let info = Self::info(&st, &scene, bvh, &totals, s.spp, (s.width, s.height));
-                        self.publish(frame(seq, shown, out.film, s.spp, true, false, info));
+                        let info =
+                            Self::info(&st, &scene, bvh, &totals, s.sampling.spp, (s.image.width, s.image.height));
+                        self.publish(frame(seq, shown, out.film, s.sampling.spp, true, false, info));
                     }
-                    taken = s.spp;
+                    taken = s.sampling.spp;
                 }
                 continue;
             }
-            scene.camera.fit_to(s.width as f32, s.height as f32);
+            scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
             // One band of rows, the pass's samples for each of its pixels at once (as an
             // offline render takes them: a pixel's samples side by side in a wave trace
             // coherent rays; two samples per pixel over the whole image run 28% slower).
-            let end = (taken + PASS_SAMPLES).min(s.spp);
-            let (y0, y1) = (band * s.height / bands, (band + 1) * s.height / bands);
-            let cell = wavepath::Cell { x: 0, y: y0, w: s.width, h: y1 - y0 };
-            let part = Settings { adaptive: None, cell: Some(cell), sample_range: Some((taken, end)), ..s.clone() };
+            let end = (taken + PASS_SAMPLES).min(s.sampling.spp);
+            let (y0, y1) = (band * s.image.height / bands, (band + 1) * s.image.height / bands);
+            let cell = wavepath::Cell { x: 0, y: y0, w: s.image.width, h: y1 - y0 };
+            let mut part = s.clone();
+            part.sampling.adaptive = None;
+            part.image.cell = Some(cell);
+            part.sampling.sample_range = Some((taken, end));
             let t = Instant::now();
             let Ok((sums, stats)) = wavepath::render_sums(&scene, bvh, &part, &|_| {}) else {
-                taken = s.spp;
+                taken = s.sampling.spp;
                 continue;
             };
             pass_s += t.elapsed().as_secs_f64();
             totals.add(&stats, t.elapsed());
-            let rows = y0 * s.width..y1 * s.width;
+            let rows = y0 * s.image.width..y1 * s.image.width;
             for (a, b) in acc.pixels[rows.clone()].iter_mut().zip(&sums.pixels[rows]) {
                 a.merge(b);
             }
@@ -236,7 +249,7 @@ impl Session {
                 // The pass is complete: the next one's bands take about the target time each.
                 taken = end;
                 band = 0;
-                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.height);
+                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
                 pass_s = 0.0;
             }
             // A newer generation makes this frame stale: skip publishing it.
@@ -244,15 +257,17 @@ impl Session {
                 continue;
             }
             seq += 1;
-            let converged = taken >= s.spp;
-            let info = Self::info(&st, &scene, bvh, &totals, taken, (s.width, s.height));
+            let converged = taken >= s.sampling.spp;
+            let info = Self::info(&st, &scene, bvh, &totals, taken, (s.image.width, s.image.height));
             let mut film = acc.to_film();
             if let Some(c) = coarse.as_ref().filter(|_| taken == 0) {
                 for (i, p) in film.pixels.iter_mut().enumerate() {
                     if acc.pixels[i].taken == 0 {
-                        let (x, y) = (i % s.width, i / s.width);
-                        *p = c
-                            .get((x * c.width / s.width).min(c.width - 1), (y * c.height / s.height).min(c.height - 1));
+                        let (x, y) = (i % s.image.width, i / s.image.width);
+                        *p = c.get(
+                            (x * c.width / s.image.width).min(c.width - 1),
+                            (y * c.height / s.image.height).min(c.height - 1),
+                        );
                     }
                 }
             }
@@ -272,7 +287,7 @@ impl Session {
         let boxes = st.bvh_depth.map(|d| outlines(bvh, scene, d, w, h)).unwrap_or_default();
         serde_json::json!({
             "spp": spp,
-            "spp_cap": st.settings.spp,
+            "spp_cap": st.settings.sampling.spp,
             "width": w,
             "height": h,
             "rays": t.rays,
@@ -281,9 +296,9 @@ impl Session {
             "stages": t.stages,
             "effects": effects.on.iter().map(|e| serde_json::json!({"name": e.name, "reason": e.reason})).collect::<Vec<_>>(),
             "settings": {
-                "l": st.settings.light_samples, "m": st.settings.max_depth,
-                "shading": format!("{:?}", st.settings.shading).to_lowercase(),
-                "rr": st.settings.rr_continue, "hemisphere": st.settings.hemisphere,
+                "l": st.settings.sampling.light_samples, "m": st.settings.paths.max_depth,
+                "shading": format!("{:?}", st.settings.paths.shading).to_lowercase(),
+                "rr": st.settings.paths.roulette.continue_prob, "hemisphere": st.settings.paths.hemisphere,
                 "lens": st.orbit.camera.lens_radius, "focal": st.orbit.camera.focal_distance,
                 "env": st.environment, "bvh": st.bvh_depth,
             },

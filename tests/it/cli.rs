@@ -331,3 +331,67 @@ fn scenes_that_would_not_fit_in_memory_are_refused_before_the_work() {
     }
     assert!(run("1K").status.success());
 }
+
+/// The sample-rate image is written only for adaptive renders (`-a`): a fixed-rate render's
+/// would be flat, a file nobody asked for. The same for a merge of parts.
+#[test]
+fn the_rate_image_only_for_adaptive_renders() {
+    let dir = temp_dir("cli-rate-image");
+    let render = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut args = vec!["-r", "16", "12", "-s", "4", "-f", out.to_str().unwrap()];
+        args.extend(extra);
+        let o = run_wavepath(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+    };
+    render("fixed.png", &[]);
+    assert!(dir.join("fixed.png").exists());
+    assert!(!dir.join("fixed_rate.png").exists(), "a rate image without -a");
+    render("adaptive.png", &["-a", "2", "0.1"]);
+    assert!(dir.join("adaptive_rate.png").exists(), "no rate image with -a");
+    // Split and merged: the merge follows the parts.
+    for (stem, extra) in [("tiles", &[][..]), ("tiles_a", &["-a", "2", "0.1"][..])] {
+        let mut parts = Vec::new();
+        for i in 0..2 {
+            let p = dir.join(format!("{stem}{i}.exr"));
+            let part = format!("{i}/2");
+            let mut args = vec!["-r", "16", "12", "-s", "4", "--part", &part, "-f", p.to_str().unwrap()];
+            args.extend(extra);
+            let o = run_wavepath(&args);
+            assert!(o.status.success(), "{}", stderr(&o));
+            parts.push(p.to_str().unwrap().to_string());
+        }
+        let merged = dir.join(format!("{stem}.png"));
+        let mut args = vec!["merge".to_string()];
+        args.extend(parts);
+        args.extend(["-f".to_string(), merged.to_str().unwrap().to_string()]);
+        let o = run_wavepath(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(dir.join(format!("{stem}_rate.png")).exists(), !extra.is_empty(), "{stem}: merged rate image");
+    }
+}
+
+/// A map given by `-e` lights a file that has no light of its own: the default sky is not
+/// added beside it (one light, the map's), and without `-e` the sky is there.
+#[test]
+fn an_environment_map_replaces_the_default_sky() {
+    let dir = temp_dir("cli-envmap-sky");
+    let obj = dir.join("plane.obj");
+    std::fs::write(&obj, "v -1 0 -1\nv 1 0 -1\nv 1 0 1\nv -1 0 1\nf 1 3 2\nf 1 4 3\n").unwrap();
+    let map = dir.join("grey.hdr");
+    let film = wavepath::Film { width: 8, height: 4, pixels: vec![glam::Vec3::splat(0.5); 32] };
+    wavepath::write_image(&film, &map, wavepath::Tonemap::Cs184).unwrap();
+    let lights = |extra: &[&str]| {
+        let mut args = vec!["info", "--json", obj.to_str().unwrap()];
+        args.extend(extra);
+        let o = run_wavepath(&args);
+        assert!(o.status.success(), "{}", stderr(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        let kinds: Vec<String> = v["lights"].as_array().unwrap().iter().map(|l| l["kind"].to_string()).collect();
+        (kinds, v["environment"].as_str().unwrap().to_string())
+    };
+    let (bare, env) = lights(&[]);
+    assert_eq!((bare, env.as_str()), (vec!["\"hemisphere\"".to_string()], "none"), "the default sky");
+    let (with_map, env) = lights(&["-e", map.to_str().unwrap()]);
+    assert!(with_map.is_empty() && env.starts_with("map "), "lights {with_map:?}, environment {env}");
+}

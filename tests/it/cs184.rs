@@ -96,7 +96,10 @@ fn hit_bounds(film: &Film) -> [i64; 4] {
 
 fn normals_film(scene: &Scene, w: usize, h: usize) -> Film {
     let accel = wavepath::build_accel(scene, &Default::default()).0;
-    let s = Settings { width: w, height: h, shading: Shading::Normals, ..Settings::default() };
+    let mut s = Settings::default();
+    s.image.width = w;
+    s.image.height = h;
+    s.paths.shading = Shading::Normals;
     wavepath::render(scene, accel.as_ref(), &s).unwrap().0
 }
 
@@ -562,15 +565,17 @@ fn cs184_light_pdf_weights_each_light_sample_by_its_distance() {
         let r = scene.camera.generate_ray((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
         r.at(-r.origin.y / r.dir.y)
     };
-    let s = Settings { light_samples: 4, ..render::settings(w, h, 1, 16) };
+    let mut s = render::settings(w, h, 1, 16);
+    s.sampling.light_samples = 4;
     for (biased, power) in [(false, 2), (true, 1)] {
-        let acc = render::wavefront(&scene, &Settings { cs184_light_pdf: biased, ..s.clone() }).0;
+        let acc = render::wavefront(&scene, &s.clone().with(|s| s.cs184.light_pdf = biased)).0;
         let want = |x, y| Some(glam::DVec3::splat(expected(floor_point(x, y), power)));
         crate::common::agree::assert_regions_match(&acc, 8, want, 1e-4, &format!("cs184 pdf {biased}"));
     }
-    let hemi = Settings { hemisphere: true, ..s.clone() };
+    let mut hemi = s.clone();
+    hemi.paths.hemisphere = true;
     let a = render::wavefront(&scene, &hemi).0;
-    let b = render::wavefront(&scene, &Settings { cs184_light_pdf: true, ..hemi }).0;
+    let b = render::wavefront(&scene, &hemi.with(|s| s.cs184.light_pdf = true)).0;
     assert!(a.pixels.iter().zip(&b.pixels).all(|(p, q)| p.mean() == q.mean()));
 }
 

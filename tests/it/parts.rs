@@ -87,8 +87,12 @@ fn tile_parts_merge_bit_identical_to_one_process() {
 fn sample_parts_merge_within_the_summation_order_bound() {
     let dir = temp_dir("parts-samples");
     let scene = default_scene();
-    let mut st = Settings { width: 48, height: 36, spp: 24, max_depth: 4, ..Settings::default() };
-    st.shading = wavepath::Shading::Global;
+    let mut st = Settings::default();
+    st.image.width = 48;
+    st.image.height = 36;
+    st.sampling.spp = 24;
+    st.paths.max_depth = 4;
+    st.paths.shading = wavepath::Shading::Global;
     let (bvh, _) = wavepath::build_accel(&scene, &Settings::default());
     let (single, _) = wavepath::render_sums(&scene, bvh.as_ref(), &st, &|_| {}).unwrap();
     let n = 5;
@@ -102,9 +106,10 @@ fn sample_parts_merge_within_the_summation_order_bound() {
             scene: scene.name.clone(),
             scene_hash: wavepath_apps::parts::identity::scene_hash(&scene),
             settings: wavepath_apps::parts::identity::settings_key(&st),
-            width: st.width,
-            height: st.height,
-            spp: st.spp,
+            width: st.image.width,
+            height: st.image.height,
+            spp: st.sampling.spp,
+            adaptive: st.sampling.adaptive.is_some(),
             stats,
             pixels: String::new(),
         };
@@ -113,7 +118,7 @@ fn sample_parts_merge_within_the_summation_order_bound() {
         files.push(p);
     }
     let merged = merge_files(&files).unwrap();
-    let bound = 2.0 * (st.spp as f64 - 1.0) * f64::EPSILON / 2.0;
+    let bound = 2.0 * (st.sampling.spp as f64 - 1.0) * f64::EPSILON / 2.0;
     let (mut same, mut neighbours) = (0, 0);
     let (fa, fb) = (single.to_film(), merged.acc.to_film());
     for (i, (a, b)) in single.pixels.iter().zip(&merged.acc.pixels).enumerate() {
@@ -131,7 +136,7 @@ fn sample_parts_merge_within_the_summation_order_bound() {
     // Most pixels round to the very same f32; the rest by one step.
     assert!(same > 10 * neighbours, "{same} identical channels, {neighbours} one ulp apart");
     // Every sample index was taken exactly once across the parts.
-    assert!(merged.acc.pixels.iter().all(|p| p.taken == st.spp));
+    assert!(merged.acc.pixels.iter().all(|p| p.taken == st.sampling.spp));
 }
 
 #[test]

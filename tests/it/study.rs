@@ -54,7 +54,9 @@ fn rmse_falls_as_one_over_sqrt_spp() {
             let mut mse = 0.0;
             predicted = 0.0;
             for seed in 0..4 {
-                let s = Settings { spp, seed: 1000 * seed + spp as u64, ..b.clone() };
+                let mut s = b.clone();
+                s.sampling.spp = spp;
+                s.sampling.seed = 1000 * seed + spp as u64;
                 let p = study::measure(&scene, accel.as_ref(), &s, None, 0, &reference).unwrap();
                 assert_eq!(p.invalid_samples, 0);
                 mse += p.error.rmse * p.error.rmse / 4.0;
@@ -96,9 +98,9 @@ fn importance_sampling_beats_hemisphere_sampling() {
         let cfg = config(SweepKind::Sampling, base(1), 32, 2048, temp_dir("study-sampling"));
         let r = run(&scene, accel.as_ref(), &cfg);
         assert_eq!(r.curves.len(), 2);
-        assert!(!r.curves[0].settings.hemisphere && r.curves[1].settings.hemisphere);
+        assert!(!r.curves[0].settings.paths.hemisphere && r.curves[1].settings.paths.hemisphere);
         for spp in [8, 16, 32] {
-            let at = |c: usize| r.curve_points(c).find(|p| p.settings.spp == spp).unwrap().error;
+            let at = |c: usize| r.curve_points(c).find(|p| p.settings.sampling.spp == spp).unwrap().error;
             let (is, hemi) = (at(0), at(1));
             eprintln!("{}: spp {spp}: importance rmse {:.4} hemisphere {:.4}", scene.name, is.rmse, hemi.rmse);
             assert!(is.rmse < hemi.rmse, "{}: spp {spp}: {} >= {}", scene.name, is.rmse, hemi.rmse);
@@ -117,10 +119,10 @@ fn sampler_sweep_shows_what_patterns_buy() {
     let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cfg = config(SweepKind::Sampler, base(3), 32, 2048, temp_dir("study-sampler"));
     let r = run(&scene, accel.as_ref(), &cfg);
-    let kinds: Vec<SamplerKind> = r.curves.iter().map(|c| c.settings.sampler).collect();
+    let kinds: Vec<SamplerKind> = r.curves.iter().map(|c| c.settings.sampling.sampler).collect();
     assert_eq!(kinds, SamplerKind::ALL);
     for spp in [8, 16, 32] {
-        let at = |c: usize| r.curve_points(c).find(|p| p.settings.spp == spp).unwrap().error.rmse;
+        let at = |c: usize| r.curve_points(c).find(|p| p.settings.sampling.spp == spp).unwrap().error.rmse;
         let (independent, stratified, sobol) = (at(0), at(1), at(2));
         eprintln!("spp {spp}: rmse independent {independent:.4} stratified {stratified:.4} sobol {sobol:.4}");
         assert!(stratified < independent && sobol < 0.8 * independent, "spp {spp}");
@@ -137,9 +139,9 @@ fn mis_sweep_shows_what_mis_buys() {
     let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cfg = config(SweepKind::Mis, base(2), 32, 4096, temp_dir("study-mis"));
     let r = run(&scene, accel.as_ref(), &cfg);
-    assert_eq!(r.curves.iter().map(|c| c.settings.mis).collect::<Vec<_>>(), [true, false]);
+    assert_eq!(r.curves.iter().map(|c| c.settings.paths.mis).collect::<Vec<_>>(), [true, false]);
     for spp in [4, 8, 16, 32] {
-        let at = |c: usize| r.curve_points(c).find(|p| p.settings.spp == spp).unwrap().error.rmse;
+        let at = |c: usize| r.curve_points(c).find(|p| p.settings.sampling.spp == spp).unwrap().error.rmse;
         eprintln!("spp {spp}: rmse mis {:.4} light sampling alone {:.4}", at(0), at(1));
         assert!(at(0) < 0.5 * at(1), "spp {spp}");
     }
@@ -159,7 +161,7 @@ fn reference_is_cached_and_keyed_by_settings() {
     assert!(b.reference_info.cached);
     assert_eq!(a.reference, b.reference);
     assert_eq!(a.points[1].error, b.points[1].error.clone());
-    let other = config(SweepKind::Spp, Settings { light_samples: 2, ..base(1) }, 2, 64, cache.clone());
+    let other = config(SweepKind::Spp, base(1).with(|s| s.sampling.light_samples = 2), 2, 64, cache.clone());
     assert!(!run(&scene, accel.as_ref(), &other).reference_info.cached);
     let entries = std::fs::read_dir(&cache)
         .unwrap()
@@ -180,7 +182,7 @@ fn depth_sweep_shows_truncation_bias() {
     let (accel, _) = build(&scene, &wavepath::Settings::default());
     let cfg = config(SweepKind::Depth, base(5), 16, 512, temp_dir("study-depth"));
     let r = run(&scene, accel.as_ref(), &cfg);
-    assert_eq!(r.reference_settings.max_depth, study::sweep::DEEP);
+    assert_eq!(r.reference_settings.paths.max_depth, study::sweep::DEEP);
     // Pixels that see the light (radiance 10) are left out: their jittered coverage noise
     // would swamp the mean of a 16-spp image.
     let lit: Vec<bool> = r.reference.mean.pixels.iter().map(|p| p.max_element() < 2.0).collect();

@@ -9,7 +9,7 @@
 //! adds zero, finds no light, or stops no path).
 
 use crate::scene::{Environment, Light, Scene};
-use crate::settings::{Settings, Shading};
+use crate::settings::{RouletteKind, Settings, Shading};
 
 /// One effect that is on, and the reason it is on.
 #[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
@@ -61,7 +61,8 @@ pub struct Effects {
     /// Diffuse surfaces combine light sampling with their BSDF sample by MIS: the lights are
     /// emissive triangles or an environment map, whose light sampling alone leaves fireflies
     /// (an emitter next to a wall). Area, point and hemisphere lights gain nothing from it
-    /// (measured: the same variance, 5% more time), so CS184 scenes keep the seed's estimator.
+    /// (measured: the same variance, 5% more time), so CS184 scenes keep the seed's estimator
+    /// (one of the rules [`crate::cs184`] lists).
     pub mis: bool,
     /// Every flag was forced on by `--all-effects`.
     pub forced: bool,
@@ -94,8 +95,12 @@ struct Facts<'a> {
 
 impl<'a> Facts<'a> {
     fn of(scene: &'a Scene, settings: &'a Settings) -> Facts<'a> {
-        let normals = settings.shading == Shading::Normals;
-        let depth = if settings.shading == Shading::Direct { settings.max_depth.min(1) } else { settings.max_depth };
+        let normals = settings.paths.shading == Shading::Normals;
+        let depth = if settings.paths.shading == Shading::Direct {
+            settings.paths.max_depth.min(1)
+        } else {
+            settings.paths.max_depth
+        };
         let material_count = |kinds: &[&str]| scene.materials.iter().filter(|m| kinds.contains(&m.bsdf.kind())).count();
         Facts {
             scene,
@@ -103,7 +108,7 @@ impl<'a> Facts<'a> {
             normals,
             depth,
             lit: !normals && depth >= 1,
-            sees_emission: !normals && (settings.accumulate || depth == 0),
+            sees_emission: !normals && (settings.paths.accumulate || depth == 0),
             emissive_triangles: scene
                 .mesh
                 .material_ids
@@ -130,12 +135,12 @@ impl<'a> Facts<'a> {
 
     /// Light sampling (not `-H` hemisphere probes) runs.
     fn samples_lights(&self) -> bool {
-        self.lit && !self.settings.hemisphere
+        self.lit && !self.settings.paths.hemisphere
     }
 
     /// Full global illumination to depth `d` or more.
     fn global_to(&self, d: u32) -> bool {
-        !self.normals && self.settings.shading == Shading::Global && self.depth >= d
+        !self.normals && self.settings.paths.shading == Shading::Global && self.depth >= d
     }
 }
 
@@ -183,7 +188,7 @@ const RULES: &[Rule] = &[
         flag: |e| &mut e.area_lights,
         rule: |f, _| {
             let areas = f.scene.lights.iter().filter(|l| l.kind() == "area").count();
-            let samples = f.settings.light_samples;
+            let samples = f.settings.sampling.light_samples;
             if !f.samples_lights() {
                 None
             } else if areas > 0 {
@@ -219,7 +224,7 @@ const RULES: &[Rule] = &[
         rule: |f, e| {
             if !f.lit {
                 None
-            } else if f.settings.hemisphere {
+            } else if f.settings.paths.hemisphere {
                 Some("-H: uniform hemisphere probes".into())
             } else if e.area_lights || e.delta_lights || e.infinite_light {
                 Some("light sampling: the scene has lights".into())
@@ -280,11 +285,11 @@ const RULES: &[Rule] = &[
         name: "russian-roulette",
         flag: |e| &mut e.russian_roulette,
         rule: |f, _| {
-            let p = f.settings.rr_continue;
-            let from = f.settings.rr_depth.max(1);
+            let p = f.settings.paths.roulette.continue_prob;
+            let from = f.settings.paths.roulette.start_depth.max(1);
             if !f.global_to(from + 2) {
                 None
-            } else if f.settings.rr_throughput {
+            } else if f.settings.paths.roulette.kind == RouletteKind::Throughput {
                 Some(format!("-m {} > {}, continue by path throughput from depth {from}", f.depth, from + 1))
             } else {
                 (p < 1.0).then(|| format!("-m {} > {} and --rr {p} < 1 from depth {from}", f.depth, from + 1))
@@ -294,7 +299,7 @@ const RULES: &[Rule] = &[
     Rule {
         name: "adaptive-sampling",
         flag: |e| &mut e.adaptive,
-        rule: |f, _| f.settings.adaptive.map(|(b, t)| format!("-a {b} {t}")),
+        rule: |f, _| f.settings.sampling.adaptive.map(|(b, t)| format!("-a {b} {t}")),
     },
     Rule {
         name: "environment-map",
@@ -329,7 +334,7 @@ const RULES: &[Rule] = &[
 /// Why diffuse vertices use MIS, if they do: light sampling runs, paths continue past their
 /// first hit, `--no-mis` is not given, and some light is sampled in a way MIS improves.
 fn mis_reason(f: &Facts) -> Option<String> {
-    if !(f.samples_lights() && f.global_to(2) && f.settings.mis && f.settings.accumulate) {
+    if !(f.samples_lights() && f.global_to(2) && f.settings.paths.mis && f.settings.paths.accumulate) {
         return None;
     }
     let areas = f.scene.lights.iter().any(|l| l.kind() == "area");
@@ -345,7 +350,7 @@ impl Effects {
     /// Runs the table: each rule in order, its flag set and its reason listed when it is on.
     pub fn of(scene: &Scene, settings: &Settings) -> Effects {
         let facts = Facts::of(scene, settings);
-        let force = settings.all_effects;
+        let force = settings.execution.all_effects;
         let mut e = Effects { forced: force, ..Effects::default() };
         for (i, row) in RULES.iter().enumerate() {
             let why = (row.rule)(&facts, &e);

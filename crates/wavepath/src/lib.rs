@@ -32,7 +32,9 @@ mod cpu;
 mod geometry;
 // 1: random streams and warps.
 mod sampling;
-// 2: plain data.
+// 2: the CS184 dialect's rules, in one place.
+mod cs184;
+// 3: plain data: the scene, then the settings (whose defaults follow the scene's dialect).
 mod scene;
 mod settings;
 // 3: what the integrators are built from.
@@ -60,14 +62,18 @@ mod tests;
 // Scenes: load one, or build one from plain data.
 pub use load::{CameraMode, LoadOptions, default_scene, load, write_ply};
 pub use scene::{
-    Bsdf, Camera, EnvMap, Environment, FovFit, Light, Material, MaterialIds, Mesh, Scene, Sphere, Texture,
-    format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
+    Bsdf, Camera, DEFAULT_SKY, EnvMap, Environment, FovFit, Light, Material, MaterialIds, Mesh, Scene, SceneSource,
+    Sphere, Texture, format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
 };
 
 // What a render does.
 pub use cpu::Isa;
+pub use cs184::Dialect;
 pub use sampling::SamplerKind;
-pub use settings::{BvhBuild, BvhOptions, Cell, IntegratorKind, LeafLayout, Settings, Shading};
+pub use settings::{
+    AccelSettings, BvhBuild, BvhOptions, Cell, Cs184Compat, Execution, ImageSettings, IntegratorKind, LeafLayout,
+    PathRules, Roulette, RouletteKind, Sampling, Settings, Shading,
+};
 
 // Rays: the acceleration structures and their queries.
 pub use accel::{BruteForce, BuildInfo, Bvh, Intersector, TraceCounters, build as build_accel};
@@ -78,4 +84,4 @@ pub use raysets::{diffuse_rays, primary_rays};
 pub use effects::{Effect, Effects};
 pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
 pub use render::{RenderOutput, render, render_sums, render_with_progress, with_threads};
-pub use stats::{RenderStats, StageTimes, to_json as stats_json};
+pub use stats::{RenderStats, StageTimes, roulette_json, to_json as stats_json};

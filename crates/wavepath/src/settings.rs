@@ -1,5 +1,7 @@
 //! Render settings: everything the command line can change about a render.
 
+use crate::cs184::Dialect;
+
 /// What a pixel shows.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Shading {
@@ -31,58 +33,197 @@ pub struct Cell {
     pub h: usize,
 }
 
-#[derive(Clone, Debug, PartialEq)]
+/// Everything about a render that is not the scene, in groups a caller changes together.
+///
+/// Start from [`Settings::for_scene`] (the defaults of the scene's dialect) rather than
+/// [`Settings::default`], so that a library caller renders a file as the command line does.
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Settings {
+    /// The picture: its size and the part of it to render.
+    pub image: ImageSettings,
+    /// How many samples each pixel takes and how they spread.
+    pub sampling: Sampling,
+    /// What a path does at each vertex: depth, direct-light strategy, roulette.
+    pub paths: PathRules,
+    /// How rays find their hits (same hits either way; only time and memory differ).
+    pub accel: AccelSettings,
+    /// Where and how the work runs (same image whatever is chosen, except the integrator,
+    /// which is the same in expectation).
+    pub execution: Execution,
+    /// The CS184 course renderer's deliberate deviations, opt-in (`crate::cs184` lists all
+    /// the course's rules).
+    pub cs184: Cs184Compat,
+}
+
+/// The picture's size and the part of it to render.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ImageSettings {
     pub width: usize,
     pub height: usize,
+    /// Only this rectangle of the image (`-p`); `None`: all of it.
+    pub cell: Option<Cell>,
+}
+
+impl Default for ImageSettings {
+    fn default() -> Self {
+        ImageSettings { width: 800, height: 600, cell: None }
+    }
+}
+
+/// How many samples a pixel takes and how they spread over the path space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sampling {
     /// Camera rays per pixel (`-s`).
     pub spp: u32,
     /// Samples per area light (`-l`).
     pub light_samples: u32,
+    /// Adaptive sampling: batch size and tolerance (`-a B T`).
+    pub adaptive: Option<(u32, f32)>,
+    /// How each pixel's samples spread over the path space (`--sampler`).
+    pub sampler: crate::sampling::SamplerKind,
+    /// Every random number is a function of (seed, pixel, sample, depth): the same seed gives
+    /// the same image.
+    pub seed: u64,
+    /// Render only camera samples with these indices, `[first, end)`, of the `spp` per
+    /// pixel (a `--split samples` part); `None`: all of them.
+    pub sample_range: Option<(u32, u32)>,
+}
+
+impl Default for Sampling {
+    fn default() -> Self {
+        Sampling {
+            spp: 1,
+            light_samples: 1,
+            adaptive: None,
+            sampler: crate::sampling::SamplerKind::Independent,
+            seed: 0,
+            sample_range: None,
+        }
+    }
+}
+
+/// The rules of light transport a path follows: what a pixel shows, how deep paths go, how
+/// direct light is estimated and when a path stops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PathRules {
+    pub shading: Shading,
     /// Maximum ray depth (`-m`).
     pub max_depth: u32,
     /// Accumulate all bounces (`-o 1`) or show only bounce `max_depth` (`-o 0`).
     pub accumulate: bool,
-    /// Adaptive sampling: batch size and tolerance (`-a B T`).
-    pub adaptive: Option<(u32, f32)>,
-    /// Worker threads; 0 = all cores.
-    pub threads: usize,
     /// Uniform hemisphere sampling for direct light instead of light sampling (`-H`).
     pub hemisphere: bool,
-    pub shading: Shading,
-    /// Russian roulette continue probability.
-    pub rr_continue: f32,
-    /// Use the BVH (false: brute force, `--no-bvh`).
-    pub use_bvh: bool,
-    /// How the BVH is built and its leaves stored (`--bvh-build`, `--bvh-leaves`).
-    pub bvh: BvhOptions,
-    pub seed: u64,
-    pub cell: Option<Cell>,
-    pub integrator: IntegratorKind,
-    /// Render only camera samples with these indices, `[first, end)`, of the `spp` per
-    /// pixel (a `--split samples` part); `None`: all of them.
-    pub sample_range: Option<(u32, u32)>,
-    /// Run every stage and kernel feature even when the scene does not need it
-    /// (`--all-effects`, for benchmarking what [`crate::effects::Effects`] saves).
-    pub all_effects: bool,
-    /// The widest SIMD instruction set the kernels may use (`--isa`); every set gives the
-    /// same image, so this only changes speed.
-    pub isa: crate::cpu::Isa,
-    /// The CS184 course renderer's biased area-light pdf (`--cs184-light-pdf`): see
-    /// [`SampledLight::Area`](crate::lights::SampledLight::Area).
-    pub cs184_light_pdf: bool,
     /// Combine light sampling with the diffuse BSDF's own sample by multiple importance
     /// sampling (`--no-mis` turns it off: light sampling alone, as the seed).
     pub mis: bool,
-    /// Russian roulette by the path's throughput (`--roulette throughput`): continue with
-    /// probability `min(1, max component of the throughput)`, as pbrt-v4 does, instead of the
-    /// fixed `rr_continue`.
-    pub rr_throughput: bool,
-    /// The first depth whose continuation plays Russian roulette (`--rr-depth`): 1, the
-    /// seed's rule, never stops the first indirect bounce; Mitsuba's default is 5.
-    pub rr_depth: u32,
-    /// How each pixel's samples spread over the path space (`--sampler`).
-    pub sampler: crate::sampling::SamplerKind,
+    /// When a path may stop early (Russian roulette).
+    pub roulette: Roulette,
+}
+
+impl Default for PathRules {
+    fn default() -> Self {
+        PathRules {
+            shading: Shading::Global,
+            max_depth: 1,
+            accumulate: true,
+            hemisphere: false,
+            mis: true,
+            roulette: Roulette::default(),
+        }
+    }
+}
+
+/// Russian roulette: a path continues past a vertex with some probability and is weighted
+/// by its inverse, which bounds the work of long paths without biasing the image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Roulette {
+    /// How the continue probability is chosen (`--roulette`).
+    pub kind: RouletteKind,
+    /// The continue probability of [`RouletteKind::Fixed`] (`--rr`).
+    pub continue_prob: f32,
+    /// The first depth whose continuation plays roulette (`--rr-depth`): 1, the seed's rule,
+    /// never stops the first indirect bounce; Mitsuba's default is 5.
+    pub start_depth: u32,
+}
+
+impl Default for Roulette {
+    /// The CS184 rule ([`crate::cs184`]): a fixed 0.65 from depth 1.
+    fn default() -> Self {
+        Roulette {
+            kind: RouletteKind::Fixed,
+            continue_prob: crate::cs184::RR_CONTINUE,
+            start_depth: crate::cs184::RR_START_DEPTH,
+        }
+    }
+}
+
+/// How the roulette's continue probability is chosen.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum RouletteKind {
+    /// The fixed [`Roulette::continue_prob`] at every depth (the seed's rule).
+    #[default]
+    Fixed,
+    /// `min(1, max component of the path's throughput)`, as pbrt-v4 does: dim paths stop
+    /// sooner, bright ones never.
+    Throughput,
+}
+
+impl RouletteKind {
+    /// The depth this kind starts at unless told otherwise: the fixed rule from the first
+    /// indirect bounce (the seed's), the throughput rule from depth 5, where paths have lost
+    /// enough throughput for it to stop dim ones (Mitsuba's default).
+    pub fn default_start_depth(self) -> u32 {
+        match self {
+            RouletteKind::Fixed => crate::cs184::RR_START_DEPTH,
+            RouletteKind::Throughput => 5,
+        }
+    }
+
+    /// Lowercase name, as `--roulette` spells it.
+    pub fn name(self) -> &'static str {
+        match self {
+            RouletteKind::Fixed => "fixed",
+            RouletteKind::Throughput => "throughput",
+        }
+    }
+}
+
+/// How rays find their hits.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct AccelSettings {
+    /// Use the BVH (false: brute force, `--no-bvh`, the reference the BVH is tested against).
+    pub use_bvh: bool,
+    /// How the BVH is built and its leaves stored (`--bvh-build`, `--bvh-leaves`).
+    pub bvh: BvhOptions,
+}
+
+impl Default for AccelSettings {
+    fn default() -> Self {
+        AccelSettings { use_bvh: true, bvh: BvhOptions::default() }
+    }
+}
+
+/// Where and how the work runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Execution {
+    /// Worker threads; 0 = all cores. Images do not depend on it.
+    pub threads: usize,
+    pub integrator: IntegratorKind,
+    /// The widest SIMD instruction set the kernels may use (`--isa`); every set gives the
+    /// same image, so this only changes speed.
+    pub isa: crate::cpu::Isa,
+    /// Run every stage and kernel feature even when the scene does not need it
+    /// (`--all-effects`, for benchmarking what [`crate::effects::Effects`] saves).
+    pub all_effects: bool,
+}
+
+/// Opt-in deviations of the CS184 course renderer that change the estimate (the dialect's
+/// defaults and the course's file conventions are elsewhere: [`crate::cs184`] lists them).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Cs184Compat {
+    /// The course renderer's biased area-light pdf (`--cs184-light-pdf`): see
+    /// [`crate::cs184::area_light_pdf_weight`].
+    pub light_pdf: bool,
 }
 
 /// How the BVH is made: every choice gives the same hits, only time and memory differ.
@@ -117,42 +258,46 @@ pub enum LeafLayout {
     Packed,
 }
 
-impl Default for Settings {
-    fn default() -> Self {
-        Settings {
-            width: 800,
-            height: 600,
-            spp: 1,
-            light_samples: 1,
-            max_depth: 1,
-            accumulate: true,
-            adaptive: None,
-            threads: 0,
-            hemisphere: false,
-            shading: Shading::Global,
-            rr_continue: 0.65,
-            use_bvh: true,
-            bvh: BvhOptions::default(),
-            seed: 0,
-            cell: None,
-            integrator: IntegratorKind::Wavefront,
-            sample_range: None,
-            all_effects: false,
-            isa: crate::cpu::Isa::default(),
-            cs184_light_pdf: false,
-            mis: true,
-            rr_throughput: false,
-            rr_depth: 1,
-            sampler: crate::sampling::SamplerKind::Independent,
-        }
-    }
-}
-
 impl Settings {
+    /// The defaults for a scene of `dialect`: a CS184 scene keeps the seed's pictures (fixed
+    /// roulette from depth 1, independent random numbers); any other file gets the
+    /// estimator and pattern that reached a given error soonest in the end-to-end harness
+    /// (docs/decisions.md, "Russian roulette" and "Samplers"): throughput roulette from
+    /// depth 5 and Sobol points. The dialect's other rules: [`crate::cs184`].
+    pub fn for_dialect(dialect: Dialect) -> Settings {
+        let mut s = Settings::default();
+        match dialect {
+            Dialect::Cs184 => {
+                s.paths.roulette.kind = RouletteKind::Fixed;
+                s.sampling.sampler = crate::cs184::SAMPLER;
+            }
+            Dialect::Standard => {
+                s.paths.roulette.kind = RouletteKind::Throughput;
+                s.sampling.sampler = crate::sampling::SamplerKind::Sobol;
+            }
+        }
+        s.paths.roulette.start_depth = s.paths.roulette.kind.default_start_depth();
+        s
+    }
+
+    /// The defaults for `scene`: [`Settings::for_dialect`] of the dialect its loader
+    /// recorded. The command line starts here and applies its flags on top.
+    pub fn for_scene(scene: &crate::scene::Scene) -> Settings {
+        Settings::for_dialect(scene.source.dialect)
+    }
+
+    /// These settings with `change` applied: `base.with(|s| s.sampling.spp = 4)`, for the
+    /// renders that differ from a base in a field or two (a struct update would have to
+    /// spell out the field's group).
+    pub fn with(mut self, change: impl FnOnce(&mut Settings)) -> Settings {
+        change(&mut self);
+        self
+    }
+
     /// The sample indices this render takes for each pixel, `[first, end)`.
     pub fn sample_span(&self) -> (u32, u32) {
-        let spp = self.spp.max(1);
-        match self.sample_range {
+        let spp = self.sampling.spp.max(1);
+        match self.sampling.sample_range {
             Some((a, b)) => (a.min(spp), b.min(spp)),
             None => (0, spp),
         }
@@ -160,13 +305,14 @@ impl Settings {
 
     /// The pixel rectangle to render: the `-p` cell clipped to the image, or the whole image.
     pub fn region(&self) -> Cell {
-        match self.cell {
+        let ImageSettings { width, height, cell } = self.image;
+        match cell {
             Some(c) => {
-                let x = c.x.min(self.width);
-                let y = c.y.min(self.height);
-                Cell { x, y, w: c.w.min(self.width - x), h: c.h.min(self.height - y) }
+                let x = c.x.min(width);
+                let y = c.y.min(height);
+                Cell { x, y, w: c.w.min(width - x), h: c.h.min(height - y) }
             }
-            None => Cell { x: 0, y: 0, w: self.width, h: self.height },
+            None => Cell { x: 0, y: 0, w: width, h: height },
         }
     }
 }

@@ -4,7 +4,7 @@
 
 use crate::common::{agree, render};
 use wavepath::Effects;
-use wavepath::Settings;
+use wavepath::RouletteKind;
 use wavepath::default_scene;
 
 /// The embedded Cornell box at depth 8, 32x24, 64 spp: per 8x8 region, each roulette's mean
@@ -13,12 +13,19 @@ use wavepath::default_scene;
 #[test]
 fn every_roulette_converges_to_the_same_image() {
     let scene = default_scene();
-    let base = Settings { rr_continue: 1.0, ..render::settings(32, 24, 8, 64) };
+    let mut base = render::settings(32, 24, 8, 64);
+    base.paths.roulette.continue_prob = 1.0;
     let none = render::wavefront(&scene, &base).0;
     let variants = [
-        ("fixed 0.65 from depth 1", Settings { rr_continue: 0.65, ..base.clone() }),
-        ("throughput from depth 1", Settings { rr_throughput: true, ..base.clone() }),
-        ("throughput from depth 3", Settings { rr_throughput: true, rr_depth: 3, ..base.clone() }),
+        ("fixed 0.65 from depth 1", base.clone().with(|s| s.paths.roulette.continue_prob = 0.65)),
+        ("throughput from depth 1", base.clone().with(|s| s.paths.roulette.kind = RouletteKind::Throughput)),
+        (
+            "throughput from depth 3",
+            base.clone().with(|s| {
+                s.paths.roulette.kind = RouletteKind::Throughput;
+                s.paths.roulette.start_depth = 3
+            }),
+        ),
     ];
     for (what, s) in variants {
         let (acc, st) = render::wavefront(&scene, &s);
@@ -32,7 +39,12 @@ fn every_roulette_converges_to_the_same_image() {
 #[test]
 fn roulette_runs_only_where_paths_reach_its_depth() {
     let scene = default_scene();
-    let s = |m: u32, rr_depth: u32| Settings { rr_throughput: true, rr_depth, ..render::settings(8, 6, m, 1) };
+    let s = |m: u32, rr_depth: u32| {
+        render::settings(8, 6, m, 1).with(|s| {
+            s.paths.roulette.kind = RouletteKind::Throughput;
+            s.paths.roulette.start_depth = rr_depth
+        })
+    };
     assert!(Effects::of(&scene, &s(3, 1)).russian_roulette);
     assert!(!Effects::of(&scene, &s(6, 5)).russian_roulette);
     assert!(Effects::of(&scene, &s(7, 5)).russian_roulette);

@@ -2,4 +2,5 @@
 //! writes.
 
 mod damaged;
+mod dialect;
 mod ply_bulk;

@@ -85,8 +85,8 @@ pub struct BuildInfo {
 /// Builds the intersector the settings ask for: the BVH (built and stored as `s.bvh` says, box tests
 /// of at most `s.isa`), or brute force for `--no-bvh`.
 pub fn build(scene: &crate::scene::Scene, s: &crate::settings::Settings) -> (Box<dyn Intersector>, BuildInfo) {
-    if s.use_bvh {
-        let bvh = Bvh::build_with(scene, s.bvh).with_isa(s.isa);
+    if s.accel.use_bvh {
+        let bvh = Bvh::build_with(scene, s.accel.bvh).with_isa(s.execution.isa);
         let info = bvh.info();
         return (Box::new(bvh), info);
     }

@@ -7,7 +7,7 @@ use std::path::Path;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Tonemap {
     /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1), truncated to
-    /// 8 bits as the reference writes its bytes.
+    /// 8 bits as the reference writes its bytes (the rules: [`crate::cs184`]).
     #[default]
     Cs184,
     /// Plain sRGB encoding of clamp(L, 0, 1), rounded to the nearest 8-bit level.
@@ -19,7 +19,7 @@ impl Tonemap {
     pub fn apply(self, l: f32) -> f32 {
         let l = if l.is_finite() { l.max(0.0) } else { 0.0 };
         match self {
-            Tonemap::Cs184 => (std::f32::consts::SQRT_2 * l).powf(1.0 / 2.2).clamp(0.0, 1.0),
+            Tonemap::Cs184 => crate::cs184::transfer(l),
             Tonemap::Srgb => {
                 let l = l.min(1.0);
                 if l <= 0.003_130_8 { 12.92 * l } else { 1.055 * l.powf(1.0 / 2.4) - 0.055 }
@@ -33,7 +33,7 @@ impl Tonemap {
     pub fn byte(self, l: f32) -> u8 {
         let v = self.apply(l) * 255.0;
         match self {
-            Tonemap::Cs184 => v as u8,
+            Tonemap::Cs184 => crate::cs184::byte(v),
             Tonemap::Srgb => (v + 0.5) as u8,
         }
     }

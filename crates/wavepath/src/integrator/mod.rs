@@ -24,7 +24,7 @@ use crate::geometry::{Hit, Ray};
 use crate::lights::{LightSet, SampledLight};
 use crate::sampling::{Frame, Pattern, Sampler, warp};
 use crate::scene::{Scene, Textures};
-use crate::settings::{Settings, Shading};
+use crate::settings::{RouletteKind, Settings, Shading};
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -135,16 +135,19 @@ pub struct DirectRay {
 impl<'a> Transport<'a> {
     pub fn new(scene: &'a Scene, settings: &Settings) -> Self {
         let mut lights = LightSet::new(scene);
-        if settings.cs184_light_pdf {
+        if settings.cs184.light_pdf {
             lights.use_cs184_area_pdf();
         }
         let models: Vec<crate::bsdf::Model> =
             scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect();
         let non_diffuse = models.iter().any(|m| m.kind() != crate::bsdf::Kind::Diffuse);
-        let max_depth =
-            if settings.shading == Shading::Direct { settings.max_depth.min(1) } else { settings.max_depth };
-        let light_samples = settings.light_samples.max(1);
-        let direct_per_vertex = if settings.hemisphere {
+        let max_depth = if settings.paths.shading == Shading::Direct {
+            settings.paths.max_depth.min(1)
+        } else {
+            settings.paths.max_depth
+        };
+        let light_samples = settings.sampling.light_samples.max(1);
+        let direct_per_vertex = if settings.paths.hemisphere {
             // As the seed: as many hemisphere samples as light sampling would take for
             // area lights, lights x -l.
             (lights.lights.len() as u32 * light_samples).max(light_samples)
@@ -186,14 +189,14 @@ impl<'a> Transport<'a> {
             textures: Textures::new(scene),
             lights,
             max_depth,
-            accumulate: settings.accumulate,
-            hemisphere: settings.hemisphere,
+            accumulate: settings.paths.accumulate,
+            hemisphere: settings.paths.hemisphere,
             light_samples,
-            rr_continue: settings.rr_continue.clamp(1e-3, 1.0),
-            rr_throughput: settings.rr_throughput,
-            rr_depth: settings.rr_depth.max(1),
-            seed: settings.seed,
-            pattern: Pattern::new(settings.sampler, settings.spp),
+            rr_continue: settings.paths.roulette.continue_prob.clamp(1e-3, 1.0),
+            rr_throughput: settings.paths.roulette.kind == RouletteKind::Throughput,
+            rr_depth: settings.paths.roulette.start_depth.max(1),
+            seed: settings.sampling.seed,
+            pattern: Pattern::new(settings.sampling.sampler, settings.sampling.spp),
             direct_per_vertex,
             tan_half_fov: (
                 (scene.camera.hfov_deg.to_radians() * 0.5).tan(),

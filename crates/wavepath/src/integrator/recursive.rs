@@ -107,9 +107,9 @@ pub fn render_recursive(
 ) -> (Accumulator, RenderStats) {
     let start = Instant::now();
     let transport = Transport::new(scene, settings);
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = (settings.image.width, settings.image.height);
     let region = settings.region();
-    let spp = settings.spp.max(1);
+    let spp = settings.sampling.spp.max(1);
     let mut acc = Accumulator::new(w, h);
     let rows: Vec<RowStats> = acc
         .pixels
@@ -123,7 +123,7 @@ pub fn render_recursive(
                 let mut sums = PixelSums::default();
                 let (first, end) = settings.sample_span();
                 for i in first..end {
-                    if let Some((b, tol)) = settings.adaptive
+                    if let Some((b, tol)) = settings.sampling.adaptive
                         && i > first
                         && i.is_multiple_of(b)
                         && sums.converged(tol)

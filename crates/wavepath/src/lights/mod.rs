@@ -1,7 +1,7 @@
 //! Light sampling: every light of a scene as something a shading point can draw a
 //! direction toward, with the radiance that arrives and its density.
 //!
-//! Semantics follow the CS184 reference renderer:
+//! Semantics follow the CS184 reference renderer (every course rule: [`crate::cs184`]):
 //! - point and spot lights have no distance falloff (the reference ignores COLLADA
 //!   attenuation and divides by nothing); a directional light is a radiance along a direction;
 //! - an area light is one-sided, emitting toward `direction`;
@@ -43,7 +43,8 @@ pub enum SampledLight {
     /// `cs184_pdf`: use the course renderer's pdf, `dist / (area cos)` instead of
     /// `dist^2 / (area cos)`. Its skeleton takes the light-side cosine from the unnormalised
     /// vector to the light point, so every light-sampled estimate it makes is the correct
-    /// one times that distance; kept only to compare with renderers built on it.
+    /// one times that distance; kept only to compare with renderers built on it
+    /// ([`crate::cs184::area_pdf_distance`]).
     Area {
         position: Vec3,
         normal: Vec3,
@@ -107,7 +108,7 @@ impl SampledLight {
                 let q = position + (u[0] - 0.5) * dim_x + (u[1] - 0.5) * dim_y;
                 // One-sided: the light emits toward `normal`, so it must face the point.
                 let (wi, inv_pdf) = area_to_solid_angle(p, q, normal, area, true)?;
-                let bias = if cs184_pdf { (q - p).length() } else { 1.0 };
+                let bias = if cs184_pdf { crate::cs184::area_light_pdf_weight((q - p).length()) } else { 1.0 };
                 Some(LightSample { wi, target: Some(q), weight: radiance * (inv_pdf * bias) })
             }
             SampledLight::Infinite(ref inf) => inf.sample(n, [u[0], u[1]]),
@@ -154,7 +155,7 @@ impl SampledLight {
             SampledLight::Area { normal, area, cs184_pdf, .. } => {
                 let ls = self.sample(p, n, u)?;
                 let dist2 = (ls.target? - p).length_squared();
-                let d = if cs184_pdf { dist2.sqrt() } else { dist2 };
+                let d = if cs184_pdf { crate::cs184::area_pdf_distance(dist2.sqrt()) } else { dist2 };
                 Some((ls, d / (-ls.wi.dot(normal) * area)))
             }
             SampledLight::Infinite(ref inf) => {
@@ -196,7 +197,7 @@ impl SampledLight {
                 {
                     return None;
                 }
-                let pdf = if cs184_pdf { t } else { t * t } / (cos_l * area);
+                let pdf = if cs184_pdf { crate::cs184::area_pdf_distance(t) } else { t * t } / (cos_l * area);
                 pdf.is_finite().then_some((radiance, pdf))
             }
             SampledLight::Infinite(ref inf) => match seen {

@@ -1,19 +1,18 @@
 //! The embedded default scene and the defaults given to files that carry no camera or light.
 
-use crate::scene::{Camera, FovFit, Light, Material, Mesh, Scene, Sphere};
+use crate::cs184::Dialect;
+use crate::scene::{Camera, FovFit, Light, Material, Mesh, Scene, SceneSource, Sphere};
+
 use glam::{Vec3, vec3};
 
 /// Gives a mesh-only file (OBJ, PLY, glTF without camera or lights) a camera that frames
-/// its bounds and, when nothing emits light, a sky-like hemisphere light so that
-/// `wavepath bunny.obj` shows the shape.
+/// its bounds and, when nothing lights it, the default sky so that `wavepath bunny.obj`
+/// shows the shape (the rule: [`Scene::set_environment`]).
 pub fn finish_mesh_only(scene: &mut Scene, has_camera: bool) {
     if !has_camera && let Some((lo, hi)) = scene.bounds() {
         scene.camera = Camera::framing(lo, hi);
     }
-    let emits = scene.materials.iter().any(|m| m.is_emissive());
-    if scene.lights.is_empty() && !emits {
-        scene.lights.push(Light::Hemisphere { radiance: Vec3::ONE });
-    }
+    scene.light_by_default_sky();
 }
 
 /// A Cornell box with two diffuse spheres, the same layout and colours as the CS184
@@ -59,6 +58,7 @@ pub fn default_scene() -> Scene {
     }];
     let mut scene = Scene {
         name: "default (Cornell box with two spheres)".into(),
+        source: SceneSource { dialect: Dialect::Cs184, reader: "embedded", default_sky: false },
         mesh,
         spheres,
         materials,

@@ -25,11 +25,19 @@ struct MtlState {
     notes: Vec<String>,
 }
 
+/// [`crate::scene::SceneSource::reader`] of a file the parallel reader read.
+pub const BULK_READER: &str = "obj-bulk";
+/// [`crate::scene::SceneSource::reader`] of a file tobj read: anything beyond positions and
+/// faces (groups, materials, normals, colours) and every damaged file, silently but for
+/// this name.
+pub const GENERAL_READER: &str = "tobj";
+
 pub fn load(path: &Path) -> Result<Scene> {
     let shown = path.display();
     let bytes = std::fs::read(path).with_context(|| format!("{shown}: cannot open"))?;
     if let Some(mesh) = bulk::parse(&decode_text(&bytes)) {
         let mut scene = Scene { mesh, materials: vec![Material::default()], ..Scene::default() };
+        scene.source.reader = BULK_READER;
         super::finish_mesh_only(&mut scene, false);
         return Ok(scene);
     }
@@ -241,6 +249,7 @@ fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Materia
         mesh.normals = None;
     }
     let mut scene = Scene { mesh, materials, ..Scene::default() };
+    scene.source.reader = GENERAL_READER;
     super::finish_mesh_only(&mut scene, false);
     Ok(scene)
 }

@@ -35,13 +35,13 @@ pub fn render_with_progress(
     settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<RenderOutput> {
-    let (acc, stats) = match settings.shading {
+    let (acc, stats) = match settings.paths.shading {
         Shading::Normals => {
             let (film, stats) = render_normals(scene, accel, settings);
-            let samples = vec![settings.spp; film.pixels.len()];
+            let samples = vec![settings.sampling.spp; film.pixels.len()];
             return Ok(RenderOutput { film, stats, samples });
         }
-        Shading::Direct | Shading::Global => match settings.integrator {
+        Shading::Direct | Shading::Global => match settings.execution.integrator {
             IntegratorKind::Wavefront => render_wavefront(scene, accel, settings, progress),
             IntegratorKind::Recursive => render_recursive(scene, accel, settings, progress),
         },
@@ -57,7 +57,7 @@ pub fn render_sums(
     settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Accumulator, RenderStats)> {
-    Ok(match (settings.shading, settings.integrator) {
+    Ok(match (settings.paths.shading, settings.execution.integrator) {
         (Shading::Normals, _) => anyhow::bail!("normals shading keeps no per-pixel sums"),
         (_, IntegratorKind::Wavefront) => render_wavefront(scene, accel, settings, progress),
         (_, IntegratorKind::Recursive) => render_recursive(scene, accel, settings, progress),

@@ -14,9 +14,9 @@ use std::time::Instant;
 /// Samples are jittered inside the pixel (one uniform offset per sample; the pixel centre
 /// when `spp` is 1, as the reference does), with random numbers from (seed, pixel, sample).
 pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Settings) -> (Film, RenderStats) {
-    let (w, h) = (settings.width, settings.height);
+    let (w, h) = (settings.image.width, settings.image.height);
     let region = settings.region();
-    let spp = settings.spp.max(1);
+    let spp = settings.sampling.spp.max(1);
     let start = Instant::now();
     let mut film = Film::new(w, h);
     let counters: Vec<TraceCounters> = film
@@ -34,7 +34,7 @@ pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Setting
                     let (jx, jy) = if spp == 1 {
                         (0.5, 0.5)
                     } else {
-                        Sampler::for_sample(settings.seed, pixel, s as u64).next_2d()
+                        Sampler::for_sample(settings.sampling.seed, pixel, s as u64).next_2d()
                     };
                     let ray = scene.camera.generate_ray((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
                     if let Some(hit) = accel.closest_hit(&ray, &mut c) {

@@ -47,9 +47,9 @@ pub enum FovFit {
 impl FovFit {
     /// The CS184 rule for a file's optics: whichever of its angles is too narrow for the
     /// 4:3 start-up window is widened, `t = max(tan(vfov/2), 0.75 tan(hfov/2))`.
+    /// ([`crate::cs184::fov_fit_tan_half_600`]).
     pub fn cs184(hfov_deg: f32, vfov_deg: f32) -> FovFit {
-        let half_tan = |deg: f32| (deg.to_radians() * 0.5).tan();
-        FovFit::Cs184 { tan_half_600: half_tan(vfov_deg).max(0.75 * half_tan(hfov_deg)) }
+        FovFit::Cs184 { tan_half_600: crate::cs184::fov_fit_tan_half_600(hfov_deg, vfov_deg) }
     }
 }
 
@@ -141,7 +141,8 @@ impl Camera {
         cam
     }
 
-    /// The reference renderer's placement of a COLLADA camera: keep only the direction
+    /// The reference renderer's placement of a COLLADA camera (a CS184 rule:
+    /// [`crate::cs184`] lists them all): keep only the direction
     /// `view_hint` (from the target toward the camera), put the camera at
     /// `c + 1.5 |diag| view_hint` looking at the bounding-box centre `c`, with +Y up.
     pub fn cs184_place(&mut self, view_hint: Vec3, lo: Vec3, hi: Vec3) {
@@ -244,8 +245,9 @@ impl Camera {
     }
 }
 
-/// The reference renderer's default focal distance of the thin lens.
-pub const CS184_FOCAL_DISTANCE: f32 = 4.7;
+/// The reference renderer's default focal distance of the thin lens
+/// ([`crate::cs184::FOCAL_DISTANCE`]).
+pub const CS184_FOCAL_DISTANCE: f32 = crate::cs184::FOCAL_DISTANCE;
 
 /// The direction from a box's centre toward the camera that sees a large face of the box at
 /// three quarters. A face at least half as large as the largest counts as large; among those

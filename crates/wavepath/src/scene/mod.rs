@@ -26,6 +26,7 @@ pub use normals::{area_weighted_vertex_normals, cs184_vertex_normals};
 pub use surface::SurfacePoint;
 pub use texture::Textures;
 
+use crate::cs184::Dialect;
 use glam::Vec3;
 
 /// A light source as the file describes it, in world space.
@@ -92,9 +93,70 @@ pub struct Scene {
     /// kept with the scene rather than printed, so that a file that then fails to load gets
     /// its one-line error alone.
     pub notes: Vec<String>,
+    /// What read the scene and which conventions it follows.
+    pub source: SceneSource,
 }
 
+/// Where a scene came from, recorded by its loader: the conventions it follows (which choose
+/// the render's defaults, [`Settings::for_scene`](crate::settings::Settings::for_scene)) and
+/// which reader parsed it (a fast reader may hand a file it cannot read to a general one;
+/// the log, `info` and the stats show which ran, and the tests assert it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SceneSource {
+    pub dialect: Dialect,
+    /// The reader that parsed the file: "collada", "obj-bulk", "tobj", "ply-bulk",
+    /// "ply-general", "gltf"; "embedded" for the default scene, "arrays" for a scene a
+    /// caller built.
+    pub reader: &'static str,
+    /// The loader gave the scene the default sky because nothing in it emits light (see
+    /// [`Scene::set_environment`]).
+    pub default_sky: bool,
+}
+
+impl Default for SceneSource {
+    /// A scene built from arrays: nothing asks for the CS184 conventions.
+    fn default() -> Self {
+        SceneSource { dialect: Dialect::Standard, reader: "arrays", default_sky: false }
+    }
+}
+
+/// The light of a scene that nothing else lights: constant radiance 1 from the upper
+/// hemisphere, a sky, so that a bare mesh file shows its shape.
+pub const DEFAULT_SKY: Light = Light::Hemisphere { radiance: Vec3::ONE };
+
 impl Scene {
+    /// Whether anything lights the scene: a light, an emitting material or an environment.
+    pub fn is_lit(&self) -> bool {
+        !self.lights.is_empty()
+            || self.materials.iter().any(|m| m.is_emissive())
+            || !matches!(self.env, Environment::None)
+    }
+
+    /// Adds the default sky ([`DEFAULT_SKY`]) when nothing lights the scene, and records
+    /// that it did ([`SceneSource::default_sky`]). The rule: the default sky only when the
+    /// scene has no lights, no emitters and no environment.
+    pub fn light_by_default_sky(&mut self) {
+        if !self.is_lit() {
+            self.lights.push(DEFAULT_SKY);
+            self.source.default_sky = true;
+        }
+    }
+
+    /// Replaces the environment, keeping the default sky's rule: an environment lights the
+    /// scene, so the sky the loader added for want of light is taken away (a map given to a
+    /// bare mesh is the light, not the map plus a sky); without one, an unlit scene gets the
+    /// sky back.
+    pub fn set_environment(&mut self, env: Environment) {
+        if self.source.default_sky {
+            if let Some(i) = self.lights.iter().position(|l| *l == DEFAULT_SKY) {
+                self.lights.remove(i);
+            }
+            self.source.default_sky = false;
+        }
+        self.env = env;
+        self.light_by_default_sky();
+    }
+
     /// Frees the mesh's texture coordinates when no material has a texture to look up (they
     /// are read for nothing else): 8 bytes a vertex of a scanned mesh that came with uvs.
     pub fn drop_unused_uvs(&mut self) {

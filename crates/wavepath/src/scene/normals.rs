@@ -22,6 +22,7 @@ pub fn area_weighted_vertex_normals(positions: &[Vec3], triangles: &[[u32; 3]]) 
     sum.iter().zip(&first).map(|(&s, &f)| s.try_normalize().or_else(|| f.try_normalize()).unwrap_or(Vec3::Y)).collect()
 }
 
+/// (A CS184 rule: [`crate::cs184`] lists them all.)
 /// The vertex normals the CS184 reference renderer computes for a COLLADA mesh, so that its
 /// normal view and its shading are reproduced: it builds a half-edge mesh and, at an
 /// interior vertex, sums the area vectors of the faces around it (as

@@ -2,7 +2,7 @@ use super::RenderStats;
 use crate::accel::BuildInfo;
 use crate::effects::Effects;
 use crate::scene::Scene;
-use crate::settings::Settings;
+use crate::settings::{Roulette, Settings};
 use serde_json::{Value, json};
 
 /// The `--stats` JSON object; the `json!` literal below is its schema.
@@ -14,11 +14,14 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
         "spheres": scene.spheres.len(),
         "mesh_bytes": scene.mesh.bytes(),
         "lights": scene.lights.len(),
-        "width": s.width,
-        "height": s.height,
-        "spp": s.spp,
-        "sampler": s.sampler.name(),
-        "threads": if s.threads == 0 { rayon::current_num_threads() } else { s.threads },
+        "width": s.image.width,
+        "height": s.image.height,
+        "spp": s.sampling.spp,
+        "sampler": s.sampling.sampler.name(),
+        "roulette": roulette_json(&s.paths.roulette),
+        "dialect": scene.source.dialect.name(),
+        "reader": scene.source.reader,
+        "threads": if s.execution.threads == 0 { rayon::current_num_threads() } else { s.execution.threads },
         "effects": effects.names(),
         "effect_reasons": effects.on,
         "bvh": build,
@@ -36,4 +39,9 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
         "samples_per_pixel": { "mean": mean, "min": min, "max": max },
         "invalid_samples": st.invalid_samples,
     })
+}
+
+/// The roulette a render used, as the stats and `wavepath info` report it.
+pub fn roulette_json(r: &Roulette) -> Value {
+    json!({ "kind": r.kind.name(), "continue_prob": r.continue_prob, "start_depth": r.start_depth })
 }

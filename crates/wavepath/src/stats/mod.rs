@@ -122,4 +122,4 @@ impl RenderStats {
 }
 
 mod json;
-pub use json::to_json;
+pub use json::{roulette_json, to_json};

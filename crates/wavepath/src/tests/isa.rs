@@ -28,19 +28,17 @@ fn every_instruction_set_renders_the_scalar_image() {
         }
     }
     for (name, scene) in &scenes {
-        let base = Settings {
-            width: 40,
-            height: 30,
-            spp: 4,
-            light_samples: 2,
-            max_depth: 4,
-            shading: Shading::Global,
-            threads: 1,
-            ..Settings::default()
-        };
+        let mut base = Settings::default();
+        base.image.width = 40;
+        base.image.height = 30;
+        base.sampling.spp = 4;
+        base.sampling.light_samples = 2;
+        base.paths.max_depth = 4;
+        base.paths.shading = Shading::Global;
+        base.execution.threads = 1;
         let mut scene = scene.clone();
         scene.camera.fit_aspect(40.0 / 30.0);
-        let scalar = image(&scene, &Settings { isa: Isa::Scalar, ..base.clone() });
+        let scalar = image(&scene, &base.clone().with(|s| s.execution.isa = Isa::Scalar));
         let lit = scalar.iter().filter(|p| p.iter().any(|&b| f32::from_bits(b) > 0.0)).count();
         assert!(lit > scalar.len() / 4, "{name}: only {lit} lit pixels");
         // Each path the CPU runs, once: a request this CPU cannot honour falls back to one
@@ -52,7 +50,7 @@ fn every_instruction_set_renders_the_scalar_image() {
                 continue;
             }
             ran.push(isa.effective());
-            let got = image(&scene, &Settings { isa, ..base.clone() });
+            let got = image(&scene, &base.clone().with(|s| s.execution.isa = isa));
             let differ = got.iter().zip(&scalar).filter(|(a, b)| a != b).count();
             assert_eq!(
                 differ,

@@ -10,7 +10,9 @@ use std::path::{Path, PathBuf};
 const LAYERS: &[&[&str]] = &[
     &["cpu", "geometry"],
     &["sampling"],
-    &["scene", "settings"],
+    &["cs184"],
+    &["scene"],
+    &["settings"],
     &["accel", "bsdf", "effects", "film", "lights", "load"],
     &["stats"],
     &["integrator"],

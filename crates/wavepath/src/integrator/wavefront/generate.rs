@@ -121,7 +121,10 @@ mod tests {
         let scene = crate::load::default_scene();
         let (w, h) = (13, 7);
         for (spp, batch) in [(16, 16), (16, 5), (1, 1), (64, 11)] {
-            let s = Settings { width: w, height: h, spp, ..Settings::default() };
+            let mut s = Settings::default();
+            s.image.width = w;
+            s.image.height = h;
+            s.sampling.spp = spp;
             let t = Transport::new(&scene, &s);
             let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
             let wave = Wave { pixels: &pixels, base: 2, batch };

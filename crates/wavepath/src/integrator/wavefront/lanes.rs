@@ -373,7 +373,7 @@ mod tests {
     use crate::accel::{BruteForce, TraceCounters};
     use crate::integrator::wavefront::generate::{Wave, generate};
     use crate::integrator::wavefront::{Kernel, compact, shade, traverse};
-    use crate::settings::{Settings, Shading};
+    use crate::settings::{RouletteKind, Settings, Shading};
 
     type K = Kernel<true, false, true, true, true, false>;
 
@@ -407,17 +407,15 @@ mod tests {
                     .collect();
                 scene.mesh.normals = Some(normals);
             }
-            let s = Settings {
-                width: 24,
-                height: 18,
-                spp: 8,
-                light_samples: 3,
-                max_depth: 5,
-                shading: Shading::Global,
-                rr_throughput,
-                rr_depth: 1 + rr_throughput as u32,
-                ..Settings::default()
-            };
+            let mut s = Settings::default();
+            s.image.width = 24;
+            s.image.height = 18;
+            s.sampling.spp = 8;
+            s.sampling.light_samples = 3;
+            s.paths.max_depth = 5;
+            s.paths.shading = Shading::Global;
+            s.paths.roulette.kind = if rr_throughput { RouletteKind::Throughput } else { RouletteKind::Fixed };
+            s.paths.roulette.start_depth = 1 + rr_throughput as u32;
             let t = Transport::new(&scene, &s);
             assert!(can_shade(&t, K::NON_DIFFUSE));
             let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU

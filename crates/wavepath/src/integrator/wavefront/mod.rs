@@ -182,7 +182,7 @@ pub fn render_wavefront(
 ) -> (Accumulator, RenderStats) {
     let effects = Effects::of(scene, settings);
     let transport = Transport::new(scene, settings);
-    let lanes = Lanes::of(&transport, &effects, settings.isa);
+    let lanes = Lanes::of(&transport, &effects, settings.execution.isa);
     let job = RenderJob { transport, accel, settings, effects, lanes, progress };
     let e = &job.effects;
     with_kernel!(
@@ -194,7 +194,7 @@ pub fn render_wavefront(
 fn render_frames<F: Features>(job: &RenderJob) -> (Accumulator, RenderStats) {
     let start = Instant::now();
     let s = job.settings;
-    let (w, h) = (s.width, s.height);
+    let (w, h) = (s.image.width, s.image.height);
     let region = s.region();
     let mut acc = Accumulator::new(w, h);
     let mut total = WaveStats::default();
@@ -202,7 +202,7 @@ fn render_frames<F: Features>(job: &RenderJob) -> (Accumulator, RenderStats) {
         .flat_map(|y| (region.x..region.x + region.w).map(move |x| (y * w + x) as u32))
         .collect();
     // Forced on without -a, the bookkeeping runs with a tolerance no pixel meets.
-    let adaptive = match s.adaptive {
+    let adaptive = match s.sampling.adaptive {
         Some(a) => Some(a),
         None if job.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
         None => None,
@@ -263,7 +263,7 @@ fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: 
     let mut st = WaveStats::default();
     let n = wave.len();
     let clock = Instant::now();
-    generate::generate(t, job.lanes.camera, &mut q.paths, wave, s.width, s.height, s.spp.max(1));
+    generate::generate(t, job.lanes.camera, &mut q.paths, wave, s.image.width, s.image.height, s.sampling.spp.max(1));
     st.camera = n as u64;
     let mut clock = lap(clock, &mut st.stages.generate);
     q.slot_radiance.clear();

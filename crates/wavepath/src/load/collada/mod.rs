@@ -1,5 +1,6 @@
 //! COLLADA loader for the CS184 dialect (see COLLADA-CS184.md in the shared scenes) and
-//! the common subset other exporters write.
+//! the common subset other exporters write. The scenes it reads are of the CS184 dialect
+//! (`crate::cs184` lists the course's rules, those of this reader among them).
 //!
 //! The visual scene is walked in document order, so triangles keep the file's order
 //! (instances in node order, primitives in order, polygons fan-triangulated): ray files
@@ -16,7 +17,8 @@ mod transform;
 mod xml;
 
 use super::LoadOptions;
-use crate::scene::{Camera, Scene, Sphere};
+use crate::cs184::Dialect;
+use crate::scene::{Camera, Scene, SceneSource, Sphere};
 use anyhow::{Context, Result, anyhow, bail};
 use geometry::Geometry;
 use glam::Mat4;
@@ -57,7 +59,11 @@ pub fn parse_str(text: &str, name: &str, opts: &LoadOptions) -> Result<Scene> {
         d: &d,
         opts,
         g: transform::up_axis_matrix(&d, root)?,
-        scene: Scene { name: name.to_owned(), ..Scene::default() },
+        scene: Scene {
+            name: name.to_owned(),
+            source: SceneSource { dialect: Dialect::Cs184, reader: "collada", default_sky: false },
+            ..Scene::default()
+        },
         mats: Materials::default(),
         geometries: HashMap::new(),
         camera: None,

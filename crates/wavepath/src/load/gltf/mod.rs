@@ -120,6 +120,7 @@ fn read(path: &Path) -> Result<Scene, String> {
     }
     let has_camera = camera.is_some();
     let mut scene = Scene { mesh, materials, lights, camera: camera.unwrap_or_default(), notes, ..Scene::default() };
+    scene.source.reader = "gltf";
     super::finish_mesh_only(&mut scene, has_camera);
     Ok(scene)
 }

@@ -24,8 +24,9 @@ use std::path::Path;
 pub fn load(path: &Path) -> Result<Scene> {
     let shown = path.display();
     let bytes = read_parallel(path).with_context(|| format!("{shown}: cannot read"))?;
-    let mesh = parse(&bytes).map_err(|e| anyhow!("{shown}: {e}"))?;
+    let (mesh, reader) = parse(&bytes).map_err(|e| anyhow!("{shown}: {e}"))?;
     let mut scene = Scene { mesh, materials: vec![Material::default()], ..Scene::default() };
+    scene.source.reader = reader;
     super::finish_mesh_only(&mut scene, false);
     Ok(scene)
 }
@@ -49,8 +50,15 @@ fn read_parallel(path: &Path) -> std::io::Result<Vec<u8>> {
     std::fs::read(path)
 }
 
-/// Parses a whole PLY file held in memory.
-pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
+/// [`crate::scene::SceneSource::reader`] of a file the bulk reader read.
+pub const BULK_READER: &str = "ply-bulk";
+/// [`crate::scene::SceneSource::reader`] of a file the general parser read.
+pub const GENERAL_READER: &str = "ply-general";
+
+/// Parses a whole PLY file held in memory; also says which reader did
+/// ([`BULK_READER`] or [`GENERAL_READER`]): the bulk reader declines layouts it does not
+/// know, and the general parser then reads them, silently but for this name.
+pub fn parse(bytes: &[u8]) -> Result<(Mesh, &'static str), String> {
     if !bytes.starts_with(b"ply") {
         return Err("not a PLY file (it does not start with 'ply')".into());
     }
@@ -62,9 +70,9 @@ pub fn parse(bytes: &[u8]) -> Result<Mesh, String> {
     let payload = &bytes[header_len(bytes)?..];
     check_counts(&header, payload.len())?;
     if let Some(mesh) = bulk::parse(&header, payload) {
-        return mesh;
+        return mesh.map(|m| (m, BULK_READER));
     }
-    parse_general(&header, &mut reader)
+    parse_general(&header, &mut reader).map(|m| (m, GENERAL_READER))
 }
 
 /// The general parser (ply-rs-bw, element by element): ascii files, polygons, and layouts

@@ -132,7 +132,7 @@ fn batches_of_every_isa_match_single_rays() {
 fn accel_build_switches_between_bvh_and_brute_force() {
     let scene = scene_of(icosphere(4), vec![]);
     let (bvh, info) = build(&scene, &crate::settings::Settings::default());
-    let (brute, binfo) = build(&scene, &crate::settings::Settings { use_bvh: false, ..Default::default() });
+    let (brute, binfo) = build(&scene, &crate::settings::Settings::default().with(|s| s.accel.use_bvh = false));
     assert!(bvh.name().starts_with("bvh8"));
     assert_eq!(brute.name(), "brute force");
     assert!(info.nodes > 0 && binfo.nodes == 0);

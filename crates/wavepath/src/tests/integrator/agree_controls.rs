@@ -72,9 +72,9 @@ fn a_render_biased_by_its_standard_error_does_not_agree() {
     let scene = crate::load::default_scene();
     let base = render::settings(W, H, 4, 16);
     let mut s1 = base.clone();
-    s1.seed = 1;
+    s1.sampling.seed = 1;
     let mut s2 = base;
-    s2.seed = 2;
+    s2.sampling.seed = 2;
     let (a, b) = (render::wavefront(&scene, &s1).0, render::wavefront(&scene, &s2).0);
     assert!(a != b, "the seeds gave the same render");
     let z_max = z_threshold((W / SIZE) * (H / SIZE) * 3);
@@ -131,8 +131,8 @@ fn a_render_biased_by_its_standard_error_does_not_match_the_expectation() {
         ..Scene::default()
     };
     let mut s = render::settings(W, H, 1, 16);
-    s.hemisphere = true;
-    s.light_samples = 4;
+    s.paths.hemisphere = true;
+    s.sampling.light_samples = 4;
     let acc = render::wavefront(&scene, &s).0;
     let expect = |_: usize, _: usize| Some(DVec3::splat(0.9));
     let (worst, checked) = agree::regions_match(&acc, SIZE, expect, 0.0, "unbiased").expect("the unbiased render");

@@ -65,7 +65,9 @@ fn white_furnace_converges_to_the_environment() {
         ..Scene::default()
     };
     for rr in [0.65, 1.0] {
-        let s = Settings { rr_continue: rr, light_samples: 1, ..settings(64, 32) };
+        let mut s = settings(64, 32);
+        s.paths.roulette.continue_prob = rr;
+        s.sampling.light_samples = 1;
         let acc = render(&scene, &s);
         assert_regions(&acc, |_, _| Some(Vec3::splat(0.5)), &format!("furnace --rr {rr}"));
         // Also per pixel, loosely: no pixel is far from 0.5.
@@ -115,7 +117,7 @@ fn plane_under_a_point_light() {
     }
     assert!(checked > W * H / 2);
     // Nothing can bounce twice off a single plane: -m 2 -o 0 is black, -m 2 -o 1 equals -m 1.
-    let only_second = render(&scene, &Settings { accumulate: false, ..settings(2, 4) });
+    let only_second = render(&scene, &settings(2, 4).with(|s| s.paths.accumulate = false));
     assert!(only_second.pixels.iter().all(|p| p.mean() == Vec3::ZERO));
     let both = render(&scene, &settings(2, 1));
     for (a, b) in both.pixels.iter().zip(&acc.pixels) {
@@ -147,7 +149,13 @@ fn plane_under_the_hemisphere_light() {
     let expect = |x, y| floor_point(&scene.camera, x, y, 10.0).map(|_| Vec3::splat(0.9));
     let importance = render(&scene, &settings(1, 16));
     assert_regions(&importance, expect, "hemisphere light, light sampling");
-    let hemi = render(&scene, &Settings { hemisphere: true, light_samples: 4, ..settings(1, 64) });
+    let hemi = render(
+        &scene,
+        &settings(1, 64).with(|s| {
+            s.paths.hemisphere = true;
+            s.sampling.light_samples = 4
+        }),
+    );
     assert_regions(&hemi, expect, "hemisphere light, hemisphere sampling");
     // A camera looking at the sky sees black.
     let mut up = scene.clone();
@@ -182,14 +190,23 @@ fn plane_under_an_emissive_rectangle() {
     };
     // The camera sits under the emitter, so every pixel sees the floor.
     assert!((0..H).all(|y| (0..W).all(|x| expect(x, y).is_some())));
-    let importance = render(&scene, &Settings { light_samples: 4, ..settings(1, 16) });
+    let importance = render(&scene, &settings(1, 16).with(|s| s.sampling.light_samples = 4));
     assert_regions(&importance, expect, "emitter, light sampling");
-    let hemi = render(&scene, &Settings { hemisphere: true, light_samples: 8, ..settings(1, 64) });
+    let hemi = render(
+        &scene,
+        &settings(1, 64).with(|s| {
+            s.paths.hemisphere = true;
+            s.sampling.light_samples = 8
+        }),
+    );
     assert_regions(&hemi, expect, "emitter, hemisphere sampling");
     let reference = render_recursive(
         &scene,
         &BruteForce::new(&scene),
-        &Settings { hemisphere: true, light_samples: 8, ..settings(1, 64) },
+        &settings(1, 64).with(|s| {
+            s.paths.hemisphere = true;
+            s.sampling.light_samples = 8
+        }),
         &|_| {},
     )
     .0;

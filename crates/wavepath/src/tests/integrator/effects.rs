@@ -25,7 +25,8 @@ fn stages_json(scene: &Scene, s: &Settings, st: &RenderStats) -> serde_json::Val
 #[test]
 fn normal_shading_runs_no_shadow_stage() {
     let scene = default_scene();
-    let s = Settings { shading: Shading::Normals, ..settings(1, 2) };
+    let mut s = settings(1, 2);
+    s.paths.shading = Shading::Normals;
     let e = Effects::of(&scene, &s);
     assert!(e.normal_shading && !e.direct && !e.indirect);
     assert_eq!(e.names(), ["normal-shading", "spheres"]);
@@ -96,8 +97,11 @@ fn forcing_all_effects_on_gives_the_same_image() {
     for (depth, hemisphere, rr) in
         [(1, false, 0.65), (2, false, 0.65), (5, false, 1.0), (5, false, 0.65), (3, true, 0.65)]
     {
-        let s = Settings { hemisphere, rr_continue: rr, ..settings(depth, 8) };
-        let forced = Settings { all_effects: true, ..s.clone() };
+        let mut s = settings(depth, 8);
+        s.paths.hemisphere = hemisphere;
+        s.paths.roulette.continue_prob = rr;
+        let mut forced = s.clone();
+        forced.execution.all_effects = true;
         let e = Effects::of(&scene, &forced);
         assert!(e.forced && e.indirect && e.russian_roulette && e.direct && e.environment && e.adaptive);
         let (a, sa) = render_wavefront(&scene, bvh.as_ref(), &s, &|_| {});

@@ -8,7 +8,6 @@
 use super::mis::{GAP, H, HALF, W, floor_points, scene};
 use crate::film::Accumulator;
 use crate::scene::{Camera, Scene};
-use crate::settings::Settings;
 use crate::tests::common::render;
 use glam::Vec3;
 
@@ -60,8 +59,8 @@ fn one_sided_emitters_light_only_their_front() {
     let s = render::settings(W, H, 2, 16);
     for (what, s) in [
         ("light sampling and MIS", s.clone()),
-        ("light sampling alone", Settings { mis: false, ..s.clone() }),
-        ("hemisphere probes (-H)", Settings { hemisphere: true, ..s.clone() }),
+        ("light sampling alone", s.clone().with(|s| s.paths.mis = false)),
+        ("hemisphere probes (-H)", s.clone().with(|s| s.paths.hemisphere = true)),
     ] {
         for recursive in [false, true] {
             let run = |scene: &Scene| {

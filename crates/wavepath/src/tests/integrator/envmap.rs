@@ -153,15 +153,13 @@ fn white_plane_under_the_map_reflects_its_irradiance() {
     scene.env = Environment::Map(map);
     let e = crate::effects::Effects::of(&scene, &Settings::default());
     assert!(e.environment_map && e.environment && e.infinite_light, "{:?}", e.names());
-    let s = Settings {
-        width: 16,
-        height: 16,
-        spp: 4,
-        light_samples: 16,
-        max_depth: 1,
-        shading: Shading::Direct,
-        ..Settings::default()
-    };
+    let mut s = Settings::default();
+    s.image.width = 16;
+    s.image.height = 16;
+    s.sampling.spp = 4;
+    s.sampling.light_samples = 16;
+    s.paths.max_depth = 1;
+    s.paths.shading = Shading::Direct;
     let (film, _) = crate::render::render(&scene, &BruteForce::new(&scene), &s).unwrap();
     let n = film.pixels.len() as f64;
     let mean = film.pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / n;
@@ -205,7 +203,11 @@ fn camera_misses_show_the_map_in_the_right_direction() {
             ..Scene::default()
         };
         scene.camera.nclip = 0.0;
-        let s = Settings { width: 1, height: 1, max_depth: 1, shading: Shading::Direct, ..Settings::default() };
+        let mut s = Settings::default();
+        s.image.width = 1;
+        s.image.height = 1;
+        s.paths.max_depth = 1;
+        s.paths.shading = Shading::Direct;
         let (film, _) = crate::render::render(&scene, &BruteForce::new(&scene), &s).unwrap();
         let got = film.get(0, 0);
         let want = map.texel(x, y);
@@ -219,4 +221,30 @@ fn camera_misses_show_the_map_in_the_right_direction() {
     assert_eq!(map.texel_of(Vec3::new(0.0, 0.05, 1.0).normalize()).0, 300);
     assert_eq!(map.texel_of(Vec3::new(0.0, 0.05, -1.0).normalize()).0, 900);
     assert!(map.texel_of(Vec3::new(0.0, 0.999, 0.01).normalize()).1 < 20);
+}
+
+/// A scene with no light of its own gets the default sky; an environment given to it
+/// afterwards is its light instead, not the map plus the sky: a white plane under a constant
+/// map of radiance 0.5 reflects the map's irradiance alone, E / pi = 0.5 (the sky would add
+/// its own radiance, 1, to every pixel).
+#[test]
+fn a_map_replaces_the_default_sky() {
+    let mut scene = white_plane();
+    scene.light_by_default_sky();
+    assert_eq!(scene.lights, [crate::scene::DEFAULT_SKY], "an unlit scene gets the sky");
+    let grey = EnvMap::from_texels("grey".into(), 8, 4, vec![Vec3::splat(0.5); 32]).unwrap();
+    scene.set_environment(Environment::Map(Arc::new(grey)));
+    assert!(scene.lights.is_empty(), "{:?}", scene.lights);
+    let mut s = Settings::default();
+    s.image.width = 16;
+    s.image.height = 16;
+    s.sampling.spp = 4;
+    s.sampling.light_samples = 16;
+    s.paths.shading = Shading::Direct;
+    let (film, _) = crate::render::render(&scene, &BruteForce::new(&scene), &s).unwrap();
+    let mean = film.pixels.iter().map(|p| p.as_dvec3()).sum::<DVec3>() / film.pixels.len() as f64;
+    assert!((mean - DVec3::splat(0.5)).abs().max_element() < 0.01, "mean {mean} against 0.5");
+    // Without the map, the sky comes back.
+    scene.set_environment(Environment::None);
+    assert_eq!(scene.lights, [crate::scene::DEFAULT_SKY]);
 }

@@ -30,7 +30,12 @@ fn image_moments(d: f32, rho: f32, r: f32, focus: f32) -> (DVec2, f64) {
         ..Scene::default()
     };
     // Depth 0: emission seen by camera rays only.
-    let s = Settings { width: N, height: N, spp: 1024, max_depth: 0, shading: Shading::Global, ..Settings::default() };
+    let mut s = Settings::default();
+    s.image.width = N;
+    s.image.height = N;
+    s.sampling.spp = 1024;
+    s.paths.max_depth = 0;
+    s.paths.shading = Shading::Global;
     let (film, _) = crate::render::render(&scene, &BruteForce::new(&scene), &s).unwrap();
     let (mut sum, mut c) = (0.0f64, DVec2::ZERO);
     for y in 0..N {

@@ -6,7 +6,6 @@
 //! emitter's form factor (closed form).
 
 use crate::scene::{Camera, Scene};
-use crate::settings::Settings;
 use crate::tests::common::meshgen::{EMITTER_GAP, EMITTER_HALF, emitter_above_floor};
 use crate::tests::common::{agree, render};
 use glam::{DVec3, Vec3};
@@ -56,7 +55,7 @@ fn mis_bounds_the_variance_next_to_an_emitter_and_keeps_the_mean() {
     };
     let s = render::settings(W, H, 2, 512);
     let with = render::wavefront(&scene, &s).0;
-    let without = render::wavefront(&scene, &Settings { mis: false, ..s.clone() }).0;
+    let without = render::wavefront(&scene, &s.clone().with(|s| s.paths.mis = false)).0;
     // The recursive reference shares the weights: the same estimator, other code.
     let reference = render::recursive(&scene, &s).0;
     for (acc, what) in [(&with, "wavefront"), (&reference, "recursive")] {
@@ -85,8 +84,8 @@ fn mis_is_on_where_the_lights_call_for_it() {
     assert!(Effects::of(&scene(), &global).mis);
     assert!(!Effects::of(&crate::load::default_scene(), &global).mis);
     for off in [
-        Settings { mis: false, ..global.clone() },
-        Settings { hemisphere: true, ..global.clone() },
+        global.clone().with(|s| s.paths.mis = false),
+        global.clone().with(|s| s.paths.hemisphere = true),
         render::settings(W, H, 1, 1),
     ] {
         assert!(!Effects::of(&scene(), &off).mis, "{off:?}");

@@ -438,7 +438,8 @@ fn tiny_roulette_probability_stays_finite() {
     for mut scene in scenes {
         scene.camera.fit_aspect(24.0 / 18.0);
         for depth in [5, 64] {
-            let s = Settings { rr_continue: 1e-3, ..settings(24, 18, 16, depth) };
+            let mut s = settings(24, 18, 16, depth);
+            s.paths.roulette.continue_prob = 1e-3;
             let acc = render(&scene, &s);
             let lit = |a: &Accumulator| a.pixels.iter().filter(|p| p.mean().max_element() > 0.0).count();
             // Direct light does not depend on roulette (it never stops the first bounce), so
@@ -510,7 +511,8 @@ mod slow {
             let mut scene = load(f, &LoadOptions::default()).unwrap_or_else(|e| panic!("{e:#}"));
             scene.camera.fit_aspect(24.0 / 18.0);
             for hemisphere in [false, true] {
-                let s = Settings { hemisphere, ..settings(24, 18, 2, 5) };
+                let mut s = settings(24, 18, 2, 5);
+                s.paths.hemisphere = hemisphere;
                 render(&scene, &s);
             }
         }

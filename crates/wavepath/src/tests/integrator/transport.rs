@@ -212,7 +212,7 @@ fn rough_conductor_under_an_area_light_matches_quadrature() {
     let light = Emitter { centre: vec3(0.0, 0.8, -0.5), side: 0.5, le: 4.0 };
     let scene = plane_scene(0.3, light);
     let expect = expected_plane(&scene, 0.3, light, SUB, 48);
-    let acc = render(&scene, &Settings { light_samples: 2, ..render::settings(W, H, 1, 64) });
+    let acc = render(&scene, &render::settings(W, H, 1, 64).with(|s| s.sampling.light_samples = 2));
     let (z, checked) = assert_regions_match(&acc, 8, &expect, 2e-3, "copper alpha 0.3");
     assert!(checked > W * H / 2, "{checked} pixels checked");
     // The highlight is in view: some pixels are many times the dimmest.
@@ -233,7 +233,7 @@ fn mis_keeps_a_small_bright_light_in_a_sharp_lobe_within_its_variance_bound() {
     let alpha = 0.01;
     let scene = plane_scene(alpha as f32, light);
     let ns = 1;
-    let acc = render(&scene, &Settings { light_samples: ns, ..render::settings(W, H, 1, 256) });
+    let acc = render(&scene, &render::settings(W, H, 1, 256).with(|s| s.sampling.light_samples = ns));
     let expect = expected_plane(&scene, alpha, light, 3, 80);
     let (z, checked) = assert_regions_match(&acc, 8, &expect, 5e-3, "copper alpha 0.01");
     assert!(checked > W * H / 2);
@@ -353,7 +353,7 @@ fn assert_furnace_sphere(what: &str, bsdf: Bsdf, albedo: impl Fn(f64) -> DVec3) 
             None
         }
     };
-    let acc = render(&scene, &Settings { rr_continue: 1.0, ..render::settings(W, H, 4, 64) });
+    let acc = render(&scene, &render::settings(W, H, 4, 64).with(|s| s.paths.roulette.continue_prob = 1.0));
     let (z, checked) = assert_regions_match(&acc, 4, expect, 2e-3, what);
     assert!(checked > W * H / 2);
     eprintln!("furnace {what}: worst |z| {z:.2}");

@@ -17,7 +17,8 @@ fn settings(max_depth: u32, spp: u32) -> Settings {
 
 fn compare(scene: &Scene, s: &Settings, what: &str) {
     let (a, sa) = wavefront(scene, s);
-    let other = Settings { seed: s.seed + 1000, ..s.clone() };
+    let mut other = s.clone();
+    other.sampling.seed = s.sampling.seed + 1000;
     let (b, sb) = recursive(scene, &other);
     assert_eq!(sa.invalid_samples, 0, "{what}");
     assert_eq!(sb.invalid_samples, 0, "{what}");
@@ -33,7 +34,8 @@ fn direct_light_importance_sampling_agrees() {
 
 #[test]
 fn direct_light_hemisphere_sampling_agrees() {
-    let s = Settings { hemisphere: true, ..settings(1, 32) };
+    let mut s = settings(1, 32);
+    s.paths.hemisphere = true;
     compare(&default_scene(), &s, "direct, hemisphere sampling");
 }
 
@@ -42,7 +44,8 @@ fn global_illumination_agrees_at_depths_2_3_5() {
     let scene = default_scene();
     for depth in [2, 3, 5] {
         for accumulate in [true, false] {
-            let s = Settings { accumulate, ..settings(depth, 32) };
+            let mut s = settings(depth, 32);
+            s.paths.accumulate = accumulate;
             compare(&scene, &s, &format!("-m {depth} -o {}", accumulate as u8));
         }
     }
@@ -52,27 +55,36 @@ fn global_illumination_agrees_at_depths_2_3_5() {
 fn russian_roulette_on_and_off_agree() {
     let scene = default_scene();
     for rr in [0.65, 1.0] {
-        let s = Settings { rr_continue: rr, ..settings(5, 32) };
+        let mut s = settings(5, 32);
+        s.paths.roulette.continue_prob = rr;
         compare(&scene, &s, &format!("-m 5 --rr {rr}"));
     }
     // Roulette changes the estimator, not the expectation: with and without must agree too.
-    let (a, _) = wavefront(&scene, &Settings { rr_continue: 0.5, ..settings(6, 32) });
-    let (b, _) = recursive(&scene, &Settings { rr_continue: 1.0, seed: 77, ..settings(6, 32) });
+    let (a, _) = wavefront(&scene, &settings(6, 32).with(|s| s.paths.roulette.continue_prob = 0.5));
+    let (b, _) = recursive(
+        &scene,
+        &settings(6, 32).with(|s| {
+            s.paths.roulette.continue_prob = 1.0;
+            s.sampling.seed = 77
+        }),
+    );
     assert_regions_agree(&a, &b, 8, 0.0, "--rr 0.5 vs --rr 1");
 }
 
 #[test]
 fn hemisphere_indirect_agrees() {
-    let s = Settings { hemisphere: true, ..settings(3, 32) };
+    let mut s = settings(3, 32);
+    s.paths.hemisphere = true;
     compare(&default_scene(), &s, "-H -m 3");
 }
 
 #[test]
 fn adaptive_sampling_agrees_and_stops_pixels_early() {
     let scene = default_scene();
-    let s = Settings { adaptive: Some((8, 0.1)), ..settings(3, 128) };
+    let mut s = settings(3, 128);
+    s.sampling.adaptive = Some((8, 0.1));
     let (a, sa) = wavefront(&scene, &s);
-    let (b, sb) = recursive(&scene, &Settings { seed: 5, ..s.clone() });
+    let (b, sb) = recursive(&scene, &s.clone().with(|s| s.sampling.seed = 5));
     assert_regions_agree(&a, &b, 8, 0.0, "adaptive");
     for st in [&sa, &sb] {
         let (mean, min, max) = st.spp_summary();
@@ -99,11 +111,16 @@ fn image_is_identical_for_any_thread_count() {
     // so every pool has work to share; with and without adaptive sampling, for every sampler.
     let scene = default_scene();
     let accel = crate::accel::build(&scene, &Default::default()).0;
-    let base = Settings { width: 96, height: 72, ..settings(3, 4) };
-    let adaptive = Settings { spp: 8, adaptive: Some((4, 0.05)), ..base.clone() };
-    let patterned = SamplerKind::ALL.map(|sampler| Settings { sampler, ..base.clone() });
-    for s in
-        [base.clone(), adaptive.clone(), Settings { sampler: SamplerKind::Sobol, ..adaptive }].iter().chain(&patterned)
+    let mut base = settings(3, 4);
+    base.image.width = 96;
+    base.image.height = 72;
+    let mut adaptive = base.clone();
+    adaptive.sampling.spp = 8;
+    adaptive.sampling.adaptive = Some((4, 0.05));
+    let patterned = SamplerKind::ALL.map(|sampler| base.clone().with(|s| s.sampling.sampler = sampler));
+    for s in [base.clone(), adaptive.clone(), adaptive.with(|s| s.sampling.sampler = SamplerKind::Sobol)]
+        .iter()
+        .chain(&patterned)
     {
         let run = |threads| {
             let waves = std::sync::atomic::AtomicUsize::new(0);
@@ -124,7 +141,13 @@ fn image_is_identical_for_any_thread_count() {
         };
         for threads in [2, 3, 8] {
             let (other, _) = run(threads);
-            assert_eq!(bits(&one), bits(&other), "{threads} threads, adaptive {:?}, {:?}", s.adaptive, s.sampler);
+            assert_eq!(
+                bits(&one),
+                bits(&other),
+                "{threads} threads, adaptive {:?}, {:?}",
+                s.sampling.adaptive,
+                s.sampling.sampler
+            );
             assert_eq!(one.samples_taken(), other.samples_taken());
         }
     }
@@ -148,7 +171,8 @@ fn ray_counts_add_up() {
 #[test]
 fn cell_renders_only_its_pixels() {
     let scene = default_scene();
-    let s = Settings { cell: Some(crate::settings::Cell { x: 4, y: 2, w: 5, h: 3 }), ..settings(2, 4) };
+    let mut s = settings(2, 4);
+    s.image.cell = Some(crate::settings::Cell { x: 4, y: 2, w: 5, h: 3 });
     let (a, st) = wavefront(&scene, &s);
     assert_eq!(st.samples_per_pixel.len(), 15);
     for y in 0..24 {
@@ -166,9 +190,10 @@ fn cs184_scenes_agree_and_stay_finite() {
     for name in ["CBspheres_lambertian", "CBempty"] {
         let Some(mut scene) = common::load_scene(&format!("cs184/sky/{name}.dae")) else { return };
         scene.camera.fit_aspect(32.0 / 24.0);
-        let s = Settings { light_samples: 1, ..settings(3, 16) };
+        let mut s = settings(3, 16);
+        s.sampling.light_samples = 1;
         compare(&scene, &s, name);
-        let (_, st) = wavefront(&scene, &Settings { hemisphere: true, ..s.clone() });
+        let (_, st) = wavefront(&scene, &s.clone().with(|s| s.paths.hemisphere = true));
         assert_eq!(st.invalid_samples, 0);
     }
 }

@@ -63,7 +63,10 @@ fn parallel_obj_reader_gives_tobjs_triangles() {
         let fast = load_text("fast.obj", &text).unwrap();
         // One group statement: tobj's path, the same geometry.
         let slow = load_text("slow.obj", &format!("g scan{eol}{text}")).unwrap();
-        assert_same_triangles(&fast, &slow, &format!("{n} vertices, eol {eol:?}"));
+        let what = format!("{n} vertices, eol {eol:?}");
+        // Two readers, so the comparison is not of one reader with itself.
+        assert_eq!((fast.source.reader, slow.source.reader), ("obj-bulk", "tobj"), "{what}");
+        assert_same_triangles(&fast, &slow, &what);
         assert!(fast.mesh.triangles.len() >= faces);
     }
 }
@@ -73,6 +76,7 @@ fn obj_with_more_than_positions_and_faces_keeps_tobjs_reading() {
     // Colours on `v` lines: read by tobj (the parallel reader declines), kept.
     let s = load_text("c.obj", "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n").unwrap();
     assert!(s.mesh.colors.is_some());
+    assert_eq!(s.source.reader, "tobj");
     // Damage: the same errors as before.
     let e = load_text("oob.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
     assert!(e.ends_with("oob.obj: a face refers to a vertex that does not exist"), "{e}");

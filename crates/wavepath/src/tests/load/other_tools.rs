@@ -26,7 +26,11 @@ fn covered(scene: &mut Scene) -> usize {
     scene.lights.clear();
     scene.env = Environment::Constant(Vec3::ONE);
     let count = |shading: Shading, seen: fn(Vec3) -> bool| {
-        let s = Settings { width: W, height: H, shading, max_depth: 1, ..Settings::default() };
+        let mut s = Settings::default();
+        s.image.width = W;
+        s.image.height = H;
+        s.paths.shading = shading;
+        s.paths.max_depth = 1;
         let (film, _) = crate::render::render(scene, &BruteForce::new(scene), &s).unwrap();
         (0..H).flat_map(|y| (0..W).map(move |x| (x, y))).filter(|&(x, y)| seen(film.get(x, y))).count()
     };

@@ -4,7 +4,7 @@
 //! endian); polygons fall back to the general parser; damaged indices and coordinates give
 //! the same one-line errors.
 
-use crate::load::ply::parse;
+use crate::load::ply::{BULK_READER, GENERAL_READER, parse};
 use crate::scene::Mesh;
 use crate::tests::common::Xorshift;
 
@@ -196,12 +196,19 @@ fn binary_ply_in_bulk_equals_the_general_parser() {
     for (name, l) in layouts() {
         for quads in [false, true] {
             let (values, faces) = random_mesh(&mut r, &l, 3000, 5000, quads);
-            let reference = parse(&write(&l, &values, &faces, "ascii")).unwrap_or_else(|e| panic!("{name}: {e}"));
+            let (reference, reader) =
+                parse(&write(&l, &values, &faces, "ascii")).unwrap_or_else(|e| panic!("{name}: {e}"));
+            assert_eq!(reader, GENERAL_READER, "{name}: ascii");
             let expect_tris = faces.iter().map(|f| f.len() - 2).sum::<usize>();
             assert_eq!(reference.triangles.len(), expect_tris, "{name}: fan triangulation");
             for format in ["binary_little_endian", "binary_big_endian"] {
-                let got = parse(&write(&l, &values, &faces, format)).unwrap_or_else(|e| panic!("{name} {format}: {e}"));
-                assert_same(&got, &reference, &format!("{name}, {format}, quads {quads}"));
+                let what = format!("{name}, {format}, quads {quads}");
+                let (got, reader) =
+                    parse(&write(&l, &values, &faces, format)).unwrap_or_else(|e| panic!("{name} {format}: {e}"));
+                // Triangles in every layout here are the bulk reader's; quads the general one's,
+                // so the comparison is of two different readers, not one with itself.
+                assert_eq!(reader, if quads { GENERAL_READER } else { BULK_READER }, "{what}: reader");
+                assert_same(&got, &reference, &what);
             }
         }
     }
@@ -214,7 +221,7 @@ fn binary_ply_errors_match_the_general_parser() {
     let (mut values, mut faces) = random_mesh(&mut r, l, 50, 80, false);
     // Ascii and a binary file with one quad at the end go through the general parser, plain
     // binary files through the bulk reader.
-    let errors = |values: &[Vec<f64>], faces: &[Vec<i64>], ascii: bool| -> Vec<String> {
+    let files = |values: &[Vec<f64>], faces: &[Vec<i64>], ascii: bool| -> Vec<Vec<u8>> {
         let mut with_quad = faces.to_vec();
         with_quad.push(vec![0, 1, 2, 3]);
         let mut files = vec![
@@ -225,7 +232,13 @@ fn binary_ply_errors_match_the_general_parser() {
         if ascii {
             files.push(write(l, values, faces, "ascii"));
         }
-        files.iter().map(|f| parse(f).expect_err("damaged").to_string()).collect()
+        files
+    };
+    // Undamaged, the files go to the readers said above.
+    let readers: Vec<_> = files(&values, &faces, true).iter().map(|f| parse(f).unwrap().1).collect();
+    assert_eq!(readers, [BULK_READER, BULK_READER, GENERAL_READER, GENERAL_READER]);
+    let errors = |values: &[Vec<f64>], faces: &[Vec<i64>], ascii: bool| -> Vec<String> {
+        files(values, faces, ascii).iter().map(|f| parse(f).expect_err("damaged").to_string()).collect()
     };
     faces[61][1] = 50;
     let e = errors(&values, &faces, true);

@@ -6,7 +6,6 @@
 use crate::lights::EmissiveTriangles;
 use crate::scene::texture::{Filter, Texture, TextureImage, Wrap};
 use crate::scene::{Camera, Material, Mesh, Scene};
-use crate::settings::Settings;
 use crate::tests::common::{self, agree, meshgen::quad, render};
 use glam::{DVec3, Vec2, Vec3, vec3};
 use std::sync::Arc;
@@ -78,10 +77,16 @@ fn light_sampling_follows_the_emission_texture() {
         );
         Some(DVec3::new(0.5 * FACTOR as f64 * f, 0.0, 0.0))
     };
-    let light = render::wavefront(&scene, &Settings { light_samples: 4, ..render::settings(W, H, 1, 16) }).0;
+    let light = render::wavefront(&scene, &render::settings(W, H, 1, 16).with(|s| s.sampling.light_samples = 4)).0;
     agree::assert_regions_match(&light, 8, expect, 1e-4, "textured emitter, light sampling");
-    let hemi =
-        render::wavefront(&scene, &Settings { hemisphere: true, light_samples: 8, ..render::settings(W, H, 1, 64) }).0;
+    let hemi = render::wavefront(
+        &scene,
+        &render::settings(W, H, 1, 64).with(|s| {
+            s.paths.hemisphere = true;
+            s.sampling.light_samples = 8
+        }),
+    )
+    .0;
     agree::assert_regions_match(&hemi, 8, expect, 1e-4, "textured emitter, hemisphere sampling");
 }
 

@@ -46,7 +46,8 @@ fn glass_sphere_in_a_uniform_environment_is_invisible() {
             env: Environment::Constant(c),
             ..Scene::default()
         };
-        let s = Settings { rr_continue: 1.0, ..settings(24, 24, 8, 64) };
+        let mut s = settings(24, 24, 8, 64);
+        s.paths.roulette.continue_prob = 1.0;
         for acc in [wavefront(&scene, &s), recursive(&scene, &s)] {
             for p in &acc.pixels {
                 // A path still inside after 64 bounces would be dark; allow a few.
@@ -97,7 +98,7 @@ fn mirror_shows_the_mirrored_scene() {
         }
     };
     // Through the mirror the sphere is one bounce further: -m 2 against -m 1.
-    let a = wavefront(&scene(false), &Settings { shading: Shading::Global, ..settings(48, 48, 1, 2) });
+    let a = wavefront(&scene(false), &settings(48, 48, 1, 2).with(|s| s.paths.shading = Shading::Global));
     let b = wavefront(&scene(true), &settings(48, 48, 1, 1));
     let (mut lit, mut glowing, mut off) = (0, 0, 0);
     for (p, q) in a.pixels.iter().zip(&b.pixels) {
@@ -115,7 +116,7 @@ fn mirror_shows_the_mirrored_scene() {
     // Sphere silhouettes may differ by rounding in a pixel or two.
     assert!(off <= 4, "{off} pixels differ between the mirror and the mirrored scene");
     // The same through the recursive reference.
-    let c = recursive(&scene(false), &Settings { shading: Shading::Global, ..settings(48, 48, 1, 2) });
+    let c = recursive(&scene(false), &settings(48, 48, 1, 2).with(|s| s.paths.shading = Shading::Global));
     let off = c.pixels.iter().zip(&a.pixels).filter(|(p, q)| (p.mean() - q.mean()).abs().max_element() > 1e-5).count();
     assert_eq!(off, 0);
 }
@@ -133,7 +134,7 @@ fn box_with(m: Bsdf, m2: Bsdf) -> Scene {
 
 fn compare(scene: &Scene, s: &Settings, what: &str) {
     let a = wavefront(scene, s);
-    let b = recursive(scene, &Settings { seed: s.seed + 1000, ..s.clone() });
+    let b = recursive(scene, &s.clone().with(|t| t.sampling.seed = s.sampling.seed + 1000));
     let z = assert_regions_agree(&a, &b, 8, 0.0, what);
     eprintln!("{what}: worst |z| = {z:.2}");
 }
@@ -152,9 +153,11 @@ fn wavefront_agrees_with_recursive_for_every_material() {
         for (depth, spp) in [(1, 32), (4, 64)] {
             compare(scene, &settings(32, 24, spp, depth), &format!("{what} -m {depth}"));
         }
-        let s = Settings { accumulate: false, ..settings(32, 24, 64, 3) };
+        let mut s = settings(32, 24, 64, 3);
+        s.paths.accumulate = false;
         compare(scene, &s, &format!("{what} -m 3 -o 0"));
-        let s = Settings { hemisphere: true, ..settings(32, 24, 64, 3) };
+        let mut s = settings(32, 24, 64, 3);
+        s.paths.hemisphere = true;
         compare(scene, &s, &format!("{what} -H -m 3"));
     }
 }
@@ -165,6 +168,6 @@ fn all_effects_keep_a_lambertian_image() {
     let scene = default_scene();
     let s = settings(32, 24, 4, 4);
     let a = wavefront(&scene, &s);
-    let b = wavefront(&scene, &Settings { all_effects: true, ..s.clone() });
+    let b = wavefront(&scene, &s.clone().with(|s| s.execution.all_effects = true));
     assert_eq!(a.to_film(), b.to_film());
 }

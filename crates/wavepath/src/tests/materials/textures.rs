@@ -57,7 +57,11 @@ fn render_white_furnace(scene: &mut Scene) -> crate::film::Film {
     scene.lights.clear();
     scene.env = Environment::Constant(Vec3::ONE);
     scene.camera.fit_aspect(W as f32 / H as f32);
-    let s = Settings { width: W, height: H, max_depth: 1, shading: Shading::Direct, ..Settings::default() };
+    let mut s = Settings::default();
+    s.image.width = W;
+    s.image.height = H;
+    s.paths.max_depth = 1;
+    s.paths.shading = Shading::Direct;
     let (film, _) = crate::render::render(scene, &BruteForce::new(scene), &s).unwrap();
     film
 }

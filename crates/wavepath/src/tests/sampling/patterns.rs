@@ -7,7 +7,6 @@
 
 use crate::load::default_scene;
 use crate::sampling::{Pattern, Sampler, SamplerKind};
-use crate::settings::Settings;
 use crate::tests::common::agree::assert_regions_agree;
 use crate::tests::common::render::{settings, wavefront};
 use crate::tests::common::special::gamma_q;
@@ -132,14 +131,27 @@ fn patterned_renders_keep_the_mean_and_lower_the_error() {
     // 0.42x). Their 256-spp means
     // agree with independent numbers region by region (false failure <= 1e-6).
     let scene = default_scene();
-    let base = Settings { light_samples: 1, ..settings(32, 24, 3, 16) };
-    let (reference, _) = wavefront(&scene, &Settings { spp: 1024, seed: 99, ..base.clone() });
+    let mut base = settings(32, 24, 3, 16);
+    base.sampling.light_samples = 1;
+    let (reference, _) = wavefront(
+        &scene,
+        &base.clone().with(|s| {
+            s.sampling.spp = 1024;
+            s.sampling.seed = 99
+        }),
+    );
     let reference = reference.to_film().pixels;
     let mean = reference.iter().map(|p| p.element_sum() as f64).sum::<f64>() / reference.len() as f64;
     let rmse = |kind: SamplerKind| -> f64 {
         let se: f64 = (1..=4)
             .map(|seed| {
-                let (a, _) = wavefront(&scene, &Settings { sampler: kind, seed, ..base.clone() });
+                let (a, _) = wavefront(
+                    &scene,
+                    &base.clone().with(|s| {
+                        s.sampling.sampler = kind;
+                        s.sampling.seed = seed
+                    }),
+                );
                 let px = a.to_film().pixels;
                 px.iter().zip(&reference).map(|(p, r)| (*p - *r).length_squared() as f64).sum::<f64>()
             })
@@ -150,9 +162,18 @@ fn patterned_renders_keep_the_mean_and_lower_the_error() {
     for kind in [SamplerKind::Stratified, SamplerKind::Sobol] {
         let r = rmse(kind) / independent;
         assert!(r < 0.8, "{kind:?}: RMSE {r:.3}x independent numbers'");
-        let s = Settings { spp: 256, sampler: kind, seed: 5, ..base.clone() };
+        let mut s = base.clone();
+        s.sampling.spp = 256;
+        s.sampling.sampler = kind;
+        s.sampling.seed = 5;
         let (a, _) = wavefront(&scene, &s);
-        let (b, _) = wavefront(&scene, &Settings { sampler: SamplerKind::Independent, seed: 6, ..s.clone() });
+        let (b, _) = wavefront(
+            &scene,
+            &s.clone().with(|s| {
+                s.sampling.sampler = SamplerKind::Independent;
+                s.sampling.seed = 6
+            }),
+        );
         assert_regions_agree(&a, &b, 4, 1e-5, &format!("{kind:?} vs independent"));
         assert!(a.to_film().pixels.iter().any(|p| *p != Vec3::ZERO));
     }
