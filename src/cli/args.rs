@@ -149,6 +149,7 @@ pub struct RenderArgs {
     #[arg(short = 'c', value_name = "FILE")]
     pub camera_file: Option<PathBuf>,
     /// Environment map (equirectangular .exr/.hdr): lights the scene, camera misses see it.
+    /// A file with no light of its own is lit by the map alone (no default sky beside it).
     #[arg(short = 'e', value_name = "FILE")]
     pub envmap: Option<PathBuf>,
     /// Thin-lens aperture radius (0: pinhole).
