@@ -254,9 +254,14 @@ impl Repo {
     /// paths), and the citing file's folder.
     fn resolve(&self, path: &str, from: &Path) -> Option<PathBuf> {
         let path = path.trim_end_matches('/');
-        if let Some(rest) = path.strip_prefix("../shared/") {
-            let shared = self.root.join("../shared");
-            return Some(if shared.is_dir() { shared.join(rest) } else { shared });
+        if let Some(rest) = path.strip_prefix("../shared").filter(|r| r.is_empty() || r.starts_with('/')) {
+            // Beside the repository, or where the scenes folder the tests use lives (CI's
+            // WAVEPATH_SCENES, `<shared>/scenes`, in a clone elsewhere).
+            let beside = self.root.join("../shared");
+            let from_scenes =
+                std::env::var_os("WAVEPATH_SCENES").and_then(|s| PathBuf::from(s).parent().map(Path::to_path_buf));
+            let shared = if beside.is_dir() { beside } else { from_scenes.unwrap_or(beside) };
+            return Some(shared.join(rest.trim_start_matches('/')));
         }
         let mut bases: Vec<PathBuf> = vec![from.to_path_buf()];
         for c in &self.crate_roots {
