@@ -8,27 +8,10 @@ fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// Reads a little-endian PFM written by wavepath: (width, height, rgb rows bottom-up).
+/// A PFM the binary wrote, by the shared reader: (width, height, rgb rows bottom-up).
 fn read_pfm(path: &Path) -> (usize, usize, Vec<[f32; 3]>) {
-    let bytes = std::fs::read(path).unwrap();
-    let mut lines = 0;
-    let mut pos = 0;
-    while lines < 3 {
-        if bytes[pos] == b'\n' {
-            lines += 1;
-        }
-        pos += 1;
-    }
-    let header = String::from_utf8_lossy(&bytes[..pos]).into_owned();
-    let mut it = header.split_whitespace();
-    assert_eq!(it.next(), Some("PF"));
-    let w: usize = it.next().unwrap().parse().unwrap();
-    let h: usize = it.next().unwrap().parse().unwrap();
-    let scale: f32 = it.next().unwrap().parse().unwrap();
-    assert!(scale < 0.0, "little-endian PFM");
-    let floats: Vec<f32> = bytes[pos..].chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect();
-    assert_eq!(floats.len(), w * h * 3);
-    (w, h, floats.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    let p = crate::common::pfm::read_pfm(path);
+    (p.width, p.height, p.pixels)
 }
 
 #[test]

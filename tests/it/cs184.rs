@@ -172,11 +172,9 @@ mod slow {
     }
 }
 
+/// The pixels of a PFM the binary wrote (the shared reader's), as vectors.
 fn read_pfm(path: &Path) -> Vec<Vec3> {
-    let bytes = std::fs::read(path).unwrap();
-    let mut newlines = bytes.iter().enumerate().filter(|(_, b)| **b == b'\n').map(|(i, _)| i);
-    let start = newlines.nth(2).unwrap() + 1;
-    bytes[start..].chunks_exact(12).map(|c| Vec3::from_slice(&bytemuck::pod_collect_to_vec::<u8, f32>(c))).collect()
+    crate::common::pfm::read_pfm(path).pixels.into_iter().map(Vec3::from_array).collect()
 }
 
 // ---------------------------------------------------------------------------------------
