@@ -76,8 +76,7 @@ pub fn settings(a: &RenderArgs, base: Settings) -> Result<Settings> {
     if let Some(sampler) = a.sampler {
         s.sampling.sampler = sampler.into();
     }
-    s.paths.shading =
-        a.shading.map(Shading::from).unwrap_or(if s.paths.max_depth > 1 { Shading::Global } else { Shading::Direct });
+    s.paths.shading = a.shading.map(Shading::from).unwrap_or(Shading::for_depth(s.paths.max_depth));
     if let Some(p) = &a.cell {
         for (name, v) in ["X", "Y", "DX", "DY"].iter().zip(p) {
             in_range(&format!("-p {name}"), *v, 0, MAX_SIDE)?;

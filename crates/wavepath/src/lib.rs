@@ -83,5 +83,5 @@ pub use raysets::{diffuse_rays, primary_rays};
 // Renders and what they produce.
 pub use effects::{Effect, Effects};
 pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
-pub use render::{RenderOutput, render, render_sums, render_with_progress, with_threads};
+pub use render::{INTERRUPTED, RenderOutput, render, render_sums, render_until, render_with_progress, with_threads};
 pub use stats::{RenderStats, StageTimes, roulette_json, to_json as stats_json};

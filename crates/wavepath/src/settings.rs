@@ -14,6 +14,15 @@ pub enum Shading {
     Global,
 }
 
+impl Shading {
+    /// What a pixel shows when the caller names no shading: direct light alone at depth 1
+    /// (and 0), global illumination beyond. The command line and the Python package both
+    /// follow this rule, so the same depth gives the same image through either.
+    pub fn for_depth(max_depth: u32) -> Shading {
+        if max_depth > 1 { Shading::Global } else { Shading::Direct }
+    }
+}
+
 /// Which light-transport implementation runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum IntegratorKind {

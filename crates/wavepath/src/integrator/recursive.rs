@@ -12,6 +12,7 @@ use crate::settings::Settings;
 use crate::stats::RenderStats;
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 #[derive(Default, Clone, Copy)]
@@ -105,6 +106,19 @@ pub fn render_recursive(
     settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
+    let never = AtomicBool::new(false);
+    render_recursive_until(scene, accel, settings, progress, &never).expect("nothing sets the stop flag")
+}
+
+/// As [`render_recursive`], but gives up (`None`) once `stop` is set: rows not yet started
+/// are skipped, so the caller waits at most one row per thread.
+pub fn render_recursive_until(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    settings: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Option<(Accumulator, RenderStats)> {
     let start = Instant::now();
     let transport = Transport::new(scene, settings);
     let (w, h) = (settings.image.width, settings.image.height);
@@ -118,6 +132,9 @@ pub fn render_recursive(
         .filter(|(y, _)| *y >= region.y && *y < region.y + region.h)
         .map(|(y, row)| {
             let mut st = RowStats::default();
+            if stop.load(Ordering::Relaxed) {
+                return st;
+            }
             for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
                 let pixel = (y * w + x) as u32;
                 let mut sums = PixelSums::default();
@@ -142,6 +159,9 @@ pub fn render_recursive(
             st
         })
         .collect();
+    if stop.load(Ordering::Relaxed) {
+        return None;
+    }
     let mut stats = RenderStats::default();
     for r in &rows {
         stats.counters.add(&r.trace);
@@ -152,5 +172,5 @@ pub fn render_recursive(
     stats.render_s = start.elapsed().as_secs_f64();
     stats.invalid_samples = acc.invalid_samples();
     stats.samples_per_pixel = acc.samples_taken_in(settings.region());
-    (acc, stats)
+    Some((acc, stats))
 }

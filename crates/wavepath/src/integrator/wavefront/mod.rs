@@ -38,6 +38,7 @@ use generate::Wave;
 use glam::Vec3;
 use queues::{PathQueue, ShadowQueue};
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Paths one wave holds at most: its queues (~300 bytes per path with a few shadow rays)
@@ -171,6 +172,7 @@ struct RenderJob<'a, 's> {
     effects: Effects,
     lanes: Lanes,
     progress: &'a (dyn Fn(u64) + Sync),
+    stop: &'a AtomicBool,
 }
 
 /// Renders with the wavefront integrator; `progress` is told how many samples finished.
@@ -180,10 +182,23 @@ pub fn render_wavefront(
     settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> (Accumulator, RenderStats) {
+    let never = AtomicBool::new(false);
+    render_wavefront_until(scene, accel, settings, progress, &never).expect("nothing sets the stop flag")
+}
+
+/// As [`render_wavefront`], but gives up (`None`) once `stop` is set: no new wave starts,
+/// so a caller that wants the render to end (Ctrl-C) waits at most one wave per thread.
+pub fn render_wavefront_until(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    settings: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Option<(Accumulator, RenderStats)> {
     let effects = Effects::of(scene, settings);
     let transport = Transport::new(scene, settings);
     let lanes = Lanes::of(&transport, &effects, settings.execution.isa);
-    let job = RenderJob { transport, accel, settings, effects, lanes, progress };
+    let job = RenderJob { transport, accel, settings, effects, lanes, progress, stop };
     let e = &job.effects;
     with_kernel!(
         render_frames(&job),
@@ -191,7 +206,7 @@ pub fn render_wavefront(
     )
 }
 
-fn render_frames<F: Features>(job: &RenderJob) -> (Accumulator, RenderStats) {
+fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderStats)> {
     let start = Instant::now();
     let s = job.settings;
     let (w, h) = (s.image.width, s.image.height);
@@ -224,12 +239,18 @@ fn render_frames<F: Features>(job: &RenderJob) -> (Accumulator, RenderStats) {
             .par_chunks_mut(per_wave)
             .zip(active.par_chunks(per_wave))
             .map_init(WaveQueues::default, |queues, (out, pixels)| {
+                if job.stop.load(Ordering::Relaxed) {
+                    return WaveStats::default();
+                }
                 let wave = Wave { pixels, base: n, batch };
                 let st = run_wave::<F>(job, &wave, queues, out);
                 (job.progress)(wave.len() as u64);
                 st
             })
             .reduce(WaveStats::default, WaveStats::sum);
+        if job.stop.load(Ordering::Relaxed) {
+            return None;
+        }
         total = total.sum(frame);
         for (&p, sums) in active.iter().zip(&partial) {
             acc.pixels[p as usize].merge(sums);
@@ -253,7 +274,7 @@ fn render_frames<F: Features>(job: &RenderJob) -> (Accumulator, RenderStats) {
     stats.render_s = start.elapsed().as_secs_f64();
     stats.invalid_samples = acc.invalid_samples();
     stats.samples_per_pixel = acc.samples_taken_in(s.region());
-    (acc, stats)
+    Some((acc, stats))
 }
 
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
