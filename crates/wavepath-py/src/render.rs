@@ -20,6 +20,7 @@ pub struct RenderOptions {
     pub spp: Option<i64>,
     pub light_samples: Option<i64>,
     pub max_depth: Option<i64>,
+    pub accumulate: Option<bool>,
     pub resolution: Option<(i64, i64)>,
     pub threads: Option<i64>,
     pub sampler: Option<String>,
@@ -69,6 +70,7 @@ pub fn settings(scene: &Scene, o: &RenderOptions) -> PyResult<Settings> {
     s.sampling.light_samples =
         in_range("light_samples (samples per area light)", o.light_samples.unwrap_or(1), 1, 1 << 16)? as u32;
     s.paths.max_depth = in_range("max_depth (maximum ray depth)", o.max_depth.unwrap_or(1), 0, 1 << 12)? as u32;
+    s.paths.accumulate = o.accumulate.unwrap_or(true);
     if let Some((b, t)) = o.adaptive {
         if !(b.is_finite() && b >= 1.0 && b <= (1u32 << 20) as f64 && b.fract() == 0.0) {
             return Err(value_error(format!(

@@ -173,7 +173,7 @@ impl PyScene {
     /// (`wavepath SCENE -s SPP -l LIGHT_SAMPLES -m MAX_DEPTH -r W H ...`). Ctrl-C stops the
     /// render (KeyboardInterrupt); `progress(done, total)` is called a few times a second
     /// with the camera samples finished. Other Python threads run meanwhile.
-    #[pyo3(signature = (*, spp=None, light_samples=None, max_depth=None, resolution=None, camera=None, threads=None, sampler=None, seed=None, adaptive=None, shading=None, integrator=None, hemisphere=None, mis=None, roulette=None, rr=None, rr_depth=None, isa=None, fov=None, lens_radius=None, focal_distance=None, progress=None))]
+    #[pyo3(signature = (*, spp=None, light_samples=None, max_depth=None, accumulate=None, resolution=None, camera=None, threads=None, sampler=None, seed=None, adaptive=None, shading=None, integrator=None, hemisphere=None, mis=None, roulette=None, rr=None, rr_depth=None, isa=None, fov=None, lens_radius=None, focal_distance=None, progress=None))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -181,6 +181,7 @@ impl PyScene {
         spp: Option<i64>,
         light_samples: Option<i64>,
         max_depth: Option<i64>,
+        accumulate: Option<bool>,
         resolution: Option<(i64, i64)>,
         camera: Option<&Bound<'py, PyAny>>,
         threads: Option<i64>,
@@ -204,6 +205,7 @@ impl PyScene {
             spp,
             light_samples,
             max_depth,
+            accumulate,
             resolution,
             threads,
             sampler,

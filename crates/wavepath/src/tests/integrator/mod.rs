@@ -11,5 +11,6 @@ mod lens;
 pub mod mis;
 mod offsets;
 mod stability;
+mod stop;
 mod transport;
 mod wavefront;

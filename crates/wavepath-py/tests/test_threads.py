@@ -1,0 +1,105 @@
+"""A render leaves the interpreter alive: other threads run, Ctrl-C stops it, progress is told."""
+
+import _thread
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import wavepath
+
+# Long enough (a few seconds on 2 cores) that the checks below have time to act.
+SLOW = dict(resolution=(320, 240), spp=256, max_depth=6)
+
+
+def test_other_python_threads_run_during_a_render():
+    count = 0
+    running = True
+
+    def spin():
+        nonlocal count
+        while running:
+            count += 1
+
+    t = threading.Thread(target=spin)
+    t.start()
+    time.sleep(0.05)
+    start = count
+    t0 = time.perf_counter()
+    wavepath.default_scene().render(resolution=(160, 120), spp=64, max_depth=4)
+    elapsed = time.perf_counter() - t0
+    during = count - start
+    running = False
+    t.join()
+    # Holding the GIL for the render would let the spinning thread count only in the
+    # moments between calls; released, it counts all along (millions per second).
+    assert elapsed > 0.2, "the render was too quick to tell"
+    assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
+
+
+def test_ctrl_c_interrupts_a_render_within_a_second():
+    fired = {}
+
+    def interrupt():
+        fired["at"] = time.perf_counter()
+        _thread.interrupt_main()
+
+    timer = threading.Timer(0.5, interrupt)
+    t0 = time.perf_counter()
+    timer.start()
+    with pytest.raises(KeyboardInterrupt):
+        wavepath.default_scene().render(**SLOW)
+    end = time.perf_counter()
+    timer.join()
+    assert "at" in fired
+    assert end - fired["at"] < 1.0, f"the render went on for {end - fired['at']:.2f} s after Ctrl-C"
+    # The scene is still usable afterwards, camera and all.
+    image, _ = wavepath.default_scene().render(resolution=(8, 6))
+    assert np.isfinite(image).all()
+
+
+def test_progress_is_reported_and_its_exception_stops_the_render():
+    seen = []
+    wavepath.default_scene().render(resolution=(160, 120), spp=32, max_depth=4, progress=lambda d, t: seen.append((d, t)))
+    total = 160 * 120 * 32
+    assert seen and all(t == total for _, t in seen)
+    assert [d for d, _ in seen] == sorted(d for d, _ in seen)
+    assert seen[-1][0] == total
+
+    class Stop(Exception):
+        pass
+
+    def stop(done, total):
+        raise Stop()
+
+    t0 = time.perf_counter()
+    with pytest.raises(Stop):
+        wavepath.default_scene().render(**SLOW, progress=stop)
+    assert time.perf_counter() - t0 < 1.5
+
+
+def test_ray_queries_release_the_gil_too():
+    scene = wavepath.default_scene()
+    rays = scene.primary_rays(800, 600)
+    o = np.repeat(rays["origins"], 8, axis=0)
+    d = np.repeat(rays["directions"], 8, axis=0)
+    count = 0
+    running = True
+
+    def spin():
+        nonlocal count
+        while running:
+            count += 1
+
+    t = threading.Thread(target=spin)
+    t.start()
+    time.sleep(0.05)
+    start = count
+    t0 = time.perf_counter()
+    scene.intersect(o, d, threads=1)
+    elapsed = time.perf_counter() - t0
+    during = count - start
+    running = False
+    t.join()
+    assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
