@@ -4,7 +4,7 @@
 
 use crate::errors::value_error;
 use glam::Vec3;
-use numpy::ndarray::{ArrayView1, ArrayView2};
+use numpy::ndarray::{ArrayView1, ArrayView2, s};
 use numpy::{PyArrayDescrMethods, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods};
 use pyo3::prelude::*;
 
@@ -55,6 +55,56 @@ impl FloatRows<'_> {
             FloatRows::F64(a) => a[[i, j]] as f32,
         }
     }
+
+    /// Rows `start..start + out.len()` of a three-column array into `out`: the dtype is
+    /// chosen once per call and C-contiguous rows are read as one flat slice, so the
+    /// per-ray cost is a load and a store, not a match and three bounds checks.
+    pub fn read_vec3s(&self, start: usize, out: &mut [Vec3]) {
+        match self {
+            FloatRows::F32(a) => rows3(a, start, out),
+            FloatRows::F64(a) => rows3(a, start, out),
+        }
+    }
+}
+
+/// The real types numpy arrays arrive in, read as the engine's f32.
+pub trait Real: Copy {
+    fn to_f32(self) -> f32;
+}
+
+impl Real for f32 {
+    #[inline]
+    fn to_f32(self) -> f32 {
+        self
+    }
+}
+
+impl Real for f64 {
+    #[inline]
+    fn to_f32(self) -> f32 {
+        self as f32
+    }
+}
+
+fn rows3<T: Real>(a: &ArrayView2<'_, T>, start: usize, out: &mut [Vec3]) {
+    let rows = a.slice(s![start..start + out.len(), ..]);
+    if let Some(flat) = rows.as_slice() {
+        for (v, c) in out.iter_mut().zip(flat.chunks_exact(3)) {
+            *v = Vec3::new(c[0].to_f32(), c[1].to_f32(), c[2].to_f32());
+        }
+    } else {
+        for (v, r) in out.iter_mut().zip(rows.outer_iter()) {
+            *v = Vec3::new(r[0].to_f32(), r[1].to_f32(), r[2].to_f32());
+        }
+    }
+}
+
+fn values<T: Real>(a: &ArrayView1<'_, T>, start: usize, out: &mut [f32]) {
+    let part = a.slice(s![start..start + out.len()]);
+    match part.as_slice() {
+        Some(flat) => out.iter_mut().zip(flat).for_each(|(o, v)| *o = v.to_f32()),
+        None => out.iter_mut().zip(part.iter()).for_each(|(o, v)| *o = v.to_f32()),
+    }
 }
 
 /// A per-ray value: one number for every ray, or an `(n,)` array.
@@ -82,12 +132,12 @@ impl PerRay<'_> {
 }
 
 impl PerRayView<'_> {
-    #[inline]
-    pub fn at(&self, i: usize) -> f32 {
+    /// Values `start..start + out.len()` into `out` (the dtype chosen once per call).
+    pub fn read(&self, start: usize, out: &mut [f32]) {
         match self {
-            PerRayView::All(v) => *v,
-            PerRayView::F32(a) => a[i],
-            PerRayView::F64(a) => a[i] as f32,
+            PerRayView::All(v) => out.fill(*v),
+            PerRayView::F32(a) => values(a, start, out),
+            PerRayView::F64(a) => values(a, start, out),
         }
     }
 }

@@ -24,33 +24,42 @@ impl RayArrays<'_> {
         self.origins.len()
     }
 
-    /// Ray `i`, or `None` when it is not a ray (a non-finite origin or direction, a zero
-    /// direction, a NaN bound).
-    #[inline]
-    fn ray(&self, i: usize) -> Option<Ray> {
-        let r = Ray {
-            origin: self.origins.vec3(i),
-            dir: self.directions.vec3(i),
-            tmin: self.tmin.at(i),
-            tmax: self.tmax.at(i),
-        };
-        let ok =
-            r.origin.is_finite() && r.dir.is_finite() && r.dir != Vec3::ZERO && !r.tmin.is_nan() && !r.tmax.is_nan();
-        ok.then_some(r)
-    }
-
-    /// Fills `buf` with rays `start..start + buf.len()`; records the first bad one in `bad`.
-    fn fill(&self, start: usize, buf: &mut Vec<Ray>, n: usize, bad: &AtomicUsize) {
+    /// Fills `buf` with rays `start..start + n`. A row that is not a ray (a non-finite origin
+    /// or direction, a zero direction, a NaN bound) is recorded in `bad` (the first one wins)
+    /// and replaced by an empty ray, so the chunk is still traced whole.
+    fn fill(&self, start: usize, buf: &mut Vec<Ray>, n: usize, bad: &AtomicUsize, scratch: &mut Scratch) {
+        let Scratch { o, d, lo, hi } = scratch;
+        self.origins.read_vec3s(start, &mut o[..n]);
+        self.directions.read_vec3s(start, &mut d[..n]);
+        self.tmin.read(start, &mut lo[..n]);
+        self.tmax.read(start, &mut hi[..n]);
         buf.clear();
-        for i in start..start + n {
-            match self.ray(i) {
-                Some(r) => buf.push(r),
-                None => {
-                    bad.fetch_min(i, Ordering::Relaxed);
-                    buf.push(Ray { origin: Vec3::ZERO, dir: Vec3::X, tmin: 1.0, tmax: 0.0 });
-                }
+        buf.extend((0..n).map(|j| Ray { origin: o[j], dir: d[j], tmin: lo[j], tmax: hi[j] }));
+        for (j, r) in buf.iter_mut().enumerate() {
+            let ok = r.origin.is_finite()
+                && r.dir.is_finite()
+                && r.dir != Vec3::ZERO
+                && !r.tmin.is_nan()
+                && !r.tmax.is_nan();
+            if !ok {
+                bad.fetch_min(start + j, Ordering::Relaxed);
+                *r = Ray { origin: Vec3::ZERO, dir: Vec3::X, tmin: 1.0, tmax: 0.0 };
             }
         }
+    }
+}
+
+/// Per-thread buffers of one chunk's inputs, converted column by column.
+pub struct Scratch {
+    o: Vec<Vec3>,
+    d: Vec<Vec3>,
+    lo: Vec<f32>,
+    hi: Vec<f32>,
+}
+
+impl Default for Scratch {
+    fn default() -> Self {
+        Scratch { o: vec![Vec3::ZERO; CHUNK], d: vec![Vec3::ZERO; CHUNK], lo: vec![0.0; CHUNK], hi: vec![0.0; CHUNK] }
     }
 }
 
@@ -83,10 +92,10 @@ pub fn intersect(scene: &Scene, accel: &dyn Intersector, rays: RayArrays, normal
         .zip(normal_chunks.par_iter_mut())
         .enumerate()
         .for_each_init(
-            || (Vec::with_capacity(CHUNK), vec![None; CHUNK]),
-            |(buf, hits), (k, (((t, prim), uv), nrm))| {
+            || (Vec::with_capacity(CHUNK), vec![None; CHUNK], Scratch::default()),
+            |(buf, hits, scratch), (k, (((t, prim), uv), nrm))| {
                 let start = k * CHUNK;
-                rays.fill(start, buf, t.len(), &bad);
+                rays.fill(start, buf, t.len(), &bad, scratch);
                 let hits: &mut [Option<Hit>] = &mut hits[..t.len()];
                 let mut c = TraceCounters::default();
                 accel.closest_hits(buf, hits, &mut c);
@@ -113,9 +122,9 @@ pub fn occluded(accel: &dyn Intersector, rays: RayArrays) -> (Vec<bool>, usize) 
     let mut out = vec![false; n];
     let bad = AtomicUsize::new(usize::MAX);
     out.par_chunks_mut(CHUNK).enumerate().for_each_init(
-        || Vec::with_capacity(CHUNK),
-        |buf, (k, out)| {
-            rays.fill(k * CHUNK, buf, out.len(), &bad);
+        || (Vec::with_capacity(CHUNK), Scratch::default()),
+        |(buf, scratch), (k, out)| {
+            rays.fill(k * CHUNK, buf, out.len(), &bad, scratch);
             let mut c = TraceCounters::default();
             accel.any_hits(buf, out, &mut c);
         },

@@ -2,16 +2,19 @@
 //! shared by every ray query and render that asks for the default tree.
 
 use crate::arrays::{self, Floats};
-use crate::errors::{to_py, value_error};
+use crate::errors::value_error;
 use crate::rays::{self, RayArrays};
 use crate::render::{self, RenderOptions};
 use crate::values;
 use glam::{Vec2, Vec3};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
-use std::sync::{OnceLock, RwLock};
+use std::sync::{Arc, Mutex, OnceLock, RwLock, RwLockReadGuard, RwLockWriteGuard, TryLockError};
+use std::thread::ThreadId;
+use std::time::Duration;
 use wavepath::{Bvh, BvhOptions, Intersector, Isa, MaterialIds, Mesh, Scene, SceneSource, Settings};
 
 /// A scene: triangles and spheres, materials, lights and a camera.
@@ -25,19 +28,89 @@ pub struct PyScene {
     scene: RwLock<Scene>,
     /// The default BVH (default build, best instruction set), built on first use.
     bvh: OnceLock<Bvh>,
+    /// The thread whose render holds the scene, so that a query from its own progress
+    /// callback is refused instead of waiting for itself.
+    rendering: Mutex<Option<ThreadId>>,
+    /// Worker pools by thread count, made on first use: building one costs about 0.1 ms,
+    /// more than a small batch of rays takes to trace.
+    pools: Mutex<Vec<(usize, Arc<rayon::ThreadPool>)>>,
 }
+
+/// How long a thread that finds the scene locked waits, without the GIL, before trying again.
+const LOCK_RETRY: Duration = Duration::from_micros(200);
 
 impl PyScene {
     pub fn new(scene: Scene) -> Self {
-        PyScene { scene: RwLock::new(scene), bvh: OnceLock::new() }
+        PyScene {
+            scene: RwLock::new(scene),
+            bvh: OnceLock::new(),
+            rendering: Mutex::new(None),
+            pools: Mutex::new(Vec::new()),
+        }
     }
 
-    fn read(&self) -> std::sync::RwLockReadGuard<'_, Scene> {
-        self.scene.read().unwrap_or_else(|e| e.into_inner())
+    /// Refuses a query from inside this scene's own render (its progress callback).
+    fn not_from_own_render(&self) -> PyResult<()> {
+        let r = *self.rendering.lock().unwrap_or_else(|e| e.into_inner());
+        if r == Some(std::thread::current().id()) {
+            return Err(PyRuntimeError::new_err(
+                "the scene is being rendered by this thread: use it after render() returns",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The scene for reading. The lock is never waited for while holding the GIL: a thread
+    /// that holds the lock may need the GIL (a render calls back into Python), so waiting
+    /// with it could deadlock; the wait releases the GIL between tries.
+    fn read(&self, py: Python<'_>) -> PyResult<RwLockReadGuard<'_, Scene>> {
+        self.not_from_own_render()?;
+        loop {
+            match self.scene.try_read() {
+                Ok(g) => return Ok(g),
+                Err(TryLockError::Poisoned(e)) => return Ok(e.into_inner()),
+                Err(TryLockError::WouldBlock) => py.detach(|| std::thread::sleep(LOCK_RETRY)),
+            }
+        }
+    }
+
+    /// The scene for a render to swap its camera in, waited for as [`PyScene::read`].
+    fn write(&self, py: Python<'_>) -> PyResult<RwLockWriteGuard<'_, Scene>> {
+        self.not_from_own_render()?;
+        loop {
+            match self.scene.try_write() {
+                Ok(g) => return Ok(g),
+                Err(TryLockError::Poisoned(e)) => return Ok(e.into_inner()),
+                Err(TryLockError::WouldBlock) => py.detach(|| std::thread::sleep(LOCK_RETRY)),
+            }
+        }
     }
 
     fn bvh_of(&self, scene: &Scene) -> &Bvh {
         self.bvh.get_or_init(|| Bvh::build_with(scene, BvhOptions::default()).with_isa(Isa::default()))
+    }
+
+    /// Runs `f` on `threads` workers (0: rayon's global pool, every core).
+    fn on_threads<T: Send>(&self, threads: usize, f: impl FnOnce() -> T + Send) -> PyResult<T> {
+        if threads == 0 {
+            return Ok(f());
+        }
+        let pool = {
+            let mut pools = self.pools.lock().unwrap_or_else(|e| e.into_inner());
+            match pools.iter().find(|(n, _)| *n == threads) {
+                Some((_, p)) => p.clone(),
+                None => {
+                    let p = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .map_err(|e| value_error(format!("cannot start {threads} threads: {e}")))?;
+                    let p = Arc::new(p);
+                    pools.push((threads, p.clone()));
+                    p
+                }
+            }
+        };
+        Ok(pool.install(f))
     }
 
     /// The origins, directions and bounds of a ray query, read from Python values.
@@ -63,10 +136,6 @@ fn bad_ray(i: usize) -> PyErr {
     value_error(format!(
         "ray {i} is not a ray: its origin or direction is not finite, its direction is zero, or a bound is NaN"
     ))
-}
-
-fn on_threads<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> PyResult<T> {
-    if threads == 0 { Ok(f()) } else { wavepath::with_threads(threads, f).map_err(to_py) }
 }
 
 #[pymethods]
@@ -231,7 +300,8 @@ impl PyScene {
         }
         // The render's camera is swapped in for its duration (queries from other threads
         // wait); the scene's own is put back whatever happens.
-        let mut guard = self.scene.write().unwrap_or_else(|e| e.into_inner());
+        let mut guard = self.write(py)?;
+        *self.rendering.lock().unwrap_or_else(|e| e.into_inner()) = Some(std::thread::current().id());
         let s: Settings = render::settings(&guard, &o)?;
         let cam = render::camera(given_camera.unwrap_or(guard.camera), &s, &o)?;
         let saved = std::mem::replace(&mut guard.camera, cam);
@@ -240,15 +310,16 @@ impl PyScene {
             let default_tree =
                 s.accel.use_bvh && s.accel.bvh == BvhOptions::default() && s.execution.isa == Isa::default();
             if default_tree {
-                let bvh = py.detach(|| on_threads(s.execution.threads, || self.bvh_of(scene)))?;
+                let bvh = py.detach(|| self.on_threads(s.execution.threads, || self.bvh_of(scene)))?;
                 render::run(py, scene, bvh, bvh.info(), &s, progress.as_ref())
             } else {
                 let (accel, build) =
-                    py.detach(|| on_threads(s.execution.threads, || wavepath::build_accel(scene, &s)))?;
+                    py.detach(|| self.on_threads(s.execution.threads, || wavepath::build_accel(scene, &s)))?;
                 render::run(py, scene, accel.as_ref(), build, &s, progress.as_ref())
             }
         })();
         guard.camera = saved;
+        *self.rendering.lock().unwrap_or_else(|e| e.into_inner()) = None;
         drop(guard);
         let r = result?;
         let film = r.out.film;
@@ -296,9 +367,9 @@ impl PyScene {
         let (o, d, lo, hi) = Self::ray_inputs(origins, directions, tmin.unwrap_or(&zero), tmax.unwrap_or(&inf))?;
         let rays = RayArrays { origins: o.rows(), directions: d.rows(), tmin: lo.view(), tmax: hi.view() };
         let n = rays.len();
-        let scene = self.read();
+        let scene = self.read(py)?;
         let hits = py.detach(|| {
-            on_threads(threads, || {
+            self.on_threads(threads, || {
                 let bvh = self.bvh_of(&scene);
                 rays::intersect(&scene, bvh as &dyn Intersector, rays, normals)
             })
@@ -333,9 +404,9 @@ impl PyScene {
         let inf = f64::INFINITY.into_pyobject(py)?.into_any();
         let (o, d, lo, hi) = Self::ray_inputs(origins, directions, tmin.unwrap_or(&zero), tmax.unwrap_or(&inf))?;
         let rays = RayArrays { origins: o.rows(), directions: d.rows(), tmin: lo.view(), tmax: hi.view() };
-        let scene = self.read();
+        let scene = self.read(py)?;
         let (occ, bad) = py.detach(|| {
-            on_threads(threads, || {
+            self.on_threads(threads, || {
                 let bvh = self.bvh_of(&scene);
                 rays::occluded(bvh as &dyn Intersector, rays)
             })
@@ -351,8 +422,8 @@ impl PyScene {
     /// what the build measured: seconds, nodes, leaves, depth, SAH cost, bytes.
     #[pyo3(signature = (*, threads=0))]
     fn build<'py>(&self, py: Python<'py>, threads: usize) -> PyResult<Bound<'py, PyAny>> {
-        let scene = self.read();
-        let info = py.detach(|| on_threads(threads, || self.bvh_of(&scene).info()))?;
+        let scene = self.read(py)?;
+        let info = py.detach(|| self.on_threads(threads, || self.bvh_of(&scene).info()))?;
         drop(scene);
         let json = serde_json::to_string(&info).map_err(|e| value_error(e.to_string()))?;
         py.import("json")?.call_method1("loads", (json,))
@@ -365,7 +436,7 @@ impl PyScene {
         if width == 0 || height == 0 {
             return Err(value_error("primary_rays needs a width and a height above 0"));
         }
-        let scene = self.read();
+        let scene = self.read(py)?;
         let rays = py.detach(|| wavepath::primary_rays(&scene, width, height));
         ray_dict(py, &rays)
     }
@@ -383,7 +454,7 @@ impl PyScene {
         if width == 0 || height == 0 {
             return Err(value_error("diffuse_rays needs a width and a height above 0"));
         }
-        let scene = self.read();
+        let scene = self.read(py)?;
         let rays = py.detach(|| {
             let primary = wavepath::primary_rays(&scene, width, height);
             let bvh = self.bvh_of(&scene);
@@ -395,7 +466,7 @@ impl PyScene {
     /// Vertex positions, (n, 3) float32 (a copy).
     #[getter]
     fn vertices<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<f32>>> {
-        let s = self.read();
+        let s = self.read(py)?;
         let v: Vec<f32> = s.mesh.positions.iter().flat_map(|p| p.to_array()).collect();
         to_2d(py, v, s.mesh.positions.len(), 3)
     }
@@ -403,54 +474,54 @@ impl PyScene {
     /// Triangles as vertex indices, (m, 3) uint32 (a copy), in the file's order.
     #[getter]
     fn faces<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyArray2<u32>>> {
-        let s = self.read();
+        let s = self.read(py)?;
         let v: Vec<u32> = s.mesh.triangles.iter().flatten().copied().collect();
         to_2d(py, v, s.mesh.triangles.len(), 3)
     }
 
     #[getter]
-    fn name(&self) -> String {
-        self.read().name.clone()
+    fn name(&self, py: Python<'_>) -> PyResult<String> {
+        Ok(self.read(py)?.name.clone())
     }
 
     #[getter]
-    fn triangle_count(&self) -> usize {
-        self.read().mesh.triangle_count()
+    fn triangle_count(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.read(py)?.mesh.triangle_count())
     }
 
     #[getter]
-    fn sphere_count(&self) -> usize {
-        self.read().spheres.len()
+    fn sphere_count(&self, py: Python<'_>) -> PyResult<usize> {
+        Ok(self.read(py)?.spheres.len())
     }
 
     /// Material names, in index order.
     #[getter]
-    fn materials(&self) -> Vec<String> {
-        self.read().materials.iter().map(|m| m.name.clone()).collect()
+    fn materials(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        Ok(self.read(py)?.materials.iter().map(|m| m.name.clone()).collect())
     }
 
     /// Light kinds, in order ("area", "point", "hemisphere", ...).
     #[getter]
-    fn lights(&self) -> Vec<&'static str> {
-        self.read().lights.iter().map(|l| l.kind()).collect()
+    fn lights(&self, py: Python<'_>) -> PyResult<Vec<&'static str>> {
+        Ok(self.read(py)?.lights.iter().map(|l| l.kind()).collect())
     }
 
     /// The axis-aligned bounds as ((x, y, z), (x, y, z)).
     #[getter]
     fn bounds<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyTuple>> {
-        let (lo, hi) = self.read().bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
+        let (lo, hi) = self.read(py)?.bounds().unwrap_or((Vec3::ZERO, Vec3::ZERO));
         PyTuple::new(py, [lo.to_array(), hi.to_array()])
     }
 
     /// Which file dialect's defaults the scene's renders start from ("cs184" or "standard").
     #[getter]
-    fn dialect(&self) -> &'static str {
-        self.read().source.dialect.name()
+    fn dialect(&self, py: Python<'_>) -> PyResult<&'static str> {
+        Ok(self.read(py)?.source.dialect.name())
     }
 
-    fn __repr__(&self) -> String {
-        let s = self.read();
-        format!(
+    fn __repr__(&self, py: Python<'_>) -> PyResult<String> {
+        let s = self.read(py)?;
+        Ok(format!(
             "wavepath.Scene({:?}: {} triangles, {} spheres, {} materials, {} lights, {} dialect)",
             s.name,
             s.mesh.triangle_count(),
@@ -458,7 +529,7 @@ impl PyScene {
             s.materials.len(),
             s.lights.len(),
             s.source.dialect.name()
-        )
+        ))
     }
 }
 

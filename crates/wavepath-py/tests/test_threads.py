@@ -103,3 +103,44 @@ def test_ray_queries_release_the_gil_too():
     running = False
     t.join()
     assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
+
+
+def test_queries_from_other_threads_during_a_render_wait_and_agree():
+    # One scene, a render on this thread and ray queries on others: the queries wait for the
+    # render's camera to be put back (no deadlock on the GIL) and see the scene unchanged.
+    scene = wavepath.default_scene()
+    rays = scene.primary_rays(64, 48)
+    expected = scene.intersect(rays["origins"], rays["directions"])["prim"]
+    results, errors = [], []
+
+    def query():
+        try:
+            for _ in range(20):
+                results.append(scene.intersect(rays["origins"], rays["directions"])["prim"])
+                scene.primary_rays(8, 6)
+        except Exception as e:  # pragma: no cover - reported below
+            errors.append(e)
+
+    threads = [threading.Thread(target=query) for _ in range(2)]
+    for t in threads:
+        t.start()
+    image, _ = scene.render(resolution=(96, 72), spp=16, max_depth=3, progress=lambda d, t: None)
+    for t in threads:
+        t.join(timeout=30)
+    assert not any(t.is_alive() for t in threads), "a query thread hung"
+    assert not errors and len(results) == 40
+    assert all(np.array_equal(r, expected) for r in results)
+    assert np.isfinite(image).all()
+
+
+def test_a_query_from_the_renders_own_callback_is_refused():
+    scene = wavepath.default_scene()
+    rays = scene.primary_rays(4, 3)
+
+    def cb(done, total):
+        scene.intersect(rays["origins"], rays["directions"])
+
+    with pytest.raises(RuntimeError, match="being rendered"):
+        scene.render(**SLOW, progress=cb)
+    # And the scene works again once the render has ended.
+    assert scene.intersect(rays["origins"], rays["directions"])["t"].shape == (12,)
