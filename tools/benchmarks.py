@@ -719,7 +719,7 @@ def part_python(args, scenes_dir):
 
 
 def md_python(args, part):
-    shown = [a for a in part["opts"]]
+    shown = list(part["opts"])
     for flag, value in (("--bin", args.bin_shown), ("--scenes", args.scenes_shown), ("--cache", "CACHE")):
         shown[shown.index(flag) + 1] = value
     out = ["## Ray casting from Python\n"]
