@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Regenerate BENCHMARKS.md: current results of wavepath on this machine.
 
-    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,viewer,large] [--quick] [options]
+    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,viewer,large,python] [--quick] [options]
 
 The page is one section per part, each between `<!-- part:NAME -->` and `<!-- /part:NAME -->`
 and each with the date, machine, binary and command it was measured with. A run replaces the
@@ -20,6 +20,9 @@ Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
            fresh processes
   viewer   `wavepath view` timed by tools/view_timing.py (a client on the frame stream posting
            moves) against offline renders of the same settings
+  python   ray casting from numpy through the Python package beside embreex, Open3D and Mitsuba 3
+           (tools/python_bench.py, run by the interpreter `--python` names: one with numpy, the
+           package and the peers installed)
 
 The peers folder is copied to a scratch folder (--work) first: its scripts write build
 products beside themselves, and the shared copy must stay untouched.
@@ -683,25 +686,77 @@ def md_viewer(args, part):
     return out
 
 
+# ------------------------------------------------------------------ python ----
+PYTHON_VENV = ("python3 -m venv VENV && VENV/bin/pip install ./crates/wavepath-py numpy embreex open3d "
+               "mitsuba trimesh")
+
+
+def part_python(args, scenes_dir):
+    """tools/python_bench.py under the interpreter that has the libraries: the standard
+    library's python3 here need not have numpy, so the whole script runs under `--python`."""
+    work = os.path.join(args.work, "python")
+    os.makedirs(work, exist_ok=True)
+    md, jsonl = os.path.join(work, "python.md"), os.path.join(work, "results.jsonl")
+    threads = "1" if args.threads == 1 else f"1,{args.threads}"
+    opts = ["--bin", os.path.abspath(args.bin), "--scenes", scenes_dir, "--cache", work,
+            "--threads", threads, "--rounds", str(args.rounds), "--reps", str(min(args.reps, 5) if not args.quick else args.reps),
+            "--wait-quiet", str(args.wait_quiet)] + (["--quick"] if args.quick else []) + shlex.split(args.python_args)
+    cmd = [args.python, os.path.join(REPO, "tools", "python_bench.py")] + opts + ["--md", md, "--jsonl", jsonl]
+    part = {"load_before": loadavg(), "date": now_utc(), "opts": opts}
+    log(f"python: {shlex.join(cmd)}")
+    r = subprocess.run(cmd, cwd=REPO)
+    if r.returncode != 0:
+        raise SystemExit(f"python part failed (exit {r.returncode}); is {args.python} an interpreter with numpy "
+                         f"and the libraries? ({PYTHON_VENV})")
+    with open(md) as f:
+        part["md"] = f.read()
+    with open(jsonl) as f:
+        part["rows"] = [json.loads(l) for l in f if l.strip()]
+    part["load_after"] = loadavg()
+    busy = [r.get("other_busy", 0.0) for r in part["rows"] if "other_busy" in r] or [0.0]
+    part["busy_mean"], part["busy_max"] = statistics.mean(busy), max(busy)
+    return part
+
+
+def md_python(args, part):
+    shown = list(part["opts"])
+    for flag, value in (("--bin", args.bin_shown), ("--scenes", args.scenes_shown), ("--cache", "CACHE")):
+        shown[shown.index(flag) + 1] = value
+    out = ["## Ray casting from Python\n"]
+    out.append(f"`wavepath` from Python (the package in `crates/wavepath-py`) beside the Python ray casters "
+               f"its users would otherwise reach for, measured by `tools/python_bench.py`. The interpreter "
+               f"needs numpy, the package and the peers: `{PYTHON_VENV}`, then "
+               f"`tools/benchmarks.sh --parts python --python VENV/bin/python`.\n")
+    out.append(part["md"].rstrip() + "\n")
+    out.append(f"Command: `VENV/bin/python tools/python_bench.py {shlex.join(shown)}` (what "
+               f"`tools/benchmarks.sh --parts python` runs; raw results, one JSON line per process, in "
+               f"`{os.path.join(args.work, 'python', 'results.jsonl')}`).  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
 # ------------------------------------------------------------------ page ----
 # The page's parts in order, with the title a part has before it was ever run.
-PART_ORDER = ["renders", "peers", "e2e", "viewer", "large"]
+PART_ORDER = ["renders", "peers", "e2e", "viewer", "large", "python"]
 PART_TITLES = {"renders": "Renders", "peers": "Ray throughput against the peers",
                "e2e": "End to end against Mitsuba 3", "viewer": "Interactive viewer",
-               "large": "Large meshes"}
+               "large": "Large meshes", "python": "Ray casting from Python"}
 NOT_RUN = {
     "e2e": "`tools/benchmarks.sh --parts e2e` adds whole renders against Mitsuba 3 at equal error "
            "(`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args '" + E2E_QUICK + "'` under a minute).",
     "viewer": "`tools/benchmarks.sh --parts viewer` times `wavepath view` (tools/view_timing.py), about a minute.",
+    "python": "`tools/benchmarks.sh --parts python --python VENV/bin/python` casts rays from numpy through the "
+              "Python package beside embreex, Open3D and Mitsuba 3 (tools/python_bench.py, about 15 min; "
+              "`--quick` about one), with an interpreter made by `" + PYTHON_VENV + "`.",
 }
 SECTION = re.compile(r"^<!-- part:([a-z0-9_-]+) -->\n(.*?)^<!-- /part:\1 -->[ \t]*\n?", re.S | re.M)
 PAGE_HEAD = """# Benchmarks
 
 Generated by `tools/benchmarks.sh`; rerun it rather than editing this page. Each section is one
-part (`--parts renders,peers,e2e,viewer,large`) and says when, on what machine, with which binary
-and command it was measured: a run replaces the sections of the parts it ran and keeps the others
-as they were, with their dates, so sections of one page may come from different days and
-builds. Why the code is as it is, with the figures of past experiments:
+part (`--parts renders,peers,e2e,viewer,large,python`) and says when, on what machine, with
+which binary and command it was measured: a run replaces the sections of the parts it ran and
+keeps the others as they were, with their dates, so sections of one page may come from
+different days and builds. Why the code is as it is, with the figures of past experiments:
 [docs/decisions.md](docs/decisions.md). Ratios come from fresh processes run side by side;
 absolute times move with the machine's load.
 """
@@ -793,6 +848,11 @@ def main(argv):
                     help="extra options for e2e/run.sh (default none: its full comparison, 15-25 min; "
                          "quick: " + repr(E2E_QUICK) + ", under a minute)")
     ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
+    ap.add_argument("--python", default="python3",
+                    help="python: the interpreter with numpy, the wavepath package, embreex, open3d and mitsuba "
+                         "(default python3; make one with: " + PYTHON_VENV + ")")
+    ap.add_argument("--python-args", default="",
+                    help="python: extra options for tools/python_bench.py, e.g. '--meshes lucy_100k'")
     args = ap.parse_args(argv)
     q = args.quick
     args.rounds = args.rounds or (1 if q else 3)
@@ -845,6 +905,8 @@ def main(argv):
         results["viewer"] = part_viewer(args, scenes_dir)
     if "large" in parts:
         results["large"] = part_large(args, scenes_dir, peers_dir)
+    if "python" in parts:
+        results["python"] = part_python(args, scenes_dir)
     took = time.monotonic() - t0
     with open(os.path.join(args.work, "results.json"), "w") as f:
         json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)
@@ -864,6 +926,8 @@ def main(argv):
         md["viewer"] = with_measured(md_viewer(args, results["viewer"]), run, results["viewer"])
     if "large" in results:
         md["large"] = with_measured(md_large(args, results["large"]), run, results["large"])
+    if "python" in results:
+        md["python"] = with_measured(md_python(args, results["python"]), run, results["python"])
     old = ""
     if os.path.exists(args.out):
         with open(args.out) as f:
