@@ -691,14 +691,14 @@ PYTHON_VENV = ("python3 -m venv VENV && VENV/bin/pip install ./crates/wavepath-p
                "mitsuba trimesh")
 
 
-def part_python(args, scenes_dir):
+def part_python(args, scenes_dir, peers_dir):
     """tools/python_bench.py under the interpreter that has the libraries: the standard
     library's python3 here need not have numpy, so the whole script runs under `--python`."""
     work = os.path.join(args.work, "python")
     os.makedirs(work, exist_ok=True)
     md, jsonl = os.path.join(work, "python.md"), os.path.join(work, "results.jsonl")
     threads = "1" if args.threads == 1 else f"1,{args.threads}"
-    opts = ["--bin", os.path.abspath(args.bin), "--scenes", scenes_dir, "--cache", work,
+    opts = ["--bin", os.path.abspath(args.bin), "--scenes", scenes_dir, "--peers", peers_dir, "--cache", work,
             "--threads", threads, "--rounds", str(args.rounds), "--reps", str(min(args.reps, 5) if not args.quick else args.reps),
             "--wait-quiet", str(args.wait_quiet)] + (["--quick"] if args.quick else []) + shlex.split(args.python_args)
     cmd = [args.python, os.path.join(REPO, "tools", "python_bench.py")] + opts + ["--md", md, "--jsonl", jsonl]
@@ -906,7 +906,7 @@ def main(argv):
     if "large" in parts:
         results["large"] = part_large(args, scenes_dir, peers_dir)
     if "python" in parts:
-        results["python"] = part_python(args, scenes_dir)
+        results["python"] = part_python(args, scenes_dir, peers_dir)
     took = time.monotonic() - t0
     with open(os.path.join(args.work, "results.json"), "w") as f:
         json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)

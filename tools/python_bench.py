@@ -23,7 +23,7 @@ All four get the same triangles in the same order: the mesh is written once as b
 `wavepath subdivide -n LEVEL` and read here into the same numpy arrays for every library, so a
 triangle index means the same triangle everywhere and the hits can be compared ray by ray
 against wavepath's (hit or miss; t within a relative 1e-4). The rays are the peers harness's
-sets, written by `wavepath rays dump --kind primary|diffuse` from that PLY.
+own sets, made by its `raygen` (built from ../shared/peers/rust) from that mesh as OBJ.
 
 Every measurement is a fresh Python process (`--one LIB MESH RAYS THREADS`: import, read,
 build, one untimed first call, K timed calls, one JSON line), the libraries taking turns in
@@ -314,9 +314,25 @@ def wait_quiet(limit):
 
 
 # ------------------------------------------------------------ preparation ----
+def peer_tools(args):
+    """The peers harness's own `raygen` and `ply2obj` (../shared/peers/rust), built once into the
+    cache: the ray sets are the harness's, so these figures sit beside its tables."""
+    target = os.path.join(args.cache, "peers-target")
+    manifest = os.path.join(args.peers, "rust", "Cargo.toml")
+    if not os.path.exists(manifest):
+        raise SystemExit(f"{manifest} missing: --peers must name the peers harness folder")
+    bins = {b: os.path.join(target, "release", b) for b in ("raygen", "ply2obj")}
+    if not all(os.path.exists(b) for b in bins.values()):
+        run(["cargo", "build", "-q", "--release", "--manifest-path", manifest, "-p", "peers-tools",
+             "--bin", "raygen", "--bin", "ply2obj", "--target-dir", target])
+    return bins
+
+
 def prepare(args):
-    """The meshes as binary PLY and their ray sets, made once in the cache folder."""
+    """The meshes as binary PLY and their ray sets (the peers harness's raygen, on the same
+    triangles as OBJ), made once in the cache folder."""
     os.makedirs(args.cache, exist_ok=True)
+    tools = peer_tools(args)
     todo = []
     res = QUICK_RES if args.quick else None
     for name in args.meshes:
@@ -328,13 +344,13 @@ def prepare(args):
         ply = os.path.join(args.cache, f"{name}.ply")
         if not os.path.exists(ply):
             run([args.bin, "subdivide", "-n", str(level), source, ply])
-        sets = {}
-        for kind in args.sets:
-            tag = f"{kind}-{res[0]}x{res[1]}" if res else kind
-            path = os.path.join(args.cache, f"{name}.{tag}.rays")
-            if not os.path.exists(path):
-                run([args.bin, "rays", "dump", "--kind", kind, "--out", path, ply] + (["-r", *res] if res else []))
-            sets[kind] = path
+        obj = os.path.join(args.cache, f"{name}.obj")
+        if not os.path.exists(obj):
+            run([tools["ply2obj"], ply, obj])
+        raydir = os.path.join(args.cache, f"{name}.rays-{res[0]}x{res[1]}" if res else f"{name}.rays")
+        if not os.path.exists(os.path.join(raydir, "rays_diffuse.bin")):
+            run([tools["raygen"], obj, raydir] + (["--width", res[0], "--height", res[1]] if res else []))
+        sets = {kind: os.path.join(raydir, f"rays_{kind}.bin") for kind in args.sets}
         todo.append({"name": name, "source": src, "level": level, "ply": ply, "sets": sets})
     return todo
 
@@ -472,9 +488,9 @@ def markdown(args, rows, libs, missing, todo, ref):
                f"indices, conversions included; {thr_note} threads. Median over {args.rounds} round"
                f"{'s' if args.rounds > 1 else ''} of fresh processes (the libraries taking turns) of each "
                f"process's best of {args.reps} calls after one untimed first call. Rays: the peers "
-               f"harness's sets from `wavepath rays dump` (primary: "
-               f"{'x'.join(QUICK_RES) if args.quick else '800x600'} camera rays, most of which miss; diffuse: "
-               f"one cosine bounce per primary hit). `/ fastest peer`: wavepath over the fastest other "
+               f"harness's own sets (its `raygen`: primary, "
+               f"{'x'.join(QUICK_RES) if args.quick else '800x600'} camera rays framing the mesh, in 4x4 pixel "
+               f"blocks; diffuse, one cosine bounce per primary hit). `/ fastest peer`: wavepath over the fastest other "
                f"library of the row (> 1: wavepath faster). Agreement with "
                f"{LABELS.get(ref, ref)}'s hits, ray by ray: the % of rays with the same verdict (hit or "
                f"miss) / the % of the rays both hit with t within a relative {T_REL:g} of the reference's.\n")
@@ -591,9 +607,11 @@ def main(argv):
     ap.add_argument("--python", default=sys.executable,
                     help="interpreter that has numpy and the libraries (default: this one)")
     ap.add_argument("--bin", default=os.environ.get("WAVEPATH", os.path.join(REPO, "target/release/wavepath")),
-                    help="wavepath binary, for `subdivide` and `rays dump` (default $WAVEPATH or target/release/wavepath)")
+                    help="wavepath binary, for `subdivide` (default $WAVEPATH or target/release/wavepath)")
     ap.add_argument("--scenes", default=os.environ.get("WAVEPATH_SCENES") or os.path.join(REPO, "..", "shared", "scenes"),
                     help="scenes folder (default $WAVEPATH_SCENES or ../shared/scenes)")
+    ap.add_argument("--peers", default=os.path.join(REPO, "..", "shared", "peers"),
+                    help="the peers harness folder, whose raygen makes the ray sets (default ../shared/peers)")
     ap.add_argument("--cache", default=os.path.join(REPO, "target", "python-bench"),
                     help="meshes, rays and hits made here (default target/python-bench)")
     ap.add_argument("--meshes", default=None, help="comma list of " + ", ".join(MESHES) + " (default all; quick lucy_100k)")

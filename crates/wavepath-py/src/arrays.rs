@@ -56,6 +56,15 @@ impl FloatRows<'_> {
         }
     }
 
+    /// Rows `start..start + n` as one flat float32 slice of `3 n` values, when the array is
+    /// float32 and those rows are C-contiguous (the common case: no conversion needed).
+    pub fn f32_rows(&self, start: usize, n: usize) -> Option<&[f32]> {
+        match self {
+            FloatRows::F32(a) => a.slice(s![start..start + n, ..]).to_slice(),
+            FloatRows::F64(_) => None,
+        }
+    }
+
     /// Rows `start..start + out.len()` of a three-column array into `out`: the dtype is
     /// chosen once per call and C-contiguous rows are read as one flat slice, so the
     /// per-ray cost is a load and a store, not a match and three bounds checks.
@@ -132,6 +141,14 @@ impl PerRay<'_> {
 }
 
 impl PerRayView<'_> {
+    /// Values `start..start + n` as a float32 slice, when they are one (or `None`).
+    pub fn f32_values(&self, start: usize, n: usize) -> Option<&[f32]> {
+        match self {
+            PerRayView::F32(a) => a.slice(s![start..start + n]).to_slice(),
+            _ => None,
+        }
+    }
+
     /// Values `start..start + out.len()` into `out` (the dtype chosen once per call).
     pub fn read(&self, start: usize, out: &mut [f32]) {
         match self {

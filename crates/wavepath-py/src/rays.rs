@@ -28,13 +28,10 @@ impl RayArrays<'_> {
     /// or direction, a zero direction, a NaN bound) is recorded in `bad` (the first one wins)
     /// and replaced by an empty ray, so the chunk is still traced whole.
     fn fill(&self, start: usize, buf: &mut Vec<Ray>, n: usize, bad: &AtomicUsize, scratch: &mut Scratch) {
-        let Scratch { o, d, lo, hi } = scratch;
-        self.origins.read_vec3s(start, &mut o[..n]);
-        self.directions.read_vec3s(start, &mut d[..n]);
-        self.tmin.read(start, &mut lo[..n]);
-        self.tmax.read(start, &mut hi[..n]);
         buf.clear();
-        buf.extend((0..n).map(|j| Ray { origin: o[j], dir: d[j], tmin: lo[j], tmax: hi[j] }));
+        if !self.fill_f32(start, n, buf) {
+            self.fill_converted(start, n, buf, scratch);
+        }
         for (j, r) in buf.iter_mut().enumerate() {
             let ok = r.origin.is_finite()
                 && r.dir.is_finite()
@@ -46,6 +43,41 @@ impl RayArrays<'_> {
                 *r = Ray { origin: Vec3::ZERO, dir: Vec3::X, tmin: 1.0, tmax: 0.0 };
             }
         }
+    }
+
+    /// The common case in one pass: float32 rows read straight into rays (bounds one number
+    /// or float32 arrays). False when the inputs are otherwise.
+    fn fill_f32(&self, start: usize, n: usize, buf: &mut Vec<Ray>) -> bool {
+        let (Some(o), Some(d)) = (self.origins.f32_rows(start, n), self.directions.f32_rows(start, n)) else {
+            return false;
+        };
+        let rays = o.chunks_exact(3).zip(d.chunks_exact(3));
+        let ray = |o: &[f32], d: &[f32], tmin: f32, tmax: f32| Ray {
+            origin: Vec3::new(o[0], o[1], o[2]),
+            dir: Vec3::new(d[0], d[1], d[2]),
+            tmin,
+            tmax,
+        };
+        match (self.tmin, self.tmax) {
+            (PerRayView::All(lo), PerRayView::All(hi)) => buf.extend(rays.map(|(o, d)| ray(o, d, lo, hi))),
+            _ => match (self.tmin.f32_values(start, n), self.tmax.f32_values(start, n)) {
+                (Some(lo), Some(hi)) => {
+                    buf.extend(rays.zip(lo.iter().zip(hi)).map(|((o, d), (&lo, &hi))| ray(o, d, lo, hi)))
+                }
+                _ => return false,
+            },
+        }
+        true
+    }
+
+    /// Any other dtypes and layouts: column by column through `scratch`, converted to f32.
+    fn fill_converted(&self, start: usize, n: usize, buf: &mut Vec<Ray>, scratch: &mut Scratch) {
+        let Scratch { o, d, lo, hi } = scratch;
+        self.origins.read_vec3s(start, &mut o[..n]);
+        self.directions.read_vec3s(start, &mut d[..n]);
+        self.tmin.read(start, &mut lo[..n]);
+        self.tmax.read(start, &mut hi[..n]);
+        buf.extend((0..n).map(|j| Ray { origin: o[j], dir: d[j], tmin: lo[j], tmax: hi[j] }));
     }
 }
 
@@ -77,8 +109,10 @@ pub struct Hits {
 /// (the triangle's winding normal, or the sphere's outward one).
 pub fn intersect(scene: &Scene, accel: &dyn Intersector, rays: RayArrays, normals: bool) -> Hits {
     let n = rays.len();
-    let mut t = vec![f32::INFINITY; n];
-    let mut prim = vec![wavepath_miss(); n];
+    // Zeroed allocations come from calloc, untouched until written: every entry is written
+    // once below (misses included), so no pass fills them first.
+    let mut t = vec![0.0f32; n];
+    let mut prim = vec![0u32; n];
     let mut uv = vec![0.0f32; 2 * n];
     let mut normal = normals.then(|| vec![0.0f32; 3 * n]);
     let bad = AtomicUsize::new(usize::MAX);
@@ -100,14 +134,20 @@ pub fn intersect(scene: &Scene, accel: &dyn Intersector, rays: RayArrays, normal
                 let mut c = TraceCounters::default();
                 accel.closest_hits(buf, hits, &mut c);
                 for (j, h) in hits.iter().enumerate() {
-                    if let Some(h) = h {
-                        t[j] = h.t;
-                        prim[j] = h.prim;
-                        uv[2 * j] = h.u;
-                        uv[2 * j + 1] = h.v;
-                        if let Some(nrm) = nrm.as_deref_mut() {
-                            let g = geometric_normal(scene, &buf[j], h);
-                            nrm[3 * j..3 * j + 3].copy_from_slice(&g.to_array());
+                    match h {
+                        Some(h) => {
+                            t[j] = h.t;
+                            prim[j] = h.prim;
+                            uv[2 * j] = h.u;
+                            uv[2 * j + 1] = h.v;
+                            if let Some(nrm) = nrm.as_deref_mut() {
+                                let g = geometric_normal(scene, &buf[j], h);
+                                nrm[3 * j..3 * j + 3].copy_from_slice(&g.to_array());
+                            }
+                        }
+                        None => {
+                            t[j] = f32::INFINITY;
+                            prim[j] = wavepath_miss();
                         }
                     }
                 }
@@ -126,7 +166,8 @@ pub fn occluded(accel: &dyn Intersector, rays: RayArrays) -> (Vec<bool>, usize) 
         |(buf, scratch), (k, out)| {
             rays.fill(k * CHUNK, buf, out.len(), &bad, scratch);
             let mut c = TraceCounters::default();
-            accel.any_hits(buf, out, &mut c);
+            // Rays from one origin (camera rays, shadow rays of one point) run as packets.
+            accel.any_hits_packets(buf, out, &mut c);
         },
     );
     (out, bad.into_inner())
