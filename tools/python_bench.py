@@ -43,6 +43,7 @@ import shlex
 import statistics
 import subprocess
 import sys
+import tempfile
 import time
 
 import numpy as np
@@ -597,12 +598,101 @@ def markdown(args, rows, libs, missing, todo, ref):
 
 
 # ------------------------------------------------------------------ main ----
+# ------------------------------------------------------------------ renders ----
+# Render from Python against the command line: the same scene and settings in fresh processes
+# taking turns; the figure is the render's own time (stats "render_s", loading and the BVH
+# build excluded in both), and the whole `render()` call beside it.
+RENDER_SCENES = ["cs184/sky/CBspheres_lambertian.dae", "meshes/dragon_100k.ply"]
+RENDER_FLAGS = {"spp": 64, "light_samples": 1, "max_depth": 5, "resolution": (320, 240)}
+
+
+def render_flags(threads):
+    f = RENDER_FLAGS
+    return ["-s", f["spp"], "-l", f["light_samples"], "-m", f["max_depth"], "-r", *f["resolution"], "-t", threads]
+
+
+def render_one(scene_path, threads):
+    """One render from Python in this process; prints one JSON line."""
+    import wavepath
+    scene = wavepath.load(scene_path)
+    t0 = time.perf_counter()
+    _, stats = scene.render(threads=threads, **RENDER_FLAGS)
+    call = time.perf_counter() - t0
+    print(json.dumps({"who": "python", "render_s": stats["render_s"], "call_s": call}))
+
+
+def render_cli(args, scene_path, threads):
+    with tempfile.TemporaryDirectory() as tmp:
+        stats = os.path.join(tmp, "s.json")
+        cmd = [args.bin, scene_path, *map(str, render_flags(threads)), "-f", os.path.join(tmp, "x.pfm"), "--stats", stats]
+        t0 = time.perf_counter()
+        r = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, timeout=args.timeout)
+        wall = time.perf_counter() - t0
+        if r.returncode != 0:
+            raise SystemExit(f"failed: {shlex.join(cmd)}\n{r.stderr[-2000:]}")
+        with open(stats) as f:
+            return {"who": "cli", "render_s": json.load(f)["render_s"], "call_s": wall}
+
+
+def measure_renders(args, jsonl):
+    """Rounds of (command line, Python) fresh processes per scene and thread count."""
+    rows = []
+    for rnd in range(args.rounds):
+        for rel in RENDER_SCENES:
+            path = os.path.join(args.scenes, rel)
+            if not os.path.exists(path):
+                log(f"skip render of {rel}: missing")
+                continue
+            for threads in args.threads:
+                wait_quiet(args.wait_quiet)
+                a = render_cli(args, path, threads)
+                wait_quiet(args.wait_quiet)
+                r = subprocess.run([args.python, os.path.abspath(__file__), "--one-render", path, str(threads)],
+                                   capture_output=True, text=True, timeout=args.timeout)
+                if r.returncode != 0:
+                    raise SystemExit(f"python render failed: {r.stderr[-2000:]}")
+                b = json.loads(r.stdout.strip().splitlines()[-1])
+                for x in (a, b):
+                    x.update({"kind": "render", "scene": rel, "threads": threads, "round": rnd})
+                    jsonl.write(json.dumps(x) + "\n")
+                    rows.append(x)
+                log(f"render {rel} {threads}T round {rnd + 1}: cli {a['render_s']:.3f} s, python {b['render_s']:.3f} s")
+    return rows
+
+
+def render_markdown(rows, threads):
+    f = RENDER_FLAGS
+    out = [f"Render from Python against the command line: the same scene and settings (`-s {f['spp']} -l "
+           f"{f['light_samples']} -m {f['max_depth']} -r {f['resolution'][0]} {f['resolution'][1]} -t N`, the "
+           f"same image bit for bit), fresh processes taking turns. Seconds of the render itself (the "
+           f"statistics' `render_s`, load and BVH build excluded in both), median over rounds; the ratio "
+           f"is Python over the command line per round, its median and range (< 1.02: within 2%). "
+           f"`render()` call: the whole Python call (its BVH build included).\n",
+           "| scene | threads | command line s | Python s | Python / command line | `render()` call s |",
+           "|---|--:|--:|--:|--:|--:|"]
+    for rel in RENDER_SCENES:
+        for t in threads:
+            cli = [r for r in rows if r["scene"] == rel and r["threads"] == t and r["who"] == "cli"]
+            py = [r for r in rows if r["scene"] == rel and r["threads"] == t and r["who"] == "python"]
+            if not cli or not py:
+                continue
+            ratios = [p["render_s"] / c["render_s"] for c, p in zip(cli, py)]
+            med = statistics.median
+            out.append(f"| `{rel}` | {t} | {med(c['render_s'] for c in cli):.3f} | {med(p['render_s'] for p in py):.3f} | "
+                       f"{med(ratios):.3f} ({min(ratios):.3f}-{max(ratios):.3f}) | {med(p['call_s'] for p in py):.3f} |")
+    return "\n".join(out) + "\n"
+
+
 def main(argv):
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[1],
                                  formatter_class=argparse.RawDescriptionHelpFormatter, epilog=__doc__)
     ap.add_argument("--one", nargs=4, metavar=("LIB", "MESH", "RAYS", "THREADS"),
                     help="measure one library in this process and print one JSON line")
     ap.add_argument("--hits", help="with --one: write the hits (t, prim) to this .npz")
+    ap.add_argument("--one-render", nargs=2, metavar=("SCENE", "THREADS"),
+                    help="render SCENE from Python in this process and print one JSON line")
+    ap.add_argument("--parts", default="rays,render",
+                    help="rays (ray casting against the peers), render (Python against the command line)")
     ap.add_argument("--coherent", action="store_true", help="with --one: the rays are coherent (camera rays)")
     ap.add_argument("--python", default=sys.executable,
                     help="interpreter that has numpy and the libraries (default: this one)")
@@ -628,6 +718,9 @@ def main(argv):
     ap.add_argument("--jsonl", default=None, help="raw results, one JSON line per process (default CACHE/results.jsonl)")
     ap.add_argument("--md", default=None, help="write the Markdown here (default: standard output)")
     args = ap.parse_args(argv)
+    if args.one_render:
+        render_one(args.one_render[0], int(args.one_render[1]))
+        return 0
     if args.one:
         lib, mesh, rays, thr = args.one
         one(lib, mesh, rays, int(thr), args.reps or 5, args.coherent, args.hits)
@@ -667,9 +760,13 @@ def main(argv):
         jsonl.write(json.dumps({"kind": "run", "date": date, "argv": argv, "python": args.python, "libs": libs,
                                 "missing": missing, "cpu": cpu_model()[0], "avx512f": cpu_model()[1],
                                 "load_before": load0}) + "\n")
-        rows = measure(args, libs, todo, jsonl)
+        parts = args.parts.split(",")
+        rows = measure(args, libs, todo, jsonl) if "rays" in parts else []
+        renders = measure_renders(args, jsonl) if "render" in parts and "wavepath" in libs else []
         jsonl.write(json.dumps({"kind": "end", "load_after": os.getloadavg()[0]}) + "\n")
-    md = markdown(args, rows, libs, missing, todo, ref)
+    md = markdown(args, rows, libs, missing, todo, ref) if rows else ""
+    if renders:
+        md += "\n" + render_markdown(renders, args.threads)
     if args.md:
         with open(args.md, "w") as f:
             f.write(md)
