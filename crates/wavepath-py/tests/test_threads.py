@@ -1,6 +1,8 @@
 """A render leaves the interpreter alive: other threads run, Ctrl-C stops it, progress is told."""
 
 import _thread
+import os
+import signal
 import threading
 import time
 
@@ -38,12 +40,17 @@ def test_other_python_threads_run_during_a_render():
     assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
 
 
-def test_ctrl_c_interrupts_a_render_within_a_second():
+@pytest.mark.parametrize("how", ["interrupt_main", "SIGINT"])
+def test_ctrl_c_interrupts_a_render_within_a_second(how):
     fired = {}
 
     def interrupt():
         fired["at"] = time.perf_counter()
-        _thread.interrupt_main()
+        if how == "SIGINT":
+            # What a terminal's Ctrl-C sends: the signal itself, to this process.
+            os.kill(os.getpid(), signal.SIGINT)
+        else:
+            _thread.interrupt_main()
 
     timer = threading.Timer(0.5, interrupt)
     t0 = time.perf_counter()
