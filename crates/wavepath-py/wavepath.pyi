@@ -43,14 +43,15 @@ class Rays(TypedDict):
 def load(
     path: Union[str, PathLike[str]],
     *,
-    camera: Literal["cs184", "file"] = "cs184",
-    smooth_normals: bool = True,
-    two_sided_emission: bool = False,
-    subdivide: int = 0,
+    camera: Optional[Literal["cs184", "file"]] = None,
+    smooth_normals: Optional[bool] = None,
+    two_sided_emission: Optional[bool] = None,
+    subdivide: Optional[int] = None,
 ) -> Scene:
-    """Loads a scene file (.dae, .obj, .ply, .gltf, .glb) with the command line's defaults.
+    """Loads a scene file (.dae, .obj, .ply, .gltf, .glb); options left out keep the
+    library's defaults, which are the command line's.
 
-    camera: "cs184" places a .dae file's camera as the CS184 reference renderer does (the
+    camera: "cs184" (default) places a .dae file's camera as the CS184 reference renderer does (the
     command line's default); "file" keeps the file's camera as written. smooth_normals:
     COLLADA files get area-weighted vertex normals. two_sided_emission: every emitter emits
     from both faces. subdivide: rounds of midpoint subdivision (4**n times the triangles).

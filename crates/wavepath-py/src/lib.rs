@@ -23,21 +23,28 @@ use scene::PyScene;
 /// faces. subdivide: rounds of midpoint subdivision (4^n times the triangles).
 /// Raises FileNotFoundError for a missing file, ValueError for a malformed one.
 #[pyfunction]
-#[pyo3(signature = (path, *, camera="cs184", smooth_normals=true, two_sided_emission=false, subdivide=0))]
+#[pyo3(signature = (path, *, camera=None, smooth_normals=None, two_sided_emission=None, subdivide=None))]
 fn load(
     py: Python<'_>,
     path: std::path::PathBuf,
-    camera: &str,
-    smooth_normals: bool,
-    two_sided_emission: bool,
-    subdivide: u32,
+    camera: Option<&str>,
+    smooth_normals: Option<bool>,
+    two_sided_emission: Option<bool>,
+    subdivide: Option<u32>,
 ) -> PyResult<PyScene> {
-    let camera = match camera {
-        "cs184" => wavepath::CameraMode::Cs184,
-        "file" => wavepath::CameraMode::File,
-        other => return Err(errors::value_error(format!("camera must be \"cs184\" or \"file\", got \"{other}\""))),
-    };
-    let opts = wavepath::LoadOptions { camera, smooth_normals, two_sided_emission, subdivide };
+    // Options left out keep the library's defaults (`LoadOptions::default()`, the command line's).
+    let mut opts = wavepath::LoadOptions::default();
+    match camera {
+        None => {}
+        Some("cs184") => opts.camera = wavepath::CameraMode::Cs184,
+        Some("file") => opts.camera = wavepath::CameraMode::File,
+        Some(other) => {
+            return Err(errors::value_error(format!("camera must be \"cs184\" or \"file\", got \"{other}\"")));
+        }
+    }
+    opts.smooth_normals = smooth_normals.unwrap_or(opts.smooth_normals);
+    opts.two_sided_emission = two_sided_emission.unwrap_or(opts.two_sided_emission);
+    opts.subdivide = subdivide.unwrap_or(opts.subdivide);
     let mut scene = py.detach(|| wavepath::load(&path, &opts)).map_err(errors::to_py)?;
     scene.drop_unused_uvs();
     Ok(PyScene::new(scene))

@@ -66,11 +66,19 @@ pub fn settings(scene: &Scene, o: &RenderOptions) -> PyResult<Settings> {
         s.image.width = w as usize;
         s.image.height = h as usize;
     }
-    s.sampling.spp = in_range("spp (samples per pixel)", o.spp.unwrap_or(1), 1, 1 << 20)? as u32;
-    s.sampling.light_samples =
-        in_range("light_samples (samples per area light)", o.light_samples.unwrap_or(1), 1, 1 << 16)? as u32;
-    s.paths.max_depth = in_range("max_depth (maximum ray depth)", o.max_depth.unwrap_or(1), 0, 1 << 12)? as u32;
-    s.paths.accumulate = o.accumulate.unwrap_or(true);
+    // Left out, an option keeps the library's default for the scene (as a flag left out does).
+    if let Some(v) = o.spp {
+        s.sampling.spp = in_range("spp (samples per pixel)", v, 1, 1 << 20)? as u32;
+    }
+    if let Some(v) = o.light_samples {
+        s.sampling.light_samples = in_range("light_samples (samples per area light)", v, 1, 1 << 16)? as u32;
+    }
+    if let Some(v) = o.max_depth {
+        s.paths.max_depth = in_range("max_depth (maximum ray depth)", v, 0, 1 << 12)? as u32;
+    }
+    if let Some(v) = o.accumulate {
+        s.paths.accumulate = v;
+    }
     if let Some((b, t)) = o.adaptive {
         if !(b.is_finite() && b >= 1.0 && b <= (1u32 << 20) as f64 && b.fract() == 0.0) {
             return Err(value_error(format!(
@@ -102,13 +110,19 @@ pub fn settings(scene: &Scene, o: &RenderOptions) -> PyResult<Settings> {
     if let Some(d) = o.rr_depth {
         s.paths.roulette.start_depth = in_range("rr_depth", d, 1, 1 << 16)? as u32;
     }
-    s.paths.hemisphere = o.hemisphere.unwrap_or(false);
-    s.paths.mis = o.mis.unwrap_or(true);
+    if let Some(v) = o.hemisphere {
+        s.paths.hemisphere = v;
+    }
+    if let Some(v) = o.mis {
+        s.paths.mis = v;
+    }
     if let Some(isa) = &o.isa {
         s.execution.isa = Isa::parse(isa)
             .ok_or_else(|| value_error(format!("unknown instruction set \"{isa}\" (scalar, sse, avx2, avx512)")))?;
     }
-    s.sampling.seed = o.seed.unwrap_or(0);
+    if let Some(v) = o.seed {
+        s.sampling.seed = v;
+    }
     if let Some(i) = &o.integrator {
         s.execution.integrator = match i.as_str() {
             "wavefront" => IntegratorKind::Wavefront,
