@@ -53,6 +53,10 @@ impl Binding {
 }
 
 impl Materials {
+    pub fn new(common_profile: bool, dir: PathBuf) -> Materials {
+        Materials { common_profile, dir, ..Materials::default() }
+    }
+
     pub fn default_id(&mut self) -> u32 {
         *self.default.get_or_insert_with(|| {
             self.list.push(Material::diffuse("default", Vec3::splat(DEFAULT_ALBEDO)));

@@ -66,11 +66,10 @@ pub fn parse_str(text: &str, name: &str, opts: &LoadOptions) -> Result<Scene> {
             source: SceneSource { dialect: Dialect::Cs184, reader: "collada", default_sky: false },
             ..Scene::default()
         },
-        mats: Materials {
-            common_profile: !dialect::is_course_file(root),
-            dir: Path::new(name).parent().map(Path::to_path_buf).unwrap_or_default(),
-            ..Materials::default()
-        },
+        mats: Materials::new(
+            !dialect::is_course_file(root),
+            Path::new(name).parent().map(Path::to_path_buf).unwrap_or_default(),
+        ),
         geometries: HashMap::new(),
         camera: None,
     };

@@ -316,19 +316,20 @@ fn no_nan_or_inf_for_any_input() {
 /// The Phong model is Kd / pi plus Ks times the GGX microfacet term with
 /// alpha = sqrt(2 / (Ns + 2)), written here from the formulas in f64: D = alpha^2 /
 /// (pi cos^4 (alpha^2 + tan^2)^2), height-correlated Smith G with GGX's Lambda.
+fn ggx(alpha: f64, wo: DVec3, wi: DVec3) -> f64 {
+    let h = (wo + wi).normalize();
+    let (c2, a2) = (h.z * h.z, alpha * alpha);
+    let tan2 = (1.0 - c2) / c2;
+    let d = a2 / (std::f64::consts::PI * c2 * c2 * (a2 + tan2) * (a2 + tan2));
+    let lambda = |w: DVec3| {
+        let t2 = (1.0 - w.z * w.z) / (w.z * w.z);
+        0.5 * (-1.0 + (1.0 + a2 * t2).sqrt())
+    };
+    d / (1.0 + lambda(wo) + lambda(wi)) / (4.0 * wo.z * wi.z)
+}
+
 #[test]
 fn phong_is_lambert_plus_fresnel_free_ggx() {
-    let ggx = |alpha: f64, wo: DVec3, wi: DVec3| {
-        let h = (wo + wi).normalize();
-        let (c2, a2) = (h.z * h.z, alpha * alpha);
-        let tan2 = (1.0 - c2) / c2;
-        let d = a2 / (std::f64::consts::PI * c2 * c2 * (a2 + tan2) * (a2 + tan2));
-        let lambda = |w: DVec3| {
-            let t2 = (1.0 - w.z * w.z) / (w.z * w.z);
-            0.5 * (-1.0 + (1.0 + a2 * t2).sqrt())
-        };
-        d / (1.0 + lambda(wo) + lambda(wi)) / (4.0 * wo.z * wi.z)
-    };
     let mut r = Sampler::for_sample(12, 0, 0);
     let (kd, ks) = (DVec3::new(0.5, 0.3, 0.2), DVec3::new(0.3, 0.35, 0.4));
     for ns in [0.0f64, 10.0, 48.0, 300.0] {
@@ -379,21 +380,41 @@ fn phong_pdf_integrates_to_one() {
     }
 }
 
-/// Kd + Ks = 1 at small roughness reflects everything but what single-scattering
-/// microfacets lose (< 0.5% at alpha 0.045 away from grazing): the Phong white furnace; and
-/// Kd + Ks <= 1 never reflects more than Kd + Ks.
+/// Directional albedo of the GGX term alone (Ks = 1) by midpoint quadrature of the f64
+/// formula above in (cos, phi), independent of the model's code.
+fn ggx_albedo(alpha: f64, wo: DVec3, n: usize) -> f64 {
+    let mut sum = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let c = (i as f64 + 0.5) / n as f64;
+            let phi = (j as f64 + 0.5) / n as f64 * std::f64::consts::TAU;
+            let s = (1.0 - c * c).sqrt();
+            sum += ggx(alpha, wo, DVec3::new(s * phi.cos(), s * phi.sin(), c)) * c;
+        }
+    }
+    sum * std::f64::consts::TAU / (n * n) as f64
+}
+
+/// The Phong white furnace, sampled: the albedo is Kd + Ks E(wo), E the GGX term's own
+/// albedo (quadrature), never above Kd + Ks. E is what single scattering keeps: 1 to within
+/// 1.5% for a sharp lobe (Kd + Ks = 1 then reflects everything), much less for a rough one
+/// (alpha 1, `Ns 0`: facets steeper than 45 degrees reflect into the surface).
 #[test]
 fn phong_white_furnace() {
     let mut r = Sampler::for_sample(14, 0, 0);
-    for (kd, ks, ns, lo, hi) in [
-        (0.7, 0.3, 1000.0, 0.995, 1.0),
-        (0.0, 1.0, 1000.0, 0.99, 1.0),
-        (0.4, 0.2, 10.0, 0.5, 0.6),
-        (0.5, 0.5, 0.0, 0.8, 1.0),
-    ] {
+    for (kd, ks, ns) in
+        [(0.7f32, 0.3f32, 1000.0f32), (0.0, 1.0, 1000.0), (0.4, 0.2, 10.0), (0.5, 0.5, 0.0), (0.2, 0.8, 48.0)]
+    {
         let m = Model::Glossy(Glossy::phong(Vec3::splat(kd), Vec3::splat(ks), ns));
+        let alpha = (2.0 / (ns as f64 + 2.0)).sqrt();
         for cos in [1.0f32, 0.7, 0.4] {
             let wo = wo_at(cos, 0.3);
+            // A sharp lobe is too narrow for the quadrature: there E is 1 to within 1.5%.
+            let (want, slack) = if ns >= 1000.0 {
+                ((kd + ks) as f64, 0.015 * ks as f64)
+            } else {
+                (kd as f64 + ks as f64 * ggx_albedo(alpha, wo.as_dvec3(), 600), 2e-3)
+            };
             let n = 200_000;
             let (mut sum, mut sum2) = (0.0f64, 0.0f64);
             for _ in 0..n {
@@ -404,11 +425,14 @@ fn phong_white_furnace() {
                 }
             }
             let mean = sum / n as f64;
-            // 5 sigma of the mean: a false failure about once in 3.5 million runs per case.
+            // 5 sigma of the mean (a false failure about once in 3.5 million runs per case),
+            // plus the quadrature's error.
             let sigma = ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt();
             assert!(
-                mean >= lo - 5.0 * sigma && mean <= hi + 5.0 * sigma,
-                "Kd {kd} Ks {ks} Ns {ns} cos {cos}: albedo {mean} +- {sigma}, expected in [{lo}, {hi}]"
+                mean >= want - slack - 5.0 * sigma
+                    && mean <= want + 2e-3 + 5.0 * sigma
+                    && mean <= (kd + ks) as f64 + 5.0 * sigma,
+                "Kd {kd} Ks {ks} Ns {ns} cos {cos}: albedo {mean} +- {sigma}, Kd + Ks E = {want}"
             );
         }
     }

@@ -33,7 +33,8 @@ fn sphere_mean(acc: &crate::film::Accumulator, w: usize, h: usize, cam: &Camera)
 
 /// A unit sphere of Phong material under a constant white environment reflects, from every
 /// direction, its directional albedo: at most Kd + Ks, and Kd + Ks = 1 with a sharp lobe
-/// reflects all but the < 0.5% single-scattering microfacets lose. The sphere is convex, so
+/// reflects all but the ~1% single-scattering microfacets lose (a rough lobe loses more:
+/// about a quarter of Ks at alpha 0.41 over the sphere; the BSDF tests pin it per direction). The sphere is convex, so
 /// each path reflects once; the light comes through light sampling of the environment and
 /// BSDF sampling, combined by MIS, in both integrators.
 #[test]
@@ -41,7 +42,7 @@ fn phong_sphere_in_a_white_furnace() {
     let (w, h) = (24, 24);
     let camera = Camera::look_at(vec3(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, 30.0, 1.0);
     for (kd, ks, ns, lo, hi) in
-        [(0.7f32, 0.3f32, 1000.0f32, 0.995, 1.0), (0.5, 0.5, 10.0, 0.9, 1.0), (0.3, 0.3, 48.0, 0.5, 0.6)]
+        [(0.7f32, 0.3f32, 1000.0f32, 0.995, 1.0), (0.5, 0.5, 10.0, 0.8, 1.0), (0.3, 0.3, 48.0, 0.5, 0.6)]
     {
         let scene = Scene {
             name: "phong furnace".into(),
