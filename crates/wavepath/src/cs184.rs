@@ -34,6 +34,9 @@
 //!   `xml.rs`; `<area>` lights (`lights.rs`), analytic `<sphere>`s (`geometry.rs`), BSDF
 //!   extras (`materials.rs`); the up axis becomes +Y as the course's loader does
 //!   (`transform.rs`);
+//! - effects without an extra are diffuse with the common profile's diffuse colour in the
+//!   course's files (those with its extensions or from its Blender versions: `dialect.rs`);
+//!   other files' common profile is read in full (`common.rs`);
 //! - vertex normals recomputed as the course's half-edge mesh does
 //!   (`scene::cs184_vertex_normals` in `scene/normals.rs`, applied by `instance.rs` when
 //!   `LoadOptions::smooth_normals`).

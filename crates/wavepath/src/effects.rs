@@ -48,7 +48,7 @@ pub struct Effects {
     pub mirror: bool,
     /// Glass or refraction materials (delta reflection and refraction).
     pub glass: bool,
-    /// Rough conductors (microfacet), with MIS between light and BSDF sampling.
+    /// Glossy models (rough conductors, PBR, Phong), with MIS between light and BSDF sampling.
     pub microfacet: bool,
     /// Any of the three: the kernel shades through the BSDF models.
     pub non_diffuse: bool,
@@ -89,8 +89,10 @@ struct Facts<'a> {
     mirrors: usize,
     glasses: usize,
     metals: usize,
-    /// glTF metallic-roughness and specular-glossiness materials.
+    /// Metallic-roughness (glTF, MTL `Pr`/`Pm`) and specular-glossiness materials.
     pbr: usize,
+    /// Phong materials (MTL `illum 2` with `Ks`, COLLADA `<phong>`/`<blinn>`).
+    phong: usize,
 }
 
 impl<'a> Facts<'a> {
@@ -130,6 +132,7 @@ impl<'a> Facts<'a> {
             glasses: material_count(&["glass", "refraction"]),
             metals: material_count(&["microfacet"]),
             pbr: material_count(&["metallic-roughness", "specular-glossiness"]),
+            phong: material_count(&["phong"]),
         }
     }
 
@@ -258,7 +261,10 @@ const RULES: &[Rule] = &[
                 what.push(format!("{} rough conductor(s): Beckmann microfacets", f.metals));
             }
             if f.pbr > 0 {
-                what.push(format!("{} glTF PBR material(s): diffuse base under GGX specular", f.pbr));
+                what.push(format!("{} PBR material(s): diffuse base under GGX specular", f.pbr));
+            }
+            if f.phong > 0 {
+                what.push(format!("{} Phong material(s): diffuse plus GGX specular", f.phong));
             }
             (f.lit && !what.is_empty()).then(|| format!("{}; MIS of light and BSDF samples", what.join(", ")))
         },
@@ -274,7 +280,7 @@ const RULES: &[Rule] = &[
         rule: |f, _| {
             if f.global_to(2) {
                 Some(format!("-m {} > 1", f.depth))
-            } else if f.lit && f.mirrors + f.glasses + f.metals + f.pbr > 0 {
+            } else if f.lit && f.mirrors + f.glasses + f.metals + f.pbr + f.phong > 0 {
                 Some("light found by rays from mirror, glass or glossy surfaces".into())
             } else {
                 None

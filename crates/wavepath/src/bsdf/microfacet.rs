@@ -176,6 +176,39 @@ impl Microfacet {
         let p = self.d(h) * h.z / (4.0 * oh);
         if p.is_finite() { p } else { 0.0 }
     }
+
+    /// GGX only: `wo` reflected about a normal drawn from those visible from `wo` (Heitz
+    /// 2018, the stretched hemisphere construction). Its sample weight F G / G1(wo) stays
+    /// below F at grazing angles, where drawing from D alone gives weights of order 1 / alpha.
+    #[inline]
+    pub fn sample_visible(&self, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {
+        let a = self.a();
+        let vh = Vec3::new(a * wo.x, a * wo.y, wo.z).try_normalize()?;
+        let len2 = vh.x * vh.x + vh.y * vh.y;
+        let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
+        let t2 = vh.cross(t1);
+        let r = u[0].sqrt();
+        let (sin, cos) = (std::f32::consts::TAU * u[1]).sin_cos();
+        let (p1, p2) = (r * cos, r * sin);
+        let s = 0.5 * (1.0 + vh.z);
+        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
+        let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
+        let h = Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).try_normalize()?;
+        let oh = wo.dot(h);
+        let wi = 2.0 * oh * h - wo;
+        (oh > 0.0 && wi.z > 0.0).then_some(wi)
+    }
+
+    /// Density of [`sample_visible`](Self::sample_visible): G1(wo) D(h) / (4 cos_o).
+    #[inline]
+    pub fn visible_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let Some(h) = (wo + wi).try_normalize() else { return 0.0 };
+        if wo.dot(h) <= 0.0 {
+            return 0.0;
+        }
+        let p = self.g1(wo) * self.d(h) / (4.0 * wo.z);
+        if p.is_finite() { p } else { 0.0 }
+    }
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@
 //! `None`).
 
 mod dielectric;
+mod glossy;
 mod lambert;
 mod microfacet;
 mod mirror;
@@ -17,6 +18,7 @@ mod pbr;
 pub use dielectric::Dielectric;
 #[cfg(test)]
 pub use dielectric::fresnel_dielectric;
+pub use glossy::Glossy;
 pub use lambert::Lambert;
 pub use microfacet::{Distribution, Microfacet};
 pub use mirror::Mirror;
@@ -47,6 +49,7 @@ pub enum Model {
     Dielectric(Dielectric),
     Microfacet(Microfacet),
     Pbr(Pbr),
+    Glossy(Glossy),
 }
 
 /// How a model's light is best estimated: which integrator strategy it needs.
@@ -61,12 +64,12 @@ pub enum Kind {
 }
 
 impl Model {
-    /// The model of a material as the file states it. Phong (no loader produces it yet) is
-    /// shaded by its diffuse part; glass roughness is ignored, as the CS184 reference does.
+    /// The model of a material as the file states it. Glass roughness is ignored, as the
+    /// CS184 reference does.
     pub fn new(b: &Bsdf) -> Model {
         match *b {
             Bsdf::Diffuse { albedo } => Model::Lambert(Lambert { albedo }),
-            Bsdf::Phong { diffuse, .. } => Model::Lambert(Lambert { albedo: diffuse }),
+            Bsdf::Phong { diffuse, specular, shininess } => Model::Glossy(Glossy::phong(diffuse, specular, shininess)),
             Bsdf::Mirror { reflectance } => Model::Mirror(Mirror { reflectance }),
             Bsdf::Glass { reflectance, transmittance, ior, .. } => {
                 Model::Dielectric(Dielectric { reflectance, transmittance, eta: ior, reflect: true })
@@ -90,7 +93,7 @@ impl Model {
         match self {
             Model::Lambert(_) => Kind::Diffuse,
             Model::Mirror(_) | Model::Dielectric(_) => Kind::Delta,
-            Model::Microfacet(_) | Model::Pbr(_) => Kind::Glossy,
+            Model::Microfacet(_) | Model::Pbr(_) | Model::Glossy(_) => Kind::Glossy,
         }
     }
 
@@ -111,6 +114,7 @@ impl Model {
             Model::Mirror(_) | Model::Dielectric(_) => Vec3::ZERO,
             Model::Microfacet(m) => m.eval(wo, wi),
             Model::Pbr(m) => m.eval(wo, wi),
+            Model::Glossy(m) => m.eval(wo, wi),
         }
     }
 
@@ -123,6 +127,7 @@ impl Model {
             Model::Dielectric(m) => m.sample(wo, u[2]),
             Model::Microfacet(m) => m.sample(wo, [u[0], u[1]]),
             Model::Pbr(m) => m.sample(wo, u),
+            Model::Glossy(m) => m.sample(wo, u),
         }
     }
 
@@ -133,6 +138,7 @@ impl Model {
             Model::Mirror(_) | Model::Dielectric(_) => 0.0,
             Model::Microfacet(m) => m.pdf(wo, wi),
             Model::Pbr(m) => m.pdf(wo, wi),
+            Model::Glossy(m) => m.pdf(wo, wi),
         }
     }
 }

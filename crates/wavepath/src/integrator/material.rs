@@ -18,7 +18,7 @@
 //! (which only collects this light).
 
 use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin};
-use crate::bsdf::{Kind, Lambert, Model, Pbr, power_heuristic, to_local};
+use crate::bsdf::{Glossy, Kind, Lambert, Model, Pbr, power_heuristic, to_local};
 use crate::geometry::{Hit, Ray};
 use crate::lights::Seen;
 use crate::sampling::{Frame, Sampler, warp};
@@ -71,6 +71,12 @@ impl Transport<'_> {
                 }
                 _ => p,
             }),
+            // The diffuse colour varies (map_Kd, vertex colours); the scaling that keeps
+            // Kd + Ks <= 1 applies to it where it is looked up.
+            Model::Glossy(g) => match self.scene.materials[v.material as usize].bsdf {
+                Bsdf::Phong { specular, shininess, .. } => Model::Glossy(Glossy::phong(v.albedo, specular, shininess)),
+                _ => Model::Glossy(g),
+            },
             m => m,
         };
         let frame = Frame::new(v.ns);

@@ -178,19 +178,13 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
     let dir = path.parent().unwrap_or(Path::new("."));
     let mut state = state.borrow_mut();
     match mtl::parse(&text, dir) {
-        Ok(mut mats) => {
-            for m in &mut mats {
-                let Some(t) = &mut m.albedo_texture else { continue };
-                if !t.path.is_file() {
-                    state.notes.push(format!("warning: {}: texture {} not found", path.display(), t.path.display()));
-                    continue;
-                }
-                // An image that does not decode leaves the material its Kd, with a warning.
-                match crate::scene::texture::TextureImage::open_srgb(&t.path) {
-                    Ok(img) => t.image = Some(std::sync::Arc::new(img)),
-                    Err(e) => state.notes.push(format!("warning: {}: {e:#}; using Kd", path.display())),
-                }
+        Ok(mut lib) => {
+            let shown = path.display();
+            for n in std::mem::take(&mut lib.notes) {
+                state.notes.push(format!("warning: {shown}: {n}"));
             }
+            mtl::load_images(&mut lib, path, &mut state.notes);
+            let mats = lib.materials;
             let names: Vec<tobj::Material> =
                 mats.iter().map(|m| tobj::Material { name: m.name.clone(), ..Default::default() }).collect();
             let map = mats.iter().enumerate().map(|(i, m)| (m.name.clone(), i)).collect();

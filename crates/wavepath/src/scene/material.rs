@@ -76,6 +76,14 @@ impl Bsdf {
     }
 }
 
+/// The microfacet roughness (alpha) of Phong exponent `n`, by the Phong–Beckmann
+/// correspondence of Walter et al. 2007 (n = 2 / alpha^2 - 2): how MTL `Ns` and COLLADA
+/// `<shininess>` become [`Bsdf::Phong`]'s lobe width, and MTL `Ns` a PBR roughness.
+#[inline]
+pub fn phong_alpha(n: f32) -> f32 {
+    (2.0 / (n.max(0.0) + 2.0)).sqrt()
+}
+
 /// A surface's appearance: how it scatters and what it emits.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {

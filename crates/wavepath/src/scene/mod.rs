@@ -18,7 +18,7 @@ pub mod texture;
 pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit};
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
 pub use envmap::EnvMap;
-pub use material::{Bsdf, Material, Texture};
+pub use material::{Bsdf, Material, Texture, phong_alpha};
 pub use material_ids::MaterialIds;
 pub use mesh::{Mesh, Sphere, first_bad};
 pub use normals::{area_weighted_vertex_normals, cs184_vertex_normals};

@@ -76,15 +76,24 @@ impl TextureImage {
         Ok(TextureImage { width: w, height: h, texels })
     }
 
-    /// Reads and decodes an image file; errors are one line naming the file.
+    /// Reads and decodes an image file of colours; errors are one line naming the file.
     pub fn open_srgb(path: &Path) -> Result<TextureImage> {
+        Self::open(path, srgb_to_linear)
+    }
+
+    /// Reads and decodes an image file of linear data (MTL roughness and metalness maps).
+    pub fn open_linear(path: &Path) -> Result<TextureImage> {
+        Self::open(path, |c| c)
+    }
+
+    fn open(path: &Path, transfer: fn(f32) -> f32) -> Result<TextureImage> {
         // The content decides the format where it can; the extension where it cannot (TGA has
         // no signature).
         let reader = image::ImageReader::open(path)
             .and_then(|r| r.with_guessed_format())
             .map_err(|e| anyhow!("{}: cannot read texture: {e}", path.display()))?;
         let img = reader.decode().map_err(|e| anyhow!("{}: not a readable texture: {e}", path.display()))?;
-        Self::from_srgb(img).map_err(|e| anyhow!("{}: {e}", path.display()))
+        Self::convert(img, transfer).map_err(|e| anyhow!("{}: {e}", path.display()))
     }
 
     #[inline]

@@ -3,12 +3,14 @@
 //! Materials are converted when a geometry instance first binds them, so the scene holds
 //! only the materials it uses, in order of first use.
 
+use super::common::Context;
 use super::xml::{Doc, child, children, cs184_extra, path};
 use crate::scene::{Bsdf, Material};
 use anyhow::Result;
 use glam::Vec3;
 use roxmltree::Node;
 use std::collections::HashMap;
+use std::path::PathBuf;
 
 /// Albedo of surfaces whose file gives none (as in the reference renderer).
 const DEFAULT_ALBEDO: f32 = 0.5;
@@ -18,6 +20,13 @@ pub struct Materials {
     pub list: Vec<Material>,
     by_node: HashMap<roxmltree::NodeId, u32>,
     default: Option<u32>,
+    /// The file is not the CS184 course's: effects without a CGL extra are read by the
+    /// common profile in full (`common.rs`), not as the course's diffuse colour.
+    pub common_profile: bool,
+    /// The folder image paths are relative to.
+    pub dir: PathBuf,
+    /// Warnings for the scene's notes.
+    pub notes: Vec<String>,
 }
 
 /// An instance's `bind_material`: material symbol -> material index.
@@ -44,6 +53,10 @@ impl Binding {
 }
 
 impl Materials {
+    pub fn new(common_profile: bool, dir: PathBuf) -> Materials {
+        Materials { common_profile, dir, ..Materials::default() }
+    }
+
     pub fn default_id(&mut self) -> u32 {
         *self.default.get_or_insert_with(|| {
             self.list.push(Material::diffuse("default", Vec3::splat(DEFAULT_ALBEDO)));
@@ -72,7 +85,12 @@ impl Materials {
         let name = mat.attribute("name").or(mat.attribute("id")).unwrap_or("material");
         let ie = d.child(mat, "instance_effect")?;
         let effect = d.resolve(ie, "url", &["effect"])?;
-        let m = effect_material(d, name, effect)?;
+        let m = if self.common_profile && cs184_extra(effect).is_none() {
+            let base = Material::diffuse(name, Vec3::splat(DEFAULT_ALBEDO));
+            super::common::material(d, base, effect, &mut Context { dir: &self.dir, notes: &mut self.notes })?
+        } else {
+            effect_material(d, name, effect)?
+        };
         self.list.push(m);
         let i = (self.list.len() - 1) as u32;
         self.by_node.insert(mat.id(), i);
@@ -125,8 +143,9 @@ fn positive(d: &Doc, node: Node, what: &str, v: f32) -> Result<f32> {
     if v > 0.0 { Ok(v) } else { Err(d.err(node, format!("{what} {v} must be positive"))) }
 }
 
-/// `profile_COMMON/technique/(phong|lambert|blinn|constant)`: diffuse colour as albedo,
-/// emission colour as emitted radiance.
+/// The course's reading of `profile_COMMON/technique/(phong|lambert|blinn|constant)`:
+/// diffuse colour as albedo, emission colour as emitted radiance (other files:
+/// `common.rs`).
 fn common_material(d: &Doc, mut m: Material, effect: Node) -> Result<Material> {
     let Some(tech) = path(effect, &["profile_COMMON", "technique"]) else {
         return Ok(m);

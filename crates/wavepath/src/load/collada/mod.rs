@@ -9,6 +9,8 @@
 //! parallel projections.
 
 mod camera;
+mod common;
+mod dialect;
 mod geometry;
 mod instance;
 mod lights;
@@ -64,7 +66,10 @@ pub fn parse_str(text: &str, name: &str, opts: &LoadOptions) -> Result<Scene> {
             source: SceneSource { dialect: Dialect::Cs184, reader: "collada", default_sky: false },
             ..Scene::default()
         },
-        mats: Materials::default(),
+        mats: Materials::new(
+            !dialect::is_course_file(root),
+            Path::new(name).parent().map(Path::to_path_buf).unwrap_or_default(),
+        ),
         geometries: HashMap::new(),
         camera: None,
     };
@@ -175,6 +180,7 @@ impl<'a, 'input> Builder<'_, 'a, 'input> {
     fn finish(mut self) -> Result<Scene> {
         let name = self.d.file;
         self.scene.materials = std::mem::take(&mut self.mats.list);
+        self.scene.notes.append(&mut self.mats.notes);
         let Some(bounds) = self.scene.bounds() else {
             bail!("{name}: the scene has no triangles and no spheres");
         };

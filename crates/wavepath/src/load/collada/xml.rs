@@ -30,6 +30,11 @@ impl<'a, 'input> Doc<'a, 'input> {
         Doc { file, doc, ids }
     }
 
+    /// The element whose `id` is `id`.
+    pub fn by_id(&self, id: &str) -> Option<Node<'a, 'input>> {
+        self.ids.get(id).copied()
+    }
+
     /// One-line error naming the file, the element (with its line) and the problem.
     pub fn err(&self, node: Node, msg: impl Display) -> Error {
         let pos = self.doc.text_pos_at(node.range().start);

@@ -2,10 +2,12 @@
 //! files, and one scene written in three formats loading alike.
 
 mod collada;
+mod collada_common;
 mod exporters;
 mod formats_agree;
 mod gltf_materials;
 mod mesh_loaders;
+mod mtl_models;
 mod obj_bulk;
 mod other_tools;
 mod ply_bulk;

@@ -144,10 +144,12 @@ fn wavefront_agrees_with_recursive_for_every_material() {
     let mirror = Bsdf::Mirror { reflectance: vec3(0.9, 0.9, 0.8) };
     let refraction = Bsdf::Refraction { transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
     let metal = |alpha| Bsdf::Microfacet { alpha, eta: vec3(0.2, 0.9, 1.1), k: vec3(3.9, 2.4, 2.2) };
+    let phong = |ks, ns| Bsdf::Phong { diffuse: vec3(0.6, 0.4, 0.3), specular: Vec3::splat(ks), shininess: ns };
     let cases = [
         ("mirror + glass", box_with(mirror, glass(1.5))),
         ("refraction + rough metal", box_with(refraction, metal(0.25))),
         ("smooth + rough metal", box_with(metal(0.05), metal(0.5))),
+        ("sharp + rough Phong", box_with(phong(0.3, 1000.0), phong(0.5, 10.0))),
     ];
     for (what, scene) in &cases {
         for (depth, spp) in [(1, 32), (4, 64)] {
