@@ -7,6 +7,7 @@
 //! shared inside a model (tobj keeps one vertex per distinct position/uv/normal triple).
 
 mod bulk;
+mod dissolve;
 mod mtl;
 
 use crate::scene::{Material, Mesh, Scene};
@@ -180,6 +181,7 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
     match mtl::parse(&text, dir) {
         Ok(mut mats) => {
             for m in &mut mats {
+                dissolve::decode(&mut m.alpha, path, &m.name, &mut state.notes);
                 let Some(t) = &mut m.albedo_texture else { continue };
                 if !t.path.is_file() {
                     state.notes.push(format!("warning: {}: texture {} not found", path.display(), t.path.display()));

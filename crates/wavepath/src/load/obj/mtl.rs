@@ -1,6 +1,7 @@
 //! A small MTL reader: tobj's own one panics on spec-legal short colour lines
 //! (`Kd 0.5`, where g and b default to r), so the materials are parsed here.
 
+use super::dissolve::Dissolve;
 use crate::scene::{Material, Texture};
 use glam::Vec3;
 use std::path::Path;
@@ -9,6 +10,7 @@ use std::path::Path;
 /// Errors carry the line number; the caller adds the file name.
 pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
     let mut out: Vec<Material> = Vec::new();
+    let mut dissolve = Dissolve::default();
     for (i, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
         let mut words = line.split_whitespace();
@@ -20,6 +22,9 @@ pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
             if name.is_empty() {
                 return Err(at("newmtl without a name"));
             }
+            if let Some(m) = out.last_mut() {
+                m.alpha = dissolve.take();
+            }
             out.push(Material::diffuse(name, Vec3::splat(0.5)));
             continue;
         }
@@ -27,6 +32,9 @@ pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
             // Statements before the first newmtl have no material to apply to.
             continue;
         };
+        if dissolve.read(key, &rest, dir).map_err(|e| at(&e))? {
+            continue;
+        }
         match key {
             "Kd" => {
                 let albedo = colour(&rest).map_err(|e| at(&e))?;
@@ -46,6 +54,9 @@ pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
             }
             _ => {}
         }
+    }
+    if let Some(m) = out.last_mut() {
+        m.alpha = dissolve.take();
     }
     Ok(out)
 }

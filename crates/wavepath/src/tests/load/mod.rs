@@ -2,6 +2,7 @@
 //! files, and one scene written in three formats loading alike.
 
 mod collada;
+mod cutouts;
 mod exporters;
 mod formats_agree;
 mod gltf_materials;
