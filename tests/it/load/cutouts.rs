@@ -45,9 +45,8 @@ fn a_cutout_shows_the_background_through_its_holes() {
     // 2 x 2 texels: alpha 0 in the top-left and bottom-right ones. The square (side 2, seen
     // from 3 away with a field of view of 0.5 rad) fills the picture, texel by quarter.
     let png = png_uri(2, 2, Some(&[0, 255, 255, 0]), [255; 3]);
-    let material = |mode: &str| {
-        format!(r#"{{"alphaMode":"{mode}","pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}"#)
-    };
+    let material =
+        |mode: &str| format!(r#"{{"alphaMode":"{mode}","pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}"#);
     for (mode, holes) in [("MASK", true), ("OPAQUE", false)] {
         let file = d.join(format!("{mode}.gltf"));
         std::fs::write(&file, square_doc(1.0, 3.0, 0.5, &textured(&material(mode), &png))).unwrap();

@@ -45,7 +45,8 @@ fn scene(alpha: Alpha) -> Scene {
     uvs.extend([vec2(0.0, 0.0), vec2(0.0, 1.0), vec2(1.0, 1.0), vec2(1.0, 0.0)]);
     mesh.uvs = Some(uvs);
     let mut s = scene_of(mesh, vec![]);
-    s.materials = vec![Material::diffuse("back", Vec3::splat(0.5)), Material { alpha, ..Material::diffuse("cut", Vec3::ONE) }];
+    s.materials =
+        vec![Material::diffuse("back", Vec3::splat(0.5)), Material { alpha, ..Material::diffuse("cut", Vec3::ONE) }];
     s
 }
 
@@ -75,10 +76,13 @@ fn target(i: usize, j: usize) -> Vec3 {
     vec3(2.0 * c(i) - 1.0, 1.0 - 2.0 * c(j), 0.0)
 }
 
+/// A ray and the grid cell (i, j) it aims at.
+type Aimed = (Ray, (usize, usize));
+
 /// Rays toward the grid's cells: parallel ones (each from its own origin, traced alone or
 /// three in flight), and from one point (a pinhole: runs of them are traced as coherent
 /// packets, and their shadow-ray copies as shadow packets).
-fn ray_sets() -> Vec<(&'static str, Vec<(Ray, (usize, usize))>)> {
+fn ray_sets() -> Vec<(&'static str, Vec<Aimed>)> {
     let cells = || (0..GRID).flat_map(|j| (0..GRID).map(move |i| (i, j)));
     let parallel = cells().map(|(i, j)| (Ray::new(target(i, j) + vec3(0.0, 0.0, 3.0), vec3(0.0, 0.0, -1.0)), (i, j)));
     let eye = vec3(0.05, -0.03, 25.0);

@@ -11,10 +11,10 @@ fn b64(bytes: &[u8]) -> String {
 pub fn png_uri(w: u32, h: u32, alpha: Option<&[u8]>, rgb: [u8; 3]) -> String {
     let mut out = std::io::Cursor::new(Vec::new());
     match alpha {
-        Some(a) => image::RgbaImage::from_fn(w, h, |x, y| {
-            image::Rgba([rgb[0], rgb[1], rgb[2], a[(y * w + x) as usize]])
-        })
-        .write_to(&mut out, image::ImageFormat::Png),
+        Some(a) => {
+            image::RgbaImage::from_fn(w, h, |x, y| image::Rgba([rgb[0], rgb[1], rgb[2], a[(y * w + x) as usize]]))
+                .write_to(&mut out, image::ImageFormat::Png)
+        }
         None => image::RgbImage::from_fn(w, h, |_, _| image::Rgb(rgb)).write_to(&mut out, image::ImageFormat::Png),
     }
     .expect("a PNG in memory");

@@ -33,9 +33,13 @@ fn gltf_alpha_modes_read_the_base_colours_alpha() {
     let d = temp_dir("cutouts-gltf");
     let tex = r#""baseColorTexture":{"index":0}"#;
     let materials = [
-        format!(r#"{{"name":"mask","alphaMode":"MASK","alphaCutoff":0.3,"pbrMetallicRoughness":{{{tex},"baseColorFactor":[1,1,1,0.8]}}}}"#),
+        format!(
+            r#"{{"name":"mask","alphaMode":"MASK","alphaCutoff":0.3,"pbrMetallicRoughness":{{{tex},"baseColorFactor":[1,1,1,0.8]}}}}"#
+        ),
         format!(r#"{{"name":"mask-default","alphaMode":"MASK","pbrMetallicRoughness":{{{tex}}}}}"#),
-        format!(r#"{{"name":"blend","alphaMode":"BLEND","pbrMetallicRoughness":{{{tex},"baseColorFactor":[1,1,1,0.5]}}}}"#),
+        format!(
+            r#"{{"name":"blend","alphaMode":"BLEND","pbrMetallicRoughness":{{{tex},"baseColorFactor":[1,1,1,0.5]}}}}"#
+        ),
         format!(r#"{{"name":"opaque","pbrMetallicRoughness":{{{tex},"baseColorFactor":[1,1,1,0.1]}}}}"#),
         r#"{"name":"factor-only","alphaMode":"BLEND","pbrMetallicRoughness":{"baseColorFactor":[1,1,1,0.25]}}"#.into(),
         format!(r#"{{"name":"glowing","alphaMode":"MASK","emissiveFactor":[1,1,1],"pbrMetallicRoughness":{{{tex}}}}}"#),
