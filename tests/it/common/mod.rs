@@ -5,6 +5,8 @@
 #[path = "../../../crates/wavepath/src/tests/common/agree.rs"]
 pub mod agree;
 pub mod cdp;
+#[path = "../../../crates/wavepath/src/tests/common/cutout.rs"]
+pub mod cutout;
 #[path = "../../../crates/wavepath/src/tests/common/meshgen.rs"]
 pub mod meshgen;
 pub mod pfm;

@@ -1,6 +1,7 @@
 //! Loading through the command line: damaged files, what materials become, and PLY meshes
 //! the `subdivide` command writes.
 
+mod cutouts;
 mod damaged;
 mod dialect;
 mod materials;

@@ -1,3 +1,4 @@
+use super::cutout::Cutouts;
 use super::triangle::{ShearedRay, intersect_sheared};
 use super::{Intersector, TraceCounters, sphere};
 use crate::geometry::{Hit, Ray};
@@ -7,21 +8,29 @@ use glam::Vec3;
 /// Tests every primitive for every ray: the `--no-bvh` reference and timing baseline.
 ///
 /// Uses the same watertight triangle test and the same rule for exact ties (the smaller
-/// primitive id wins) as the BVH, so both return identical hits.
+/// primitive id wins) and the same alpha test as the BVH, so both return identical hits.
 pub struct BruteForce {
     tris: Vec<[Vec3; 3]>,
     spheres: Vec<Sphere>,
+    cutouts: Option<Cutouts>,
 }
 
 impl BruteForce {
     pub fn new(scene: &Scene) -> Self {
         let tris = (0..scene.mesh.triangle_count()).map(|i| scene.mesh.corners(i)).collect();
-        BruteForce { tris, spheres: scene.spheres.clone() }
+        BruteForce { tris, spheres: scene.spheres.clone(), cutouts: Cutouts::of(scene) }
     }
 }
 
 fn valid(ray: &Ray) -> bool {
     !(ray.tmin.is_nan() || ray.tmax.is_nan() || ray.tmin > ray.tmax)
+}
+
+impl BruteForce {
+    /// Whether a hit on triangle `i` at barycentrics (`u`, `v`) counts (its alpha test).
+    fn keeps(&self, i: usize, u: f32, v: f32, ray: &Ray) -> bool {
+        self.cutouts.as_ref().is_none_or(|c| c.keeps(i as u32, u, v, ray))
+    }
 }
 
 impl Intersector for BruteForce {
@@ -35,6 +44,7 @@ impl Intersector for BruteForce {
             // Ascending ids: on an exact tie the earlier (smaller) id is kept.
             if let Some((t, u, v)) = intersect_sheared(&sr, ray.tmin, tmax, *a, *b, *c)
                 && best.is_none_or(|h| t < h.t)
+                && self.keeps(i, u, v, ray)
             {
                 best = Some(Hit { t, prim: i as u32, u, v });
             }
@@ -55,7 +65,9 @@ impl Intersector for BruteForce {
         counters.rays += 1;
         let Some(sr) = ShearedRay::new(ray).filter(|_| valid(ray)) else { return false };
         for (i, [a, b, c]) in self.tris.iter().enumerate() {
-            if intersect_sheared(&sr, ray.tmin, ray.tmax, *a, *b, *c).is_some() {
+            if let Some((_, u, v)) = intersect_sheared(&sr, ray.tmin, ray.tmax, *a, *b, *c)
+                && self.keeps(i, u, v, ray)
+            {
                 counters.prim_tests += i as u64 + 1;
                 return true;
             }

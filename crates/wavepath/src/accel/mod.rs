@@ -3,6 +3,7 @@
 
 mod brute;
 pub mod bvh;
+pub mod cutout;
 pub mod sphere;
 pub mod triangle;
 

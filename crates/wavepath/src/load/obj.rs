@@ -7,6 +7,7 @@
 //! shared inside a model (tobj keeps one vertex per distinct position/uv/normal triple).
 
 mod bulk;
+mod dissolve;
 mod mtl;
 
 use crate::scene::{Material, Mesh, Scene};
@@ -182,6 +183,9 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
             let shown = path.display();
             for n in std::mem::take(&mut lib.notes) {
                 state.notes.push(format!("warning: {shown}: {n}"));
+            }
+            for m in &mut lib.materials {
+                dissolve::decode(&mut m.alpha, path, &m.name, &mut state.notes);
             }
             mtl::load_images(&mut lib, path, &mut state.notes);
             let mats = lib.materials;

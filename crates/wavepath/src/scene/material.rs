@@ -1,3 +1,4 @@
+pub use super::alpha::Alpha;
 pub use super::texture::Texture;
 use glam::Vec3;
 
@@ -102,6 +103,8 @@ pub struct Material {
     /// `doubleSided` material) or only from its front, the side its winding's normal points
     /// to (OBJ `Ke`, a single-sided glTF material: what the formats' own renderers show).
     pub two_sided_emission: bool,
+    /// Where the surface is there at all (cutouts; see [`super::alpha`]).
+    pub alpha: Alpha,
 }
 
 impl Default for Material {
@@ -120,6 +123,7 @@ impl Material {
             emission_texture: None,
             metallic_roughness_texture: None,
             two_sided_emission: true,
+            alpha: Alpha::OPAQUE,
         }
     }
 
@@ -133,6 +137,7 @@ impl Material {
             emission_texture: None,
             metallic_roughness_texture: None,
             two_sided_emission: true,
+            alpha: Alpha::OPAQUE,
         }
     }
 
@@ -166,6 +171,13 @@ impl Material {
         }
         if self.emission.min_element() < 0.0 {
             return Err("negative emission".into());
+        }
+        let cutoff = match self.alpha.mode {
+            super::AlphaMode::Mask { cutoff } => cutoff,
+            _ => 0.0,
+        };
+        if !self.alpha.factor.is_finite() || !cutoff.is_finite() {
+            return Err("an alpha value is not finite".into());
         }
         Ok(())
     }

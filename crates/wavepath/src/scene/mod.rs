@@ -3,6 +3,7 @@
 //! Geometry is flattened into world space at load time so that the accelerator and the
 //! integrator never see node hierarchies or file-format quirks.
 
+pub mod alpha;
 mod camera;
 mod camera_file;
 pub mod envmap;
@@ -15,6 +16,7 @@ pub mod subdivide;
 pub mod surface;
 pub mod texture;
 
+pub use alpha::{Alpha, AlphaMode};
 pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit};
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
 pub use envmap::EnvMap;
@@ -157,12 +159,15 @@ impl Scene {
         self.light_by_default_sky();
     }
 
-    /// Frees the mesh's texture coordinates when no material has a texture to look up (they
-    /// are read for nothing else): 8 bytes a vertex of a scanned mesh that came with uvs.
+    /// Frees the mesh's texture coordinates when no material has a texture (or a coverage
+    /// map) to look up (they are read for nothing else): 8 bytes a vertex of a scanned mesh that came with uvs.
     pub fn drop_unused_uvs(&mut self) {
         let textured = |t: &Option<texture::Texture>| t.as_ref().is_some_and(|t| t.image.is_some());
         let any = self.materials.iter().any(|m| {
-            textured(&m.albedo_texture) || textured(&m.emission_texture) || textured(&m.metallic_roughness_texture)
+            textured(&m.albedo_texture)
+                || textured(&m.emission_texture)
+                || textured(&m.metallic_roughness_texture)
+                || m.alpha.map.as_ref().is_some_and(|a| a.image.is_some())
         });
         if !any {
             self.mesh.uvs = None;

@@ -10,6 +10,7 @@ mod traverse;
 mod tree;
 
 use super::BuildInfo;
+use super::cutout::Cutouts;
 use crate::cpu::Isa;
 use crate::scene::Scene;
 #[cfg(test)]
@@ -35,6 +36,9 @@ pub struct Bvh {
     /// index.
     spheres: Vec<(Vec3, f32)>,
     tri_count: u32,
+    /// The alpha test of the scene's cut triangles; `None` (no test compiled into the
+    /// loops) when nothing is cut.
+    cutouts: Option<Box<Cutouts>>,
     stack_need: usize,
     isa: Isa,
     /// The kernel tokens `isa` allows, made once (not per ray).

@@ -11,7 +11,7 @@ impl Intersector for Bvh {
             counters.rays += 1;
             return None;
         }
-        self.tokens.dispatch(ClosestHit { bvh: self, ray, counters })
+        self.tokens.dispatch_cut(self.cutouts.as_deref(), ClosestHit { bvh: self, ray, counters })
     }
 
     fn any_hit(&self, ray: &Ray, counters: &mut TraceCounters) -> bool {
@@ -19,7 +19,7 @@ impl Intersector for Bvh {
             counters.rays += 1;
             return false;
         }
-        self.tokens.dispatch(AnyHit { bvh: self, ray, counters })
+        self.tokens.dispatch_cut(self.cutouts.as_deref(), AnyHit { bvh: self, ray, counters })
     }
 
     fn name(&self) -> String {
@@ -32,14 +32,14 @@ impl Intersector for Bvh {
             hits.iter_mut().for_each(|h| *h = None);
             return;
         }
-        self.tokens.dispatch(ClosestBatch { bvh: self, rays, hits, counters })
+        self.tokens.dispatch_cut(self.cutouts.as_deref(), ClosestBatch { bvh: self, rays, hits, counters })
     }
 
     fn any_hits_packets(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
         if self.nodes.is_empty() {
             return self.any_hits(rays, occluded, counters);
         }
-        self.tokens.dispatch(ShadowPackets { bvh: self, rays, occluded, counters })
+        self.tokens.dispatch_cut(self.cutouts.as_deref(), ShadowPackets { bvh: self, rays, occluded, counters })
     }
 
     fn any_hits(&self, rays: &[Ray], occluded: &mut [bool], counters: &mut TraceCounters) {
@@ -48,6 +48,6 @@ impl Intersector for Bvh {
             occluded.iter_mut().for_each(|o| *o = false);
             return;
         }
-        self.tokens.dispatch(AnyHits { bvh: self, rays, occluded, counters })
+        self.tokens.dispatch_cut(self.cutouts.as_deref(), AnyHits { bvh: self, rays, occluded, counters })
     }
 }

@@ -9,10 +9,11 @@
 //! not render are accepted with one warning, so a model is drawn approximately rather than
 //! refused.
 
+mod alpha;
 mod draco;
 
 use crate::scene::texture::{Filter, TextureImage, Wrap};
-use crate::scene::{Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
+use crate::scene::{Alpha, Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
 use anyhow::{Result, anyhow};
 use glam::{Affine2, Mat3, Mat4, Vec2, Vec3};
 use gltf::accessor::{DataType, Dimensions};
@@ -61,6 +62,7 @@ fn read(path: &Path) -> Result<Scene, String> {
     // One line per drawing mode, however many primitives use it.
     let mut skipped_modes = std::collections::BTreeMap::new();
     let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images, &mut notes)).collect();
+    alpha::apply(doc, &mut materials, &images, (base, &buffers), path, &mut notes);
     let uv_sets: Vec<u32> = doc.materials().map(|m| uv_set(&m, path, &mut notes)).collect();
     let ignored: Vec<&str> = doc.extensions_used().filter(|e| !KNOWN_EXTENSIONS.contains(e)).collect();
     if !ignored.is_empty() {
@@ -492,6 +494,7 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
             emission_texture,
             metallic_roughness_texture: None,
             two_sided_emission: m.double_sided(),
+            alpha: Alpha::OPAQUE,
         };
     }
     let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
@@ -505,6 +508,7 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
             .metallic_roughness_texture()
             .map(|info| texture(&info, images, true, Vec3::new(1.0, roughness, metallic))),
         two_sided_emission: m.double_sided(),
+        alpha: Alpha::OPAQUE,
     }
 }
 

@@ -4,6 +4,7 @@
 mod batch_closest;
 mod bvh;
 mod coherent;
+mod cutouts;
 mod layouts;
 mod packets;
 mod raysets;

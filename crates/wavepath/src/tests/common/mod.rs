@@ -3,6 +3,7 @@
 
 pub mod agree;
 pub mod chi2;
+pub mod cutout;
 pub mod gltf_brdf;
 pub mod meshgen;
 pub mod render;

@@ -3,6 +3,7 @@
 
 mod collada;
 mod collada_common;
+mod cutouts;
 mod exporters;
 mod formats_agree;
 mod gltf_materials;

@@ -12,6 +12,7 @@ use super::simd::{RootBox, Tokens};
 use super::traverse::{BIG_STACK, CACHED_UP_TO, WIDTH_STACK};
 use super::tree::{MAX_PRIMS, WIDTH};
 use crate::accel::BuildInfo;
+use crate::accel::cutout::Cutouts;
 use crate::cpu::Isa;
 use crate::scene::Scene;
 use crate::settings::{BvhBuild, BvhOptions, LeafLayout};
@@ -64,6 +65,7 @@ pub fn build(scene: &Scene, opts: BvhOptions) -> Bvh {
     let leaves = leaves::store_leaves(&mut nodes, &ids, scene, packs(opts.leaves, total));
     drop(ids);
     assert!(WIDTH_STACK * (depth + 1) <= BIG_STACK, "a BVH of {depth} levels is deeper than its stack");
+    let cutouts = Cutouts::of(scene).map(Box::new);
     let info = BuildInfo {
         method: match opts.build {
             BvhBuild::Sah => "sah",
@@ -75,7 +77,9 @@ pub fn build(scene: &Scene, opts: BvhOptions) -> Bvh {
         depth,
         sah_cost,
         node_bytes: std::mem::size_of_val(&nodes[..]),
-        leaf_bytes: leaves.bytes() + scene.spheres.len() * std::mem::size_of::<(Vec3, f32)>(),
+        leaf_bytes: leaves.bytes()
+            + scene.spheres.len() * std::mem::size_of::<(Vec3, f32)>()
+            + cutouts.as_ref().map_or(0, |c| c.bytes()),
     };
     let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
     if let Some(root) = nodes.first() {
@@ -92,6 +96,7 @@ pub fn build(scene: &Scene, opts: BvhOptions) -> Bvh {
         leaves,
         spheres: scene.spheres.iter().map(|s| (s.center, s.radius)).collect(),
         tri_count: tri_count as u32,
+        cutouts,
         stack_need: WIDTH_STACK * (depth + 1),
         isa: Isa::detect(),
         tokens: Tokens::of(Isa::detect()),

@@ -4,6 +4,7 @@
 //! ([`crate::cpu::Sse`], [`crate::cpu::Avx2`]; all in `x86`, the one place that needs the
 //! target). A traversal is written once over the traits, as a value implementing
 //! [`WithKernels`], and [`Tokens::dispatch`] runs it with the best kernels the tree may use.
+mod cut;
 #[cfg(not(target_arch = "x86_64"))]
 mod other;
 mod packet;
@@ -12,11 +13,13 @@ mod scalar;
 #[cfg(target_arch = "x86_64")]
 mod x86;
 
+pub use cut::Cut;
 pub use packet::{PACKET, PacketBoxRays, PacketShear, TriRays};
 pub use ray::{BoxRay, EXIT_SCALE, Frustum, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, far, near};
 pub use scalar::Scalar;
 
 use crate::accel::bvh::tree::{Node8, Tri4, WIDTH};
+use crate::accel::cutout::Cutouts;
 use crate::accel::triangle::ShearedRay;
 use crate::cpu::{Avx2, Isa, Sse};
 use crate::geometry::Ray;
@@ -59,6 +62,23 @@ impl Tokens {
             _ => w.run(Scalar),
         }
     }
+
+    /// [`Tokens::dispatch`] with the alpha test of `cutouts` where the tree has any (the
+    /// kernels wrapped in [`Cut`]); without, the bare kernels, so a scene without cutouts
+    /// runs exactly the loops it ran before they existed. Decided once per call.
+    #[inline(always)]
+    pub fn dispatch_cut<W: WithKernels>(self, cutouts: Option<&Cutouts>, w: W) -> W::Output {
+        let Some(cutouts) = cutouts else { return self.dispatch(w) };
+        match (self.sse, self.avx2) {
+            (_, Some(avx)) => crate::cpu::with_avx2(
+                avx,
+                #[inline(always)]
+                |k| w.run(Cut { k, cutouts }),
+            ),
+            (Some(k), None) => w.run(Cut { k, cutouts }),
+            _ => w.run(Cut { k: Scalar, cutouts }),
+        }
+    }
 }
 
 /// [`BoxTest::set_up`], one ray at a time with `isa`'s [`BoxTest::box_ray`].
@@ -74,6 +94,18 @@ pub fn set_up_each<B: BoxTest>(isa: B, root: Option<&RootBox>, rays: &[Ray], out
 
 /// The per-instruction-set kernels of the traversal.
 pub trait BoxTest: Copy {
+    /// Whether [`BoxTest::keeps`] may refuse a hit (the kernels of a tree with cutouts): a
+    /// constant, so loops compiled without it carry no trace of the test.
+    const CUTS: bool = false;
+
+    /// Whether the watertight test's hit on primitive `prim` at barycentrics (`u`, `v`)
+    /// counts for `ray` (its alpha test); always, for kernels without cutouts.
+    #[inline(always)]
+    fn keeps(self, prim: u32, u: f32, v: f32, ray: &Ray) -> bool {
+        let _ = (prim, u, v, ray);
+        true
+    }
+
     /// Tests the eight child boxes of a node: bit `i` of the result is set when child `i` is
     /// entered at a distance <= `tmax`; its entry distance goes to `tnear[i]`.
     fn test(self, node: &Node8, r: &BoxRay, oct: u32, tmax: f32, tnear: &mut [f32; WIDTH]) -> u32;

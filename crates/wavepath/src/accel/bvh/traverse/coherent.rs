@@ -230,7 +230,7 @@ fn leaf_rays<K: PacketTest>(
                 let Some(r) = t.isa.tri_rays(blk, lane, &lead_shear, closest) else {
                     break;
                 };
-                let mut exact = r.exact & lanes;
+                let mut exact = t.kept(r.exact & lanes, blk.ids[lane], &r, rays);
                 while exact != 0 {
                     let k = exact.trailing_zeros() as usize;
                     exact &= exact - 1;
@@ -243,7 +243,9 @@ fn leaf_rays<K: PacketTest>(
                 let k = cand.trailing_zeros() as usize;
                 cand &= cand - 1;
                 let ray = &rays[k];
-                if let Some(h) = t.lane_hit(blk, lane, &p.sheared(k, ray), ray, best[k].t) {
+                if let Some(h) = t.lane_hit(blk, lane, &p.sheared(k, ray), ray, best[k].t)
+                    && t.isa.keeps(blk.ids[lane], h.1, h.2, ray)
+                {
                     best[k].offer(h, blk.ids[lane]);
                     closest[k] = best[k].t;
                 }

@@ -1,7 +1,9 @@
 //! The leaf tests every loop shares: the SIMD filter drops certain misses, then the exact
-//! (watertight) test decides each remaining lane; and the closest hit so far.
+//! (watertight) test decides each remaining lane, and the alpha test of the kernels
+//! ([`BoxTest::keeps`]: always true without cutouts) whether its hit counts; and the closest
+//! hit so far.
 use super::Tracer;
-use crate::accel::bvh::simd::BoxTest;
+use crate::accel::bvh::simd::{BoxTest, TriRays};
 use crate::accel::bvh::tree::{Tri4, leaf_range};
 use crate::accel::sphere;
 use crate::accel::triangle::{ShearedRay, intersect_sheared};
@@ -88,10 +90,28 @@ impl<K: BoxTest> Tracer<'_, K> {
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
-            if let Some(h) = self.lane_hit(blk, lane, sr, ray, best.t) {
+            if let Some(h) = self.lane_hit(blk, lane, sr, ray, best.t)
+                && self.isa.keeps(blk.ids[lane], h.1, h.2, ray)
+            {
                 best.offer(h, blk.ids[lane]);
             }
         }
+    }
+
+    /// The rays of `exact` (bit `k`: `rays[k]`, its hit on primitive `id` at `r.u[k]`,
+    /// `r.v[k]`) whose hits count: all of them without cutouts.
+    #[inline(always)]
+    pub fn kept(self, exact: u32, id: u32, r: &TriRays, rays: &[Ray]) -> u32 {
+        if !K::CUTS {
+            return exact;
+        }
+        let (mut m, mut out) = (exact, 0);
+        while m != 0 {
+            let k = m.trailing_zeros() as usize;
+            m &= m - 1;
+            out |= (self.isa.keeps(id, r.u[k], r.v[k], &rays[k]) as u32) << k;
+        }
+        out
     }
 
     /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
@@ -103,7 +123,9 @@ impl<K: BoxTest> Tracer<'_, K> {
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
-            if self.lane_hit(blk, lane, sr, ray, ray.tmax).is_some() {
+            if let Some((_, u, v)) = self.lane_hit(blk, lane, sr, ray, ray.tmax)
+                && self.isa.keeps(blk.ids[lane], u, v, ray)
+            {
                 return true;
             }
         }

@@ -198,7 +198,9 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                             let lane = cand.trailing_zeros() as usize;
                             cand &= cand - 1;
                             let sr = sh.sheared(k, &rays[k]);
-                            if t.lane_hit(blk, lane, &sr, &rays[k], rays[k].tmax).is_some() {
+                            if let Some((_, u, v)) = t.lane_hit(blk, lane, &sr, &rays[k], rays[k].tmax)
+                                && t.isa.keeps(blk.ids[lane], u, v, &rays[k])
+                            {
                                 hit |= 1 << k;
                                 break;
                             }
@@ -248,13 +250,15 @@ fn leaf_any_rays<K: PacketTest>(t: Tracer<'_, K>, leaf: LeafRays<'_>, mut m: u32
         let mut unsure = m;
         if blk.tri_lanes >> lane & 1 != 0 {
             let r = t.isa.tri_rays(blk, lane, sh, tmax)?;
-            hit |= r.exact & m;
+            hit |= t.kept(r.exact & m, blk.ids[lane], &r, rays);
             unsure &= r.unsure & !hit;
         }
         while unsure != 0 {
             let k = unsure.trailing_zeros() as usize;
             unsure &= unsure - 1;
-            if t.lane_hit(blk, lane, &sh.sheared(k, &rays[k]), &rays[k], rays[k].tmax).is_some() {
+            if let Some((_, u, v)) = t.lane_hit(blk, lane, &sh.sheared(k, &rays[k]), &rays[k], rays[k].tmax)
+                && t.isa.keeps(blk.ids[lane], u, v, &rays[k])
+            {
                 hit |= 1 << k;
             }
         }

@@ -10,6 +10,7 @@ mod maps;
 
 pub use maps::load_images;
 
+use super::dissolve::Dissolve;
 use crate::scene::Material;
 use keys::Entry;
 use std::collections::BTreeSet;
@@ -29,6 +30,8 @@ pub struct Library {
 /// Errors carry the line number; the caller adds the file name.
 pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
     let mut entries: Vec<Entry> = Vec::new();
+    // The alpha keys (`d`, `Tr`, `map_d`) of each entry, read apart (`super::dissolve`).
+    let mut dissolves: Vec<Dissolve> = Vec::new();
     let mut ignored = BTreeSet::new();
     for (i, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -42,12 +45,18 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
                 return Err(at("newmtl without a name"));
             }
             entries.push(Entry::new(name));
+            dissolves.push(Dissolve::default());
             continue;
         }
         let Some(entry) = entries.last_mut() else {
             // Statements before the first newmtl have no material to apply to.
             continue;
         };
+        if let Some(d) = dissolves.last_mut()
+            && d.read(key, &rest, dir).map_err(|e| at(&e))?
+        {
+            continue;
+        }
         if !entry.read(key, &rest, dir).map_err(|e| at(&e))? {
             ignored.insert(key.to_owned());
         }
@@ -64,8 +73,10 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
         ));
     }
     let mut materials = Vec::with_capacity(entries.len());
-    for e in &entries {
-        materials.push(illum::material(e, &mut notes));
+    for (e, d) in entries.iter().zip(&mut dissolves) {
+        let mut m = illum::material(e, &mut notes);
+        m.alpha = d.take();
+        materials.push(m);
     }
     let pbr_maps = entries.iter().map(maps::PbrMaps::of).collect();
     Ok(Library { materials, pbr_maps, notes })
