@@ -10,6 +10,7 @@
 
 mod dielectric;
 mod lambert;
+mod layered;
 mod microfacet;
 mod mirror;
 mod pbr;
@@ -18,6 +19,7 @@ pub use dielectric::Dielectric;
 #[cfg(test)]
 pub use dielectric::fresnel_dielectric;
 pub use lambert::Lambert;
+pub use layered::{Layered, SHEEN_TABLE, sheen_albedo_table};
 pub use microfacet::{Distribution, Microfacet};
 pub use mirror::Mirror;
 pub use pbr::Pbr;
@@ -47,6 +49,8 @@ pub enum Model {
     Dielectric(Dielectric),
     Microfacet(Microfacet),
     Pbr(Pbr),
+    /// The glTF model with its extensions' layers ([`Layered`]).
+    Layered(Layered),
 }
 
 /// How a model's light is best estimated: which integrator strategy it needs.
@@ -63,6 +67,17 @@ pub enum Kind {
 impl Model {
     /// The model of a material as the file states it. Phong (no loader produces it yet) is
     /// shaded by its diffuse part; glass roughness is ignored, as the CS184 reference does.
+    /// The model of material `m`: [`Model::new`] of its BSDF, or the layered glTF model
+    /// when it has extension layers.
+    pub fn of_material(m: &crate::scene::Material) -> Model {
+        match (&m.layers, &m.bsdf) {
+            (Some(l), Bsdf::MetallicRoughness { base, metallic, roughness }) => {
+                Model::Layered(Layered::new(*base, *metallic, *roughness, l.transmission, l))
+            }
+            _ => Model::new(&m.bsdf),
+        }
+    }
+
     pub fn new(b: &Bsdf) -> Model {
         match *b {
             Bsdf::Diffuse { albedo } => Model::Lambert(Lambert { albedo }),
@@ -90,7 +105,7 @@ impl Model {
         match self {
             Model::Lambert(_) => Kind::Diffuse,
             Model::Mirror(_) | Model::Dielectric(_) => Kind::Delta,
-            Model::Microfacet(_) | Model::Pbr(_) => Kind::Glossy,
+            Model::Microfacet(_) | Model::Pbr(_) | Model::Layered(_) => Kind::Glossy,
         }
     }
 
@@ -100,6 +115,7 @@ impl Model {
     pub fn oriented(self, front: bool) -> Model {
         match self {
             Model::Dielectric(d) if !front => Model::Dielectric(Dielectric { eta: 1.0 / d.eta, ..d }),
+            Model::Layered(l) if !front => Model::Layered(l.inside()),
             m => m,
         }
     }
@@ -111,6 +127,7 @@ impl Model {
             Model::Mirror(_) | Model::Dielectric(_) => Vec3::ZERO,
             Model::Microfacet(m) => m.eval(wo, wi),
             Model::Pbr(m) => m.eval(wo, wi),
+            Model::Layered(m) => m.eval(wo, wi),
         }
     }
 
@@ -123,6 +140,7 @@ impl Model {
             Model::Dielectric(m) => m.sample(wo, u[2]),
             Model::Microfacet(m) => m.sample(wo, [u[0], u[1]]),
             Model::Pbr(m) => m.sample(wo, u),
+            Model::Layered(m) => m.sample(wo, u),
         }
     }
 
@@ -133,6 +151,7 @@ impl Model {
             Model::Mirror(_) | Model::Dielectric(_) => 0.0,
             Model::Microfacet(m) => m.pdf(wo, wi),
             Model::Pbr(m) => m.pdf(wo, wi),
+            Model::Layered(m) => m.pdf(wo, wi),
         }
     }
 }

@@ -8,6 +8,7 @@
 
 mod bulk;
 mod mtl;
+mod relief;
 
 use crate::scene::{Material, Mesh, Scene};
 use anyhow::{Context, Result, anyhow, bail};
@@ -180,6 +181,7 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
     match mtl::parse(&text, dir) {
         Ok(mut mats) => {
             for m in &mut mats {
+                relief::decode(m, path, &mut state.notes);
                 let Some(t) = &mut m.albedo_texture else { continue };
                 if !t.path.is_file() {
                     state.notes.push(format!("warning: {}: texture {} not found", path.display(), t.path.display()));
@@ -240,7 +242,7 @@ fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Materia
         // `v x y z r g b`: colours as written (0..1, taken as linear).
         let colors = (m.vertex_color.len() == m.positions.len())
             .then(|| m.vertex_color.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect());
-        mesh.append(Mesh { positions, normals, uvs, colors, triangles, material_ids });
+        mesh.append(Mesh { positions, normals, uvs, colors, tangents: None, triangles, material_ids });
     }
     if mesh.triangles.is_empty() {
         return Err("no faces".into());

@@ -1,3 +1,5 @@
+pub use super::layers::{Layers, SpecularGlossinessMap};
+pub use super::relief::{Relief, ReliefMap};
 pub use super::texture::Texture;
 use glam::Vec3;
 
@@ -94,6 +96,14 @@ pub struct Material {
     /// `doubleSided` material) or only from its front, the side its winding's normal points
     /// to (OBJ `Ke`, a single-sided glTF material: what the formats' own renderers show).
     pub two_sided_emission: bool,
+    /// A normal or height map tilting the shading normal (glTF `normalTexture`, MTL
+    /// `norm`/`bump`).
+    pub relief: Option<ReliefMap>,
+    /// glTF material extensions beyond the core model (transmission, volume, clearcoat...):
+    /// `None` for every other material, which keeps its own model.
+    pub layers: Option<Box<Layers>>,
+    /// The specular-glossiness texture of a `SpecularGlossiness` material.
+    pub specular_glossiness_texture: Option<Box<SpecularGlossinessMap>>,
 }
 
 impl Default for Material {
@@ -112,6 +122,9 @@ impl Material {
             emission_texture: None,
             metallic_roughness_texture: None,
             two_sided_emission: true,
+            relief: None,
+            layers: None,
+            specular_glossiness_texture: None,
         }
     }
 
@@ -125,6 +138,9 @@ impl Material {
             emission_texture: None,
             metallic_roughness_texture: None,
             two_sided_emission: true,
+            relief: None,
+            layers: None,
+            specular_glossiness_texture: None,
         }
     }
 
@@ -153,6 +169,7 @@ impl Material {
                 diffuse.is_finite() && specular.is_finite() && glossiness.is_finite()
             }
         };
+        let finite = finite && self.layers.as_ref().is_none_or(|l| l.is_finite());
         if !finite || !self.emission.is_finite() {
             return Err("a parameter is not finite".into());
         }

@@ -6,11 +6,13 @@
 mod camera;
 mod camera_file;
 pub mod envmap;
+pub mod layers;
 
 mod material;
 mod material_ids;
 mod mesh;
 mod normals;
+pub mod relief;
 pub mod subdivide;
 pub mod surface;
 pub mod texture;
@@ -18,7 +20,7 @@ pub mod texture;
 pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit};
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
 pub use envmap::EnvMap;
-pub use material::{Bsdf, Material, Texture};
+pub use material::{Bsdf, Layers, Material, Relief, ReliefMap, SpecularGlossinessMap, Texture};
 pub use material_ids::MaterialIds;
 pub use mesh::{Mesh, Sphere, first_bad};
 pub use normals::{area_weighted_vertex_normals, cs184_vertex_normals};

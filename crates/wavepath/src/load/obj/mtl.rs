@@ -44,7 +44,7 @@ pub fn parse(text: &str, dir: &Path) -> Result<Vec<Material>, String> {
                 // Windows exporters write `.\\tex\\a.png`.
                 mat.albedo_texture = Some(Texture::obj(dir.join(file.replace('\\', "/"))));
             }
-            _ => {}
+            _ => super::relief::read(key, &rest, dir, mat).map_err(|e| at(&e))?,
         }
     }
     Ok(out)

@@ -4,8 +4,10 @@
 mod collada;
 mod exporters;
 mod formats_agree;
+mod gltf_extensions;
 mod gltf_materials;
 mod mesh_loaders;
 mod obj_bulk;
 mod other_tools;
 mod ply_bulk;
+mod relief;

@@ -3,5 +3,6 @@
 
 mod bsdf;
 mod emissive_textures;
+mod layers;
 mod renders;
 mod textures;
