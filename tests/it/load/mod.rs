@@ -3,4 +3,5 @@
 
 mod damaged;
 mod dialect;
+mod gltf_layers;
 mod ply_bulk;

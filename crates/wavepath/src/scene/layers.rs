@@ -3,7 +3,7 @@
 //! as the Khronos specifications define their parameters (defaults included), and the
 //! specular-glossiness texture. Shaded by [`crate::bsdf::Layered`].
 
-use super::material::Texture;
+use super::texture::Texture;
 use glam::Vec3;
 
 /// The extension parameters of one material; each field's default is the one that makes

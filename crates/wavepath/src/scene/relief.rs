@@ -3,8 +3,8 @@
 //! the geometry, and so the hit points, stay the mesh's.
 
 use super::Scene;
-use super::material::Texture;
 use super::surface::normalize_or;
+use super::texture::Texture;
 use crate::geometry::Hit;
 use glam::{Vec2, Vec3};
 
