@@ -49,7 +49,7 @@ fn generated() -> Scene {
     }
     let material_ids = vec![0; triangles.len()];
     let mut s = wavepath::default_scene();
-    s.mesh = Mesh { positions, normals: None, uvs: None, colors: None, triangles, material_ids: material_ids.into() };
+    s.mesh = Mesh { positions, triangles, material_ids: material_ids.into(), ..Mesh::default() };
     s.spheres.clear();
     s.camera = wavepath::Camera::look_at(Vec3::new(0.0, 0.5, 3.5), Vec3::ZERO, Vec3::Y, 45.0, 4.0 / 3.0);
     s

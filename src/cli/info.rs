@@ -54,7 +54,28 @@ pub fn summary_json(scene: &Scene, settings: &Settings, effects: &Effects, load_
     let materials: Vec<_> = scene
         .materials
         .iter()
-        .map(|m| json!({ "name": m.name, "bsdf": m.bsdf.kind(), "emission": v3(m.emission), "detail": format!("{:?}", m.bsdf) }))
+        .map(|m| {
+            json!({
+                "name": m.name,
+                "bsdf": m.bsdf.kind(),
+                "emission": v3(m.emission),
+                "detail": format!("{:?}", m.bsdf),
+                "layers": m.layers.as_deref().map(|l| json!({
+                    "transmission": l.transmission,
+                    "ior": l.ior,
+                    "thickness": l.thickness,
+                    "attenuation_color": v3(l.attenuation_color),
+                    "attenuation_distance": l.attenuation_distance,
+                    "specular": l.specular,
+                    "specular_color": v3(l.specular_color),
+                    "clearcoat": l.clearcoat,
+                    "clearcoat_roughness": l.clearcoat_roughness,
+                    "sheen_color": v3(l.sheen_color),
+                    "sheen_roughness": l.sheen_roughness,
+                })),
+                "relief": m.relief.as_ref().map(|r| format!("{:?}", r.relief)),
+            })
+        })
         .collect();
     json!({
         "scene": scene.name,
@@ -121,6 +142,12 @@ fn text(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> S
     let _ = writeln!(o, "materials:  {}", scene.materials.len());
     for m in &scene.materials {
         let _ = writeln!(o, "  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
+        if let Some(r) = &m.relief {
+            let _ = writeln!(o, "    relief map {:?} ({})", r.relief, r.texture.path.display());
+        }
+        if let Some(l) = &m.layers {
+            let _ = writeln!(o, "    layers {l:?}");
+        }
     }
     let _ = writeln!(o, "effects (at the scene's default settings):");
     for e in &effects.on {

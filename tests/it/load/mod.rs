@@ -5,4 +5,5 @@ mod cutouts;
 mod damaged;
 mod dialect;
 mod materials;
+mod gltf_layers;
 mod ply_bulk;

@@ -11,6 +11,7 @@
 mod dielectric;
 mod glossy;
 mod lambert;
+mod layered;
 mod microfacet;
 mod mirror;
 mod pbr;
@@ -20,6 +21,7 @@ pub use dielectric::Dielectric;
 pub use dielectric::fresnel_dielectric;
 pub use glossy::Glossy;
 pub use lambert::Lambert;
+pub use layered::{Layered, SHEEN_TABLE, sheen_albedo_table};
 pub use microfacet::{Distribution, Microfacet};
 pub use mirror::Mirror;
 pub use pbr::Pbr;
@@ -50,6 +52,8 @@ pub enum Model {
     Microfacet(Microfacet),
     Pbr(Pbr),
     Glossy(Glossy),
+    /// The glTF model with its extensions' layers ([`Layered`]).
+    Layered(Layered),
 }
 
 /// How a model's light is best estimated: which integrator strategy it needs.
@@ -64,6 +68,17 @@ pub enum Kind {
 }
 
 impl Model {
+    /// The model of material `m`: [`Model::new`] of its BSDF, or the layered glTF model
+    /// when it has extension layers.
+    pub fn of_material(m: &crate::scene::Material) -> Model {
+        match (&m.layers, &m.bsdf) {
+            (Some(l), Bsdf::MetallicRoughness { base, metallic, roughness }) => {
+                Model::Layered(Layered::new(*base, *metallic, *roughness, l.transmission, l))
+            }
+            _ => Model::new(&m.bsdf),
+        }
+    }
+
     /// The model of a material as the file states it. Glass roughness is ignored, as the
     /// CS184 reference does.
     pub fn new(b: &Bsdf) -> Model {
@@ -93,7 +108,7 @@ impl Model {
         match self {
             Model::Lambert(_) => Kind::Diffuse,
             Model::Mirror(_) | Model::Dielectric(_) => Kind::Delta,
-            Model::Microfacet(_) | Model::Pbr(_) | Model::Glossy(_) => Kind::Glossy,
+            Model::Microfacet(_) | Model::Pbr(_) | Model::Glossy(_) | Model::Layered(_) => Kind::Glossy,
         }
     }
 
@@ -103,6 +118,7 @@ impl Model {
     pub fn oriented(self, front: bool) -> Model {
         match self {
             Model::Dielectric(d) if !front => Model::Dielectric(Dielectric { eta: 1.0 / d.eta, ..d }),
+            Model::Layered(l) if !front => Model::Layered(l.inside()),
             m => m,
         }
     }
@@ -115,6 +131,7 @@ impl Model {
             Model::Microfacet(m) => m.eval(wo, wi),
             Model::Pbr(m) => m.eval(wo, wi),
             Model::Glossy(m) => m.eval(wo, wi),
+            Model::Layered(m) => m.eval(wo, wi),
         }
     }
 
@@ -128,6 +145,7 @@ impl Model {
             Model::Microfacet(m) => m.sample(wo, [u[0], u[1]]),
             Model::Pbr(m) => m.sample(wo, u),
             Model::Glossy(m) => m.sample(wo, u),
+            Model::Layered(m) => m.sample(wo, u),
         }
     }
 
@@ -139,6 +157,7 @@ impl Model {
             Model::Microfacet(m) => m.pdf(wo, wi),
             Model::Pbr(m) => m.pdf(wo, wi),
             Model::Glossy(m) => m.pdf(wo, wi),
+            Model::Layered(m) => m.pdf(wo, wi),
         }
     }
 }

@@ -67,7 +67,10 @@ impl Transport<'_> {
             Model::Pbr(p) => Model::Pbr(match self.scene.materials[v.material as usize].bsdf {
                 Bsdf::MetallicRoughness { .. } => Pbr::metallic_roughness(v.albedo, v.metal_rough.x, v.metal_rough.y),
                 Bsdf::SpecularGlossiness { specular, glossiness, .. } => {
-                    Pbr::specular_glossiness(v.albedo, specular, glossiness)
+                    match self.textures.specular_glossiness(v.material as usize, v.uv) {
+                        Some((s, g)) => Pbr::specular_glossiness(v.albedo, s, g),
+                        None => Pbr::specular_glossiness(v.albedo, specular, glossiness),
+                    }
                 }
                 _ => p,
             }),
@@ -80,7 +83,12 @@ impl Transport<'_> {
             m => m,
         };
         let frame = Frame::new(v.ns);
-        ShadingFrame { frame, wo: to_local(&frame, -dir), kind: model.kind(), model }
+        let wo = to_local(&frame, -dir);
+        let model = match model {
+            Model::Layered(_) => Model::Layered(self.layers.at(self, v, wo.z)),
+            m => m,
+        };
+        ShadingFrame { frame, wo, kind: model.kind(), model }
     }
 
     /// [`direct_rays`](Self::direct_rays) for any material: none for delta materials,
@@ -110,6 +118,9 @@ impl Transport<'_> {
                     continue;
                 }
                 let wi = sh.frame.to_world(local);
+                if !v.consistent(wi) {
+                    continue;
+                }
                 let ray =
                     Ray { origin: offset_origin(v.p, v.p_error, v.ng, wi), dir: wi, tmin: 0.0, tmax: f32::INFINITY };
                 out(DirectRay { ray, weight: f * (local.z / (warp::UNIFORM_HEMISPHERE_PDF * n as f32)) });
@@ -128,7 +139,7 @@ impl Transport<'_> {
                 }
                 let w = power_heuristic(ns as f32 * pdf_l, sh.model.pdf(sh.wo, wi));
                 let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
-                if w <= 0.0 {
+                if w <= 0.0 || !v.consistent(ls.wi) {
                     continue;
                 }
                 let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
@@ -162,6 +173,9 @@ impl Transport<'_> {
             return None;
         }
         let wi = sh.frame.to_world(s.wi);
+        if !v.consistent(wi) {
+            return None;
+        }
         let bounce = if s.delta {
             Bounce::DELTA
         } else if mis {

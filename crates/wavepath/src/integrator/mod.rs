@@ -8,6 +8,7 @@
 //! 2-d sample, plus one for a light that needs a third number).
 
 pub mod area;
+pub mod layers;
 mod material;
 
 pub mod recursive;
@@ -77,6 +78,8 @@ pub struct Transport<'a> {
     pub area_lights: Vec<Option<AreaLight>>,
     /// Per light: [`shadow_margin`] of its points.
     shadow_margins: Vec<f32>,
+    /// What the glTF material extensions need per render ([`layers::LayerData`]).
+    pub layers: layers::LayerData,
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -94,9 +97,23 @@ pub struct Vertex {
     pub material: u32,
     /// The ray hit the side the geometric normal points to (outside, for closed meshes).
     pub front: bool,
+    /// Texture coordinates (zero unless the scene has textures).
+    pub uv: Vec2,
+    /// `ns` comes from a relief map: directions on different sides of `ng` and `ns` carry
+    /// no light (see [`Vertex::consistent`]).
+    pub bumped: bool,
 }
 
 impl Vertex {
+    /// Whether a direction `wi` leaving the vertex is on the same side of the geometric
+    /// surface as of the shading one: always for interpolated normals (the renderer's
+    /// historical behaviour), checked for relief-mapped ones, whose tilted normals would
+    /// otherwise let light leak through the surface.
+    #[inline(always)]
+    pub fn consistent(&self, wi: Vec3) -> bool {
+        !self.bumped || (wi.dot(self.ng) > 0.0) == (wi.dot(self.ns) > 0.0)
+    }
+
     #[inline(always)]
     pub fn shading_point(&self) -> ShadingPoint {
         ShadingPoint { p: self.p, p_error: self.p_error, ng: self.ng, ns: self.ns }
@@ -138,8 +155,7 @@ impl<'a> Transport<'a> {
         if settings.cs184.light_pdf {
             lights.use_cs184_area_pdf();
         }
-        let models: Vec<crate::bsdf::Model> =
-            scene.materials.iter().map(|m| crate::bsdf::Model::new(&m.bsdf)).collect();
+        let models: Vec<crate::bsdf::Model> = scene.materials.iter().map(crate::bsdf::Model::of_material).collect();
         let non_diffuse = models.iter().any(|m| m.kind() != crate::bsdf::Kind::Diffuse);
         let max_depth = if settings.paths.shading == Shading::Direct {
             settings.paths.max_depth.min(1)
@@ -171,6 +187,7 @@ impl<'a> Transport<'a> {
         Transport {
             area_lights,
             shadow_margins,
+            layers: layers::LayerData::new(scene),
             scene,
             albedo: scene.materials.iter().map(|m| m.bsdf.diffuse_albedo()).collect(),
             emission: scene.materials.iter().map(|m| m.emission).collect(),
@@ -243,7 +260,14 @@ impl<'a> Transport<'a> {
     #[inline(always)]
     pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
         let sp = self.scene.surface_point_with(ray, hit, self.textures.any());
-        let (ng, ns, front) = orient(sp.geometric_normal, sp.shading_normal, ray.dir);
+        let bumped = self.layers.any_relief && self.layers.relief[sp.material as usize];
+        let (ng, ns, front) = if bumped {
+            let n = self.scene.relief_normal(hit, sp.shading_normal, sp.uv, sp.material);
+            let (ng, ns, front) = orient(sp.geometric_normal, n, ray.dir);
+            (ng, crate::scene::relief::keep_visible(ns, ng, -ray.dir), front)
+        } else {
+            orient(sp.geometric_normal, sp.shading_normal, ray.dir)
+        };
         let m = sp.material as usize;
         let emission = if front || self.two_sided_emission[m] {
             self.textures.emission(m, sp.uv).unwrap_or(self.emission[m])
@@ -260,6 +284,8 @@ impl<'a> Transport<'a> {
             metal_rough: self.textures.metal_rough(m, sp.uv).unwrap_or(self.metal_rough[m]),
             material: sp.material,
             front,
+            uv: sp.uv,
+            bumped,
         }
     }
 
@@ -300,6 +326,9 @@ impl<'a> Transport<'a> {
                 let (a, b) = rng.next_2d();
                 let local = warp::uniform_hemisphere(a, b);
                 let wi = frame.to_world(local);
+                if !v.consistent(wi) {
+                    continue;
+                }
                 let origin = offset_origin(v.p, v.p_error, v.ng, wi);
                 let ray = Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY };
                 out(DirectRay { ray, weight: scale * local.z });
@@ -316,7 +345,7 @@ impl<'a> Transport<'a> {
                 for _ in 0..ns {
                     let (a, b) = rng.next_2d();
                     let r = area::area_ray(&sp, al, a, b);
-                    if r.valid {
+                    if r.valid && v.consistent(r.ray.dir) {
                         out(DirectRay { ray: r.ray, weight: c * area::mis_weighted(r.g, ns, mis) });
                     }
                 }
@@ -333,7 +362,7 @@ impl<'a> Transport<'a> {
                     (ls, 1.0)
                 };
                 let cos = ls.wi.dot(v.ns);
-                if cos <= 0.0 || w <= 0.0 {
+                if cos <= 0.0 || w <= 0.0 || !v.consistent(ls.wi) {
                     continue;
                 }
                 let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
@@ -399,6 +428,9 @@ impl<'a> Transport<'a> {
         let (a, b) = rng.at(0).next_2d();
         let sp = v.shading_point();
         let ray = area::cosine_ray(&sp, a, b);
+        if !v.consistent(ray.dir) {
+            return None;
+        }
         Some((ray, v.albedo, self.diffuse_bounce(&sp, &ray, depth)))
     }
 

@@ -84,6 +84,11 @@ impl PathTracer<'_, '_> {
             match self.accel.closest_hit(&ray, &mut self.st.trace) {
                 Some(hit) => {
                     let next = self.transport.vertex(&ray, &hit);
+                    let w = if self.transport.layers.volumes {
+                        w * self.transport.layers.absorbed(&next, hit.t)
+                    } else {
+                        w
+                    };
                     if self.transport.counts_arrivals() {
                         l += w * self.transport.arrival(bounce, &ray, Some(&hit), next.emission, depth + 1);
                     }

@@ -9,6 +9,7 @@
 mod bulk;
 mod dissolve;
 mod mtl;
+mod relief;
 
 use crate::scene::{Material, Mesh, Scene};
 use anyhow::{Context, Result, anyhow, bail};
@@ -186,6 +187,7 @@ fn load_mtl(path: &Path, state: &RefCell<MtlState>) -> tobj::MTLLoadResult {
             }
             for m in &mut lib.materials {
                 dissolve::decode(&mut m.alpha, path, &m.name, &mut state.notes);
+                relief::decode(m, path, &mut state.notes);
             }
             mtl::load_images(&mut lib, path, &mut state.notes);
             let mats = lib.materials;
@@ -238,7 +240,7 @@ fn build_scene(path: &Path, models: Vec<tobj::Model>, mut materials: Vec<Materia
         // `v x y z r g b`: colours as written (0..1, taken as linear).
         let colors = (m.vertex_color.len() == m.positions.len())
             .then(|| m.vertex_color.chunks_exact(3).map(|c| Vec3::new(c[0], c[1], c[2])).collect());
-        mesh.append(Mesh { positions, normals, uvs, colors, triangles, material_ids });
+        mesh.append(Mesh { positions, normals, uvs, colors, tangents: None, triangles, material_ids });
     }
     if mesh.triangles.is_empty() {
         return Err("no faces".into());

@@ -38,7 +38,8 @@ pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Setting
                     };
                     let ray = scene.camera.generate_ray((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
                     if let Some(hit) = accel.closest_hit(&ray, &mut c) {
-                        let n = scene.surface_point(&ray, &hit).shading_normal;
+                        let sp = scene.surface_point(&ray, &hit);
+                        let n = scene.relief_normal(&hit, sp.shading_normal, sp.uv, sp.material);
                         sum += n * 0.5 + Vec3::splat(0.5);
                     }
                 }

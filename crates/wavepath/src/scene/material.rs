@@ -1,4 +1,6 @@
 pub use super::alpha::Alpha;
+pub use super::layers::{Layers, SpecularGlossinessMap};
+pub use super::relief::{Relief, ReliefMap};
 pub use super::texture::Texture;
 use glam::Vec3;
 
@@ -105,6 +107,14 @@ pub struct Material {
     pub two_sided_emission: bool,
     /// Where the surface is there at all (cutouts; see [`super::alpha`]).
     pub alpha: Alpha,
+    /// A normal or height map tilting the shading normal (glTF `normalTexture`, MTL
+    /// `norm`/`bump`).
+    pub relief: Option<ReliefMap>,
+    /// glTF material extensions beyond the core model (transmission, volume, clearcoat...):
+    /// `None` for every other material, which keeps its own model.
+    pub layers: Option<Box<Layers>>,
+    /// The specular-glossiness texture of a `SpecularGlossiness` material.
+    pub specular_glossiness_texture: Option<Box<SpecularGlossinessMap>>,
 }
 
 impl Default for Material {
@@ -124,6 +134,9 @@ impl Material {
             metallic_roughness_texture: None,
             two_sided_emission: true,
             alpha: Alpha::OPAQUE,
+            relief: None,
+            layers: None,
+            specular_glossiness_texture: None,
         }
     }
 
@@ -138,6 +151,9 @@ impl Material {
             metallic_roughness_texture: None,
             two_sided_emission: true,
             alpha: Alpha::OPAQUE,
+            relief: None,
+            layers: None,
+            specular_glossiness_texture: None,
         }
     }
 
@@ -166,6 +182,7 @@ impl Material {
                 diffuse.is_finite() && specular.is_finite() && glossiness.is_finite()
             }
         };
+        let finite = finite && self.layers.as_ref().is_none_or(|l| l.is_finite());
         if !finite || !self.emission.is_finite() {
             return Err("a parameter is not finite".into());
         }

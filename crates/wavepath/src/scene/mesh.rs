@@ -1,5 +1,5 @@
 use super::MaterialIds;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 /// All triangles of a scene in world space, as parallel arrays (structure of arrays).
 ///
@@ -15,6 +15,9 @@ pub struct Mesh {
     /// Linear RGB per vertex (glTF `COLOR_0`, OBJ `v x y z r g b`, PLY red green blue): it
     /// multiplies the material's base colour.
     pub colors: Option<Vec<Vec3>>,
+    /// Per-vertex tangents (xyz, and w = +-1 the bitangent's handedness) for normal maps:
+    /// kept only when some material has a normal map (a scanned mesh gets none).
+    pub tangents: Option<Vec<Vec4>>,
     pub triangles: Vec<[u32; 3]>,
     pub material_ids: MaterialIds,
 }
@@ -37,6 +40,7 @@ impl Mesh {
             + self.normals.as_deref().map_or(0, of)
             + self.uvs.as_deref().map_or(0, of)
             + self.colors.as_deref().map_or(0, of)
+            + self.tangents.as_deref().map_or(0, of)
             + of(&self.triangles)
             + self.material_ids.bytes()
     }
@@ -51,6 +55,7 @@ impl Mesh {
         merge_attr(&mut self.uvs, other.uvs, had, add, Vec2::ZERO);
         // A part without colours is white: its base colour unchanged.
         merge_attr(&mut self.colors, other.colors, had, add, Vec3::ONE);
+        merge_attr(&mut self.tangents, other.tangents, had, add, Vec4::ZERO);
         self.positions.extend(other.positions);
         self.triangles.extend(other.triangles.into_iter().map(|t| [t[0] + base, t[1] + base, t[2] + base]));
         for (start, end, id) in other.material_ids.runs() {
@@ -89,6 +94,14 @@ impl Mesh {
             }
             if c.iter().any(|v| !v.is_finite() || v.min_element() < 0.0) {
                 return Err("a vertex colour is negative or not finite".into());
+            }
+        }
+        if let Some(t) = &self.tangents {
+            if t.len() != n {
+                return Err(format!("{} tangents for {n} vertices", t.len()));
+            }
+            if t.iter().any(|v| !v.is_finite()) {
+                return Err("a vertex tangent is not finite".into());
             }
         }
         if let Some(uvs) = &self.uvs {

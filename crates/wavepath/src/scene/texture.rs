@@ -58,6 +58,18 @@ impl TextureImage {
         Self::convert(image::load_from_memory(bytes).map_err(|e| anyhow!("{e}"))?, |c| c)
     }
 
+    /// Decodes an encoded image's alpha channel (linear) into all three channels (the
+    /// glossiness of a glTF specular-glossiness texture); opaque images give 1.
+    pub fn decode_alpha(bytes: &[u8]) -> Result<TextureImage> {
+        let img = image::load_from_memory(bytes).map_err(|e| anyhow!("{e}"))?.into_rgba8();
+        let (w, h) = (img.width() as usize, img.height() as usize);
+        if w == 0 || h == 0 {
+            bail!("image has no pixels");
+        }
+        let texels = img.pixels().map(|p| Vec3::splat(p.0[3] as f32 / 255.0)).collect();
+        Ok(TextureImage { width: w, height: h, texels })
+    }
+
     fn from_srgb(img: image::DynamicImage) -> Result<TextureImage> {
         Self::convert(img, srgb_to_linear)
     }
@@ -192,6 +204,10 @@ pub struct Textures {
     emission: Vec<Option<Texture>>,
     /// Per material, the metallic-roughness texture.
     metal_rough: Vec<Option<Texture>>,
+    /// Per material, the transmission texture (glTF `KHR_materials_transmission`).
+    transmission: Vec<Option<Texture>>,
+    /// Per material, the specular and glossiness textures of a specular-glossiness one.
+    specular_glossiness: Vec<Option<(Texture, Texture)>>,
     /// Any material has a decoded texture and the mesh has uvs: otherwise lookups return
     /// `None` at the cost of one predictable branch.
     any: bool,
@@ -204,9 +220,26 @@ impl Textures {
         let emission: Vec<Option<Texture>> = scene.materials.iter().map(|m| decoded(&m.emission_texture)).collect();
         let metal_rough: Vec<Option<Texture>> =
             scene.materials.iter().map(|m| decoded(&m.metallic_roughness_texture)).collect();
-        let any =
-            scene.mesh.uvs.is_some() && per_material.iter().chain(&emission).chain(&metal_rough).any(Option::is_some);
-        Textures { per_material, emission, metal_rough, any }
+        let transmission: Vec<Option<Texture>> = scene
+            .materials
+            .iter()
+            .map(|m| decoded(&m.layers.as_ref().and_then(|l| l.transmission_texture.clone())))
+            .collect();
+        let specular_glossiness: Vec<Option<(Texture, Texture)>> = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let t = m.specular_glossiness_texture.as_deref()?;
+                (t.specular.image.is_some() && t.glossiness.image.is_some())
+                    .then(|| (t.specular.clone(), t.glossiness.clone()))
+            })
+            .collect();
+        let relief = scene.materials.iter().any(|m| m.relief.as_ref().is_some_and(|r| r.texture.image.is_some()));
+        let any = scene.mesh.uvs.is_some()
+            && (relief
+                || per_material.iter().chain(&emission).chain(&metal_rough).chain(&transmission).any(Option::is_some)
+                || specular_glossiness.iter().any(Option::is_some));
+        Textures { per_material, emission, metal_rough, transmission, specular_glossiness, any }
     }
 
     /// The textured emission of `material` at `uv`, or `None` (use the material's own).
@@ -227,6 +260,26 @@ impl Textures {
         }
         let t = self.metal_rough.get(material)?.as_ref()?.albedo(uv)?;
         Some(Vec2::new(t.z, t.y))
+    }
+
+    /// The transmission of `material` at `uv` (factor x red channel), or `None`.
+    #[inline]
+    pub fn transmission(&self, material: usize, uv: Vec2) -> Option<f32> {
+        if !self.any {
+            return None;
+        }
+        Some(self.transmission.get(material)?.as_ref()?.albedo(uv)?.x)
+    }
+
+    /// The specular colour and glossiness of a specular-glossiness `material` at `uv` from
+    /// its texture (factors applied), or `None`.
+    #[inline]
+    pub fn specular_glossiness(&self, material: usize, uv: Vec2) -> Option<(Vec3, f32)> {
+        if !self.any {
+            return None;
+        }
+        let (s, g) = self.specular_glossiness.get(material)?.as_ref()?;
+        Some((s.albedo(uv)?, g.albedo(uv)?.x))
     }
 
     /// Whether `material`'s emission varies over its surface.

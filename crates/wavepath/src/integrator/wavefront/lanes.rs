@@ -35,6 +35,7 @@ pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
         && !t.mis
         && t.two_sided_emission.iter().all(|&two| two)
         && !t.textures.any()
+        && !t.layers.any_relief
         && t.scene.mesh.colors.is_none()
         && t.area_lights.iter().all(Option::is_some)
 }

@@ -38,6 +38,9 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
             continue;
         };
         let v = t.vertex(&q.ray[i], &hit);
+        if F::NON_DIFFUSE && t.layers.volumes {
+            q.throughput[i] *= t.layers.absorbed(&v, hit.t);
+        }
         if F::EMISSION && depth == 0 && sees_emission {
             q.radiance[i] += v.emission;
         }

@@ -30,7 +30,15 @@ pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[
 
     if !file_normals && !has_uvs {
         // Vertices are exactly the file's positions.
-        return Mesh { positions, normals: Some(smooth_n), uvs: None, colors: None, triangles: pos_tris, material_ids };
+        return Mesh {
+            positions,
+            normals: Some(smooth_n),
+            uvs: None,
+            colors: None,
+            tangents: None,
+            triangles: pos_tris,
+            material_ids,
+        };
     }
 
     let nm = normal_matrix(world);
@@ -60,6 +68,7 @@ pub fn place(local: &LocalMesh, world: Mat4, smooth: bool, material_of_group: &[
         normals: Some(out_n),
         uvs: has_uvs.then_some(out_t),
         colors: None,
+        tangents: None,
         triangles,
         material_ids,
     }

@@ -11,6 +11,8 @@
 
 mod alpha;
 mod draco;
+mod extensions;
+mod tangents;
 
 use crate::scene::texture::{Filter, TextureImage, Wrap};
 use crate::scene::{Alpha, Bsdf, Camera, Light, Material, Mesh, Scene, Texture};
@@ -61,10 +63,14 @@ fn read(path: &Path) -> Result<Scene, String> {
     let images = decode_images(doc, base, &buffers, path, &mut notes)?;
     // One line per drawing mode, however many primitives use it.
     let mut skipped_modes = std::collections::BTreeMap::new();
-    let mut materials: Vec<Material> = doc.materials().map(|m| material(&m, path, &images, &mut notes)).collect();
+    let mut materials: Vec<Material> = doc
+        .materials()
+        .map(|m| extensions::extend(material(&m, path, &images, &mut notes), &m, &images))
+        .collect();
     alpha::apply(doc, &mut materials, &images, (base, &buffers), path, &mut notes);
     let uv_sets: Vec<u32> = doc.materials().map(|m| uv_set(&m, path, &mut notes)).collect();
-    let ignored: Vec<&str> = doc.extensions_used().filter(|e| !KNOWN_EXTENSIONS.contains(e)).collect();
+    let ignored: Vec<&str> =
+        doc.extensions_used().filter(|e| !KNOWN_EXTENSIONS.contains(e) && !extensions::READ.contains(e)).collect();
     if !ignored.is_empty() {
         notes.push(format!(
             "warning: {}: {} not rendered (the file is drawn without {})",
@@ -401,7 +407,9 @@ fn primitive(
     }
     let triangles = triangles_of(mode, &raw.indices)?;
     let material_ids = crate::scene::MaterialIds::uniform(mat, triangles.len());
-    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
+    let tangents =
+        tangents::of_primitive(prim, buffers, world, &positions, normals.as_deref(), uvs.as_deref(), &triangles);
+    Ok(Mesh { positions, normals, uvs, colors, tangents, triangles, material_ids })
 }
 
 /// A primitive's attributes and indices as its accessors hold them (object space).
@@ -454,7 +462,7 @@ fn accessors(prim: &gltf::Primitive, buffers: &[gltf::buffer::Data], uv_set: u32
 /// specular-glossiness as [`crate::bsdf::Pbr`] (their colour, metalness and roughness
 /// textures included), `KHR_materials_unlit` as an emitter of its base colour that reflects
 /// nothing.
-fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<String>) -> Material {
+fn material(m: &gltf::Material, images: &Images) -> Material {
     let name = m.name().map_or_else(|| format!("material {}", m.index().unwrap_or(0)), str::to_string);
     let strength = m.emissive_strength().unwrap_or(1.0);
     let emission = Vec3::from(m.emissive_factor()) * strength;
@@ -476,12 +484,6 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
     if let Some(sg) = m.pbr_specular_glossiness() {
         let [r, g, b, _] = sg.diffuse_factor();
         let diffuse = Vec3::new(r, g, b);
-        if sg.specular_glossiness_texture().is_some() {
-            notes.push(format!(
-                "warning: {}: {name}: the specular-glossiness texture is not read; its factors are used",
-                path.display()
-            ));
-        }
         return Material {
             name,
             bsdf: Bsdf::SpecularGlossiness {
@@ -495,6 +497,9 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
             metallic_roughness_texture: None,
             two_sided_emission: m.double_sided(),
             alpha: Alpha::OPAQUE,
+            relief: None,
+            layers: None,
+            specular_glossiness_texture: None,
         };
     }
     let (metallic, roughness) = (pbr.metallic_factor(), pbr.roughness_factor());
@@ -509,6 +514,9 @@ fn material(m: &gltf::Material, path: &Path, images: &Images, notes: &mut Vec<St
             .map(|info| texture(&info, images, true, Vec3::new(1.0, roughness, metallic))),
         two_sided_emission: m.double_sided(),
         alpha: Alpha::OPAQUE,
+        relief: None,
+        layers: None,
+        specular_glossiness_texture: None,
     }
 }
 
@@ -590,6 +598,9 @@ struct Images {
     /// for a texture whose only image is one wavepath cannot decode (KTX2 through
     /// `KHR_texture_basisu`, DDS).
     by_texture: Vec<Option<usize>>,
+    /// Per image, its alpha channel where a specular-glossiness texture reads glossiness
+    /// from it.
+    gloss_alpha: Vec<Option<Arc<TextureImage>>>,
 }
 
 /// Decodes every image a material's texture uses, once per colour space: from a buffer view
@@ -622,9 +633,16 @@ fn decode_images(
         }
         i
     };
+    let mut gloss_used = std::collections::HashSet::new();
     for m in doc.materials() {
-        for (t, linear) in textures_of(&m) {
-            if let Some(i) = image_of(t.texture()) {
+        if let Some(t) = m.pbr_specular_glossiness().and_then(|sg| sg.specular_glossiness_texture())
+            && let Some(i) = by_texture[t.texture().index()]
+        {
+            gloss_used.insert(i);
+        }
+        let core = textures_of(&m).into_iter().map(|(t, linear)| (t.texture(), linear));
+        for (t, linear) in core.chain(extensions::textures(&m)) {
+            if let Some(i) = image_of(t) {
                 if linear { &mut linear_used } else { &mut srgb_used }.insert(i);
             }
         }
@@ -649,12 +667,13 @@ fn decode_images(
             _ => PathBuf::from(format!("{}#image{}", path.display(), img.index())),
         })
         .collect();
-    let mut images = Images { srgb: Vec::new(), linear: Vec::new(), paths, by_texture };
+    let mut images = Images { srgb: Vec::new(), linear: Vec::new(), paths, by_texture, gloss_alpha: Vec::new() };
     for img in doc.images() {
         let (srgb, linear) = (srgb_used.contains(&img.index()), linear_used.contains(&img.index()));
         if !srgb && !linear {
             images.srgb.push(None);
             images.linear.push(None);
+            images.gloss_alpha.push(None);
             continue;
         }
         let what = format!("image {}", img.index());
@@ -703,6 +722,8 @@ fn decode_images(
         let s = one(srgb, false);
         // An image both kinds of texture read fails (or not) the same way: one warning.
         let l = if s.is_none() && srgb { None } else { one(linear, true) };
+        let gloss = bytes.as_deref().filter(|_| gloss_used.contains(&img.index()) && s.is_some());
+        images.gloss_alpha.push(gloss.and_then(|b| TextureImage::decode_alpha(b).ok()).map(Arc::new));
         images.srgb.push(s);
         images.linear.push(l);
     }

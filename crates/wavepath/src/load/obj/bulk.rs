@@ -130,5 +130,5 @@ pub fn parse(text: &str) -> Option<Mesh> {
         return None;
     }
     let material_ids = crate::scene::MaterialIds::uniform(0, triangles.len());
-    Some(Mesh { positions, normals: None, uvs: None, colors: None, triangles, material_ids })
+    Some(Mesh { positions, normals: None, uvs: None, colors: None, tangents: None, triangles, material_ids })
 }

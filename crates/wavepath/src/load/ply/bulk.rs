@@ -336,5 +336,5 @@ fn convert(
         return Err("no faces".into());
     }
     let material_ids = crate::scene::MaterialIds::uniform(0, triangles.len());
-    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
+    Ok(Mesh { positions, normals, uvs, colors, tangents: None, triangles, material_ids })
 }

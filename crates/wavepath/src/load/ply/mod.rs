@@ -135,7 +135,7 @@ fn build(header: &Header, verts: Vec<Vertex>, faces: Vec<Face>) -> Result<Mesh, 
     let colors = with_colors.then(|| verts.iter().map(|v| Vec3::from(v.c)).collect());
     let positions = verts.iter().map(|v| Vec3::from(v.p)).collect();
     let material_ids = crate::scene::MaterialIds::uniform(0, triangles.len());
-    Ok(Mesh { positions, normals, uvs, colors, triangles, material_ids })
+    Ok(Mesh { positions, normals, uvs, colors, tangents: None, triangles, material_ids })
 }
 
 /// ply-rs-bw's messages span several lines (message, offending text, cause); errors here are one line.

@@ -88,7 +88,15 @@ pub fn icosphere(freq: u32) -> Mesh {
         }
     }
     let material_ids = vec![0; triangles.len()];
-    Mesh { positions, normals: None, uvs: None, colors: None, triangles, material_ids: material_ids.into() }
+    Mesh {
+        positions,
+        normals: None,
+        uvs: None,
+        colors: None,
+        tangents: None,
+        triangles,
+        material_ids: material_ids.into(),
+    }
 }
 
 /// Corners `c` in order as two triangles (c0 c1 c2, c0 c2 c3) of material `m`.

@@ -130,6 +130,7 @@ fn white_plane() -> Scene {
         normals: None,
         uvs: None,
         colors: None,
+        tangents: None,
         triangles: vec![[0, 2, 1], [0, 3, 2]],
         material_ids: vec![0, 0].into(),
     };

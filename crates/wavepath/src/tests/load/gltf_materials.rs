@@ -62,14 +62,14 @@ fn gltf_materials_map_onto_their_models() {
     // roughness 1, white); unlit emits its base colour; specular-glossiness keeps its own
     // parameters. Two extensions wavepath does not render (one required) cost one warning.
     let doc = triangle_doc(
-        r#""extensionsUsed":["KHR_materials_unlit","KHR_materials_pbrSpecularGlossiness","KHR_materials_clearcoat","KHR_materials_iridescence"],
+        r#""extensionsUsed":["KHR_materials_unlit","KHR_materials_pbrSpecularGlossiness","KHR_materials_anisotropy","KHR_materials_iridescence"],
            "extensionsRequired":["KHR_materials_unlit","KHR_materials_pbrSpecularGlossiness","KHR_materials_iridescence"],
            "materials":[
              {"pbrMetallicRoughness":{"baseColorFactor":[0.8,0.4,0.2,1],"metallicFactor":0.25,"roughnessFactor":0.6}},
              {},
              {"pbrMetallicRoughness":{"baseColorFactor":[0.3,0.6,0.9,1]},"extensions":{"KHR_materials_unlit":{}}},
              {"extensions":{"KHR_materials_pbrSpecularGlossiness":{"diffuseFactor":[0.5,0.5,0.25,1],"specularFactor":[0.2,0.3,0.4],"glossinessFactor":0.7}}},
-             {"pbrMetallicRoughness":{"metallicFactor":0},"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":1},"KHR_materials_iridescence":{"iridescenceFactor":1}}},
+             {"pbrMetallicRoughness":{"metallicFactor":0},"extensions":{"KHR_materials_anisotropy":{"anisotropyStrength":1},"KHR_materials_iridescence":{"iridescenceFactor":1}}},
              {"emissiveFactor":[1,1,1],"doubleSided":true},
              {"emissiveFactor":[1,1,1],"doubleSided":true,"extensions":{"KHR_materials_unlit":{}}}
            ]"#,
@@ -89,7 +89,7 @@ fn gltf_materials_map_onto_their_models() {
     assert_eq!(two_sided, [false, false, false, false, false, true, true]);
     assert_eq!(s.notes.len(), 1, "{:?}", s.notes);
     let note = &s.notes[0];
-    assert!(note.contains("KHR_materials_clearcoat, KHR_materials_iridescence") && note.contains("m.gltf"), "{note}");
+    assert!(note.contains("KHR_materials_anisotropy, KHR_materials_iridescence") && note.contains("m.gltf"), "{note}");
 }
 
 /// The metallic-roughness texture is linear data: blue scales metalness, green roughness,

@@ -4,5 +4,6 @@
 mod bsdf;
 mod closed_form;
 mod emissive_textures;
+mod layers;
 mod renders;
 mod textures;

@@ -32,6 +32,8 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
     let mut entries: Vec<Entry> = Vec::new();
     // The alpha keys (`d`, `Tr`, `map_d`) of each entry, read apart (`super::dissolve`).
     let mut dissolves: Vec<Dissolve> = Vec::new();
+    // Each entry's normal or height map (`norm`, `bump`, `map_Bump`: `super::relief`).
+    let mut reliefs: Vec<Option<crate::scene::ReliefMap>> = Vec::new();
     let mut ignored = BTreeSet::new();
     for (i, raw) in text.lines().enumerate() {
         let line = raw.split('#').next().unwrap_or("").trim();
@@ -46,6 +48,7 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
             }
             entries.push(Entry::new(name));
             dissolves.push(Dissolve::default());
+            reliefs.push(None);
             continue;
         }
         let Some(entry) = entries.last_mut() else {
@@ -55,6 +58,12 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
         if let Some(d) = dissolves.last_mut()
             && d.read(key, &rest, dir).map_err(|e| at(&e))?
         {
+            continue;
+        }
+        if let Some(r) = super::relief::parse(key, &rest, dir).map_err(|e| at(&e))? {
+            if let Some(slot) = reliefs.last_mut() {
+                *slot = Some(r);
+            }
             continue;
         }
         if !entry.read(key, &rest, dir).map_err(|e| at(&e))? {
@@ -73,9 +82,10 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
         ));
     }
     let mut materials = Vec::with_capacity(entries.len());
-    for (e, d) in entries.iter().zip(&mut dissolves) {
+    for ((e, d), r) in entries.iter().zip(&mut dissolves).zip(&mut reliefs) {
         let mut m = illum::material(e, &mut notes);
         m.alpha = d.take();
+        m.relief = r.take();
         materials.push(m);
     }
     let pbr_maps = entries.iter().map(maps::PbrMaps::of).collect();
