@@ -4,6 +4,6 @@
 mod cutouts;
 mod damaged;
 mod dialect;
-mod materials;
 mod gltf_layers;
+mod materials;
 mod ply_bulk;

@@ -63,10 +63,8 @@ fn read(path: &Path) -> Result<Scene, String> {
     let images = decode_images(doc, base, &buffers, path, &mut notes)?;
     // One line per drawing mode, however many primitives use it.
     let mut skipped_modes = std::collections::BTreeMap::new();
-    let mut materials: Vec<Material> = doc
-        .materials()
-        .map(|m| extensions::extend(material(&m, path, &images, &mut notes), &m, &images))
-        .collect();
+    let mut materials: Vec<Material> =
+        doc.materials().map(|m| extensions::extend(material(&m, &images), &m, &images)).collect();
     alpha::apply(doc, &mut materials, &images, (base, &buffers), path, &mut notes);
     let uv_sets: Vec<u32> = doc.materials().map(|m| uv_set(&m, path, &mut notes)).collect();
     let ignored: Vec<&str> =
