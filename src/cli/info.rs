@@ -120,12 +120,13 @@ fn text(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> S
     let _ = writeln!(o, "environment: {}", environment(&scene.env));
     let _ = writeln!(o, "materials:  {}", scene.materials.len());
     for m in &scene.materials {
-        let _ = write!(o, "  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
-        // Cutouts (opaque materials say nothing, as before).
+        let _ = writeln!(o, "  {}: {:?}, emission {:?}", m.name, m.bsdf, m.emission);
         let a = &m.alpha;
-        let map =
-            a.map.as_ref().filter(|m| m.image.is_some()).map_or(String::new(), |m| format!(" x {}", m.path.display()));
-        let _ = if a.is_opaque() { writeln!(o) } else { writeln!(o, ", alpha {:?} of {}{map}", a.mode, a.factor) };
+        if !a.is_opaque() {
+            let map = a.map.as_ref().filter(|m| m.image.is_some());
+            let map = map.map_or(String::new(), |m| format!(" x {}", m.path.display()));
+            let _ = writeln!(o, "    alpha {:?} of {}{map}", a.mode, a.factor);
+        }
     }
     let _ = writeln!(o, "effects (at the scene's default settings):");
     for e in &effects.on {
