@@ -148,6 +148,12 @@ fn text(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> S
         if let Some(l) = &m.layers {
             let _ = writeln!(o, "    layers {l:?}");
         }
+        let a = &m.alpha;
+        if !a.is_opaque() {
+            let map = a.map.as_ref().filter(|m| m.image.is_some());
+            let map = map.map_or(String::new(), |m| format!(" x {}", m.path.display()));
+            let _ = writeln!(o, "    alpha {:?} of {}{map}", a.mode, a.factor);
+        }
     }
     let _ = writeln!(o, "effects (at the scene's default settings):");
     for e in &effects.on {
