@@ -46,8 +46,9 @@ impl LayerData {
 
     /// The layered model of `v`'s material at `v` (base colour, metalness, roughness and
     /// transmission as textured there; the inside of a volume when `v` is hit from
-    /// inside), seen from a direction of cosine `cos_o` to the shading normal.
-    #[inline]
+    /// inside), seen from a direction of cosine `cos_o` to the shading normal. Kept out of
+    /// line: the shading of every other model stays as small as it was.
+    #[inline(never)]
     pub fn at(&self, t: &Transport, v: &Vertex, cos_o: f32) -> Layered {
         let m = v.material as usize;
         let Some(l) = t.scene.materials[m].layers.as_deref() else {

@@ -39,6 +39,7 @@ impl Scene {
     /// The shading normal of `hit` on triangle `hit.prim` with its material's relief map
     /// applied (`ns` when the material has none, the triangle has no usable uvs or the
     /// image is missing). Not yet turned toward the ray: the caller orients it.
+    #[inline(never)]
     pub fn relief_normal(&self, hit: &Hit, ns: Vec3, uv: Vec2, material: u32) -> Vec3 {
         let prim = hit.prim as usize;
         if prim >= self.mesh.triangles.len() || self.mesh.uvs.is_none() {
@@ -126,7 +127,7 @@ impl ReliefMap {
 /// and shade black, or send reflections into the surface. `wo` is the unit direction toward
 /// the viewer, with `wo . ng > 0`. Unchanged where it is already valid, so a gentle map
 /// keeps its exact normal.
-#[inline]
+#[inline(never)]
 pub fn keep_visible(ns: Vec3, ng: Vec3, wo: Vec3) -> Vec3 {
     const MARGIN: f32 = 0.01;
     let valid = |n: Vec3| {

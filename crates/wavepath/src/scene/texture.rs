@@ -273,7 +273,7 @@ impl Textures {
 
     /// The specular colour and glossiness of a specular-glossiness `material` at `uv` from
     /// its texture (factors applied), or `None`.
-    #[inline]
+    #[inline(never)]
     pub fn specular_glossiness(&self, material: usize, uv: Vec2) -> Option<(Vec3, f32)> {
         if !self.any {
             return None;
