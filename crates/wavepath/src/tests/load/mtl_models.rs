@@ -177,14 +177,35 @@ fn keys_not_read_are_named_once() {
     );
     let lines: Vec<&String> = s.notes.iter().filter(|n| n.contains("keys not read")).collect();
     assert_eq!(lines.len(), 1, "{:?}", s.notes);
-    assert!(lines[0].ends_with("keys not read: Pc, Pcr, Ps, aniso, sharpness"), "{}", lines[0]);
+    assert!(lines[0].ends_with("keys not read: aniso, sharpness"), "{}", lines[0]);
     assert!(lines[0].contains("m.mtl"), "{}", lines[0]);
-    let maps: Vec<&String> = s.notes.iter().filter(|n| n.contains("not applied")).collect();
+    let maps: Vec<&String> = s.notes.iter().filter(|n| n.contains("map_Ks, map_Ns not applied")).collect();
     assert_eq!(maps.len(), 1, "{:?}", s.notes);
     assert!(maps[0].contains("map_Ks, map_Ns not applied"), "{}", maps[0]);
     // A file that uses only keys this reader knows gets no warning.
     let clean = load_library("clean", &block("x", 2));
     assert!(clean.notes.is_empty(), "{:?}", clean.notes);
+}
+
+/// The PBR extension's clearcoat and sheen (`Pc`, `Pcr`, `Ps`) become the layers of the
+/// metallic-roughness model, as glTF's clearcoat and sheen extensions; on a model without a
+/// metallic-roughness base they are named in a warning and not applied.
+#[test]
+fn pbr_clearcoat_and_sheen_become_layers() {
+    let s = load_library(
+        "layers",
+        "newmtl coat\nKd 0.5\nPr 0.4\nPm 0.1\nPc 0.8\nPcr 0.2\nnewmtl sheen\nKd 0.5\nPr 0.6\nPs 0.3\n\
+         newmtl plain\nKd 0.5\nPr 0.6\nnewmtl lambert\nKd 0.5\nPc 0.5\n",
+    );
+    let coat = material(&s, "coat").layers.as_deref().expect("clearcoat layer");
+    assert_eq!((coat.clearcoat, coat.clearcoat_roughness), (0.8, 0.2));
+    assert_eq!(coat.sheen_color, Vec3::ZERO);
+    let sheen = material(&s, "sheen").layers.as_deref().expect("sheen layer");
+    assert_eq!((sheen.sheen_color, sheen.clearcoat), (Vec3::splat(0.3), 0.0));
+    assert!(sheen.sheen_roughness > 0.0);
+    assert!(material(&s, "plain").layers.is_none());
+    assert!(material(&s, "lambert").layers.is_none());
+    assert!(s.notes.iter().any(|n| n.contains("'lambert'") && n.contains("not applied")), "{:?}", s.notes);
 }
 
 #[test]

@@ -4,7 +4,7 @@
 //! | file says | becomes |
 //! |---|---|
 //! | `illum 4`, `6`, `7`, `9` (glass) | smooth dielectric: index `Ni` (1.5 when absent or not positive), transmittance `Tf` (white when absent); Fresnel alone weighs reflection and refraction (`Ks` unused) |
-//! | `Pr` or `Pm` (or their maps), any other model | metallic-roughness (glTF's model): base `Kd`, metalness `Pm` (0), roughness `Pr` (when absent, sqrt of the alpha `Ns` gives below) |
+//! | `Pr` or `Pm` (or their maps), any other model | metallic-roughness (glTF's model): base `Kd`, metalness `Pm` (0), roughness `Pr` (when absent, sqrt of the alpha `Ns` gives below); with `Pc` (and `Pcr`) a clearcoat layer, with `Ps` a sheen layer of colour `Ps` (Blender's sheen roughness 0.5), as glTF's `KHR_materials_clearcoat`/`_sheen` |
 //! | `illum 3`, `5`, `8` (mirror) | perfect mirror of reflectance `Ks` (white when absent), no Fresnel term; `Kd` unused |
 //! | `illum 2` (or none) with a `Ks` that is not black | `Bsdf::Phong`, shaded by `bsdf/glossy.rs`: Lambertian `Kd` plus a GGX lobe of reflectance `Ks`, alpha = sqrt(2 / (`Ns` + 2)) |
 //! | `illum 0`, `1`, `2` with `Ks` black or absent | Lambertian `Kd` (`illum 0`'s unlit colour too: every surface is lit here) |
@@ -19,7 +19,7 @@
 //! absent.
 
 use super::keys::Entry;
-use crate::scene::{Bsdf, Material, Texture, phong_alpha};
+use crate::scene::{Bsdf, Layers, Material, Texture, phong_alpha};
 use glam::Vec3;
 
 /// Albedo of a material whose block has no `Kd`.
@@ -39,7 +39,32 @@ pub fn material(e: &Entry, notes: &mut Vec<String>) -> Material {
     }
     m.albedo_texture = e.map_kd.clone().map(Texture::obj);
     m.bsdf = bsdf(e, notes);
+    m.layers = layers(e, &m.bsdf, notes);
     m
+}
+
+/// Blender's sheen roughness (its Principled BSDF's default), which MTL files do not carry.
+const SHEEN_ROUGHNESS: f32 = 0.5;
+
+/// The clearcoat and sheen of the PBR extension (`Pc`, `Pcr`, `Ps`) as the layers of the
+/// metallic-roughness model; on any other model they have nothing to sit on (a warning).
+fn layers(e: &Entry, bsdf: &Bsdf, notes: &mut Vec<String>) -> Option<Box<Layers>> {
+    if e.pc.is_none() && e.ps.is_none() {
+        return None;
+    }
+    if !matches!(bsdf, Bsdf::MetallicRoughness { .. }) {
+        notes.push(format!("material '{}': Pc/Ps apply to PBR materials (Pr, Pm) only; not applied", e.name));
+        return None;
+    }
+    let pc = e.pc.unwrap_or(0.0).clamp(0.0, 1.0);
+    let ps = e.ps.unwrap_or(0.0).clamp(0.0, 1.0);
+    Some(Box::new(Layers {
+        clearcoat: pc,
+        clearcoat_roughness: e.pcr.unwrap_or(0.0).clamp(0.0, 1.0),
+        sheen_color: Vec3::splat(ps),
+        sheen_roughness: if ps > 0.0 { SHEEN_ROUGHNESS } else { 0.0 },
+        ..Layers::default()
+    }))
 }
 
 fn bsdf(e: &Entry, notes: &mut Vec<String>) -> Bsdf {

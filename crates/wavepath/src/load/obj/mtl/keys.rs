@@ -18,6 +18,11 @@ pub struct Entry {
     /// The PBR extension (Blender's exporter): roughness and metalness.
     pub pr: Option<f32>,
     pub pm: Option<f32>,
+    /// Its clearcoat (`Pc`), clearcoat roughness (`Pcr`) and sheen (`Ps`): the layers of
+    /// glTF's clearcoat and sheen extensions on top of the metallic-roughness base.
+    pub pc: Option<f32>,
+    pub pcr: Option<f32>,
+    pub ps: Option<f32>,
     pub map_kd: Option<PathBuf>,
     pub map_pr: Option<PathBuf>,
     pub map_pm: Option<PathBuf>,
@@ -42,6 +47,9 @@ impl Entry {
             "Ni" => self.ni = Some(scalar(key, rest)?),
             "Pr" => self.pr = Some(scalar(key, rest)?),
             "Pm" => self.pm = Some(scalar(key, rest)?),
+            "Pc" => self.pc = Some(scalar(key, rest)?),
+            "Pcr" => self.pcr = Some(scalar(key, rest)?),
+            "Ps" => self.ps = Some(scalar(key, rest)?),
             "illum" => self.illum = Some(illum(rest)?),
             "map_Kd" => self.map_kd = Some(map(key, rest, dir)?),
             "map_Pr" => self.map_pr = Some(map(key, rest, dir)?),
