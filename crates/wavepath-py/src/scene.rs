@@ -117,8 +117,8 @@ impl PyScene {
     fn ray_inputs<'py>(
         origins: &Bound<'py, PyAny>,
         directions: &Bound<'py, PyAny>,
-        tmin: &Bound<'py, PyAny>,
-        tmax: &Bound<'py, PyAny>,
+        tmin: Option<&Bound<'py, PyAny>>,
+        tmax: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<(Floats<'py>, Floats<'py>, arrays::PerRay<'py>, arrays::PerRay<'py>)> {
         let o = arrays::floats(origins, "origins", 3)?;
         let d = arrays::floats(directions, "directions", 3)?;
@@ -126,8 +126,9 @@ impl PyScene {
         if d.rows().len() != n {
             return Err(value_error(format!("origins has {n} rows but directions has {}", d.rows().len())));
         }
-        let lo = arrays::per_ray(tmin, "tmin", n)?;
-        let hi = arrays::per_ray(tmax, "tmax", n)?;
+        // Left out, the bounds are the whole ray: [0, inf).
+        let lo = tmin.map_or(Ok(arrays::PerRay::All(0.0)), |t| arrays::per_ray(t, "tmin", n))?;
+        let hi = tmax.map_or(Ok(arrays::PerRay::All(f32::INFINITY)), |t| arrays::per_ray(t, "tmax", n))?;
         Ok((o, d, lo, hi))
     }
 }
@@ -362,9 +363,7 @@ impl PyScene {
         normals: bool,
         threads: usize,
     ) -> PyResult<Bound<'py, PyDict>> {
-        let zero = 0.0f64.into_pyobject(py)?.into_any();
-        let inf = f64::INFINITY.into_pyobject(py)?.into_any();
-        let (o, d, lo, hi) = Self::ray_inputs(origins, directions, tmin.unwrap_or(&zero), tmax.unwrap_or(&inf))?;
+        let (o, d, lo, hi) = Self::ray_inputs(origins, directions, tmin, tmax)?;
         let rays = RayArrays { origins: o.rows(), directions: d.rows(), tmin: lo.view(), tmax: hi.view() };
         let n = rays.len();
         let scene = self.read(py)?;
@@ -400,9 +399,7 @@ impl PyScene {
         tmax: Option<&Bound<'py, PyAny>>,
         threads: usize,
     ) -> PyResult<Bound<'py, PyArray1<bool>>> {
-        let zero = 0.0f64.into_pyobject(py)?.into_any();
-        let inf = f64::INFINITY.into_pyobject(py)?.into_any();
-        let (o, d, lo, hi) = Self::ray_inputs(origins, directions, tmin.unwrap_or(&zero), tmax.unwrap_or(&inf))?;
+        let (o, d, lo, hi) = Self::ray_inputs(origins, directions, tmin, tmax)?;
         let rays = RayArrays { origins: o.rows(), directions: d.rows(), tmin: lo.view(), tmax: hi.view() };
         let scene = self.read(py)?;
         let (occ, bad) = py.detach(|| {

@@ -15,7 +15,9 @@ import wavepath
 SLOW = dict(resolution=(320, 240), spp=256, max_depth=6)
 
 
-def test_other_python_threads_run_during_a_render():
+def spin_during(call):
+    """Runs `call` while another Python thread counts as fast as it can; returns how far it
+    counted during the call and the call's seconds."""
     count = 0
     running = True
 
@@ -29,18 +31,24 @@ def test_other_python_threads_run_during_a_render():
     time.sleep(0.05)
     start = count
     t0 = time.perf_counter()
-    wavepath.default_scene().render(resolution=(160, 120), spp=64, max_depth=4)
+    call()
     elapsed = time.perf_counter() - t0
     during = count - start
     running = False
     t.join()
+    return during, elapsed
+
+
+def test_other_python_threads_run_during_a_render():
+    during, elapsed = spin_during(
+        lambda: wavepath.default_scene().render(resolution=(160, 120), spp=64, max_depth=4)
+    )
     # Holding the GIL for the render would let the spinning thread count only in the
     # moments between calls; released, it counts all along (millions per second).
     assert elapsed > 0.2, "the render was too quick to tell"
     assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
 
 
-@pytest.mark.parametrize("how", ["interrupt_main", "SIGINT"])
 def test_ctrl_c_interrupts_a_render_within_a_second(how):
     fired = {}
 
@@ -91,24 +99,7 @@ def test_ray_queries_release_the_gil_too():
     rays = scene.primary_rays(800, 600)
     o = np.repeat(rays["origins"], 8, axis=0)
     d = np.repeat(rays["directions"], 8, axis=0)
-    count = 0
-    running = True
-
-    def spin():
-        nonlocal count
-        while running:
-            count += 1
-
-    t = threading.Thread(target=spin)
-    t.start()
-    time.sleep(0.05)
-    start = count
-    t0 = time.perf_counter()
-    scene.intersect(o, d, threads=1)
-    elapsed = time.perf_counter() - t0
-    during = count - start
-    running = False
-    t.join()
+    during, elapsed = spin_during(lambda: scene.intersect(o, d, threads=1))
     assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
 
 

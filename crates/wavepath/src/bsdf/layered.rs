@@ -6,8 +6,6 @@ use crate::scene::Layers;
 use glam::Vec3;
 use std::f32::consts::{FRAC_1_PI, TAU};
 
-/// Smallest GGX roughness sampled (the lobe's own floor).
-const MIN_ALPHA: f32 = 1e-4;
 /// Smallest sheen roughness: below it the Charlie distribution's exponent overflows.
 const MIN_SHEEN_ALPHA: f32 = 1e-3;
 /// Entries of a sheen albedo table, over cos(theta_o) in [0, 1].
@@ -203,18 +201,13 @@ impl Layered {
             return self.sample_transmission(wo, pt);
         }
         let wi = if x < pc {
-            visible_reflection(self.coat_alpha, wo, [u[0], u[1]])?
+            ggx(self.coat_alpha).sample_visible(wo, [u[0], u[1]])?
         } else if x < pc + ps {
-            visible_reflection(self.alpha, wo, [u[0], u[1]])?
+            ggx(self.alpha).sample_visible(wo, [u[0], u[1]])?
         } else {
             warp::cosine_hemisphere(u[0], u[1])
         };
-        let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        let weight = self.eval(wo, wi) * (wi.z / pdf);
-        weight.is_finite().then_some(BsdfSample { wi, weight, pdf, delta: false })
+        BsdfSample::continuous(wi, self.pdf(wo, wi), || self.eval(wo, wi))
     }
 
     /// The delta transmission lobe, chosen with probability `pt`: what the layers above
@@ -249,46 +242,13 @@ impl Layered {
         let [pc, ps, pd, _] = self.lobe_probabilities(wo);
         let mut p = pd * warp::cosine_hemisphere_pdf(wi.z);
         if ps > 0.0 {
-            p += ps * visible_pdf(self.alpha, wo, wi);
+            p += ps * ggx(self.alpha).visible_pdf(wo, wi);
         }
         if pc > 0.0 {
-            p += pc * visible_pdf(self.coat_alpha, wo, wi);
+            p += pc * ggx(self.coat_alpha).visible_pdf(wo, wi);
         }
         p
     }
-}
-
-/// `wo` reflected about a GGX normal of roughness `alpha` drawn from those visible from
-/// `wo` (Heitz 2018, the stretched hemisphere construction; the same as the core model's).
-#[inline]
-fn visible_reflection(alpha: f32, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {
-    let a = alpha.max(MIN_ALPHA);
-    let vh = Vec3::new(a * wo.x, a * wo.y, wo.z).try_normalize()?;
-    let len2 = vh.x * vh.x + vh.y * vh.y;
-    let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
-    let t2 = vh.cross(t1);
-    let r = u[0].sqrt();
-    let (sin, cos) = (TAU * u[1]).sin_cos();
-    let (p1, p2) = (r * cos, r * sin);
-    let s = 0.5 * (1.0 + vh.z);
-    let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
-    let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-    let h = Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).try_normalize()?;
-    let oh = wo.dot(h);
-    let wi = 2.0 * oh * h - wo;
-    (oh > 0.0 && wi.z > 0.0).then_some(wi)
-}
-
-/// Density of [`visible_reflection`]: G1(wo) D(h) / (4 cos_o).
-#[inline]
-fn visible_pdf(alpha: f32, wo: Vec3, wi: Vec3) -> f32 {
-    let Some(h) = (wo + wi).try_normalize() else { return 0.0 };
-    if wo.dot(h) <= 0.0 {
-        return 0.0;
-    }
-    let lobe = ggx(alpha);
-    let p = lobe.g1(wo) * lobe.d(h) / (4.0 * wo.z);
-    if p.is_finite() { p } else { 0.0 }
 }
 
 /// The sheen lobe's directional albedo E(cos_o) = integral of D V cos_i over the

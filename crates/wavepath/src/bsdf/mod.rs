@@ -42,6 +42,21 @@ pub struct BsdfSample {
     pub delta: bool,
 }
 
+impl BsdfSample {
+    /// A direction `wi` drawn from a continuous mixture of density `pdf`, carrying
+    /// `f(wi) cos / pdf` (`f` evaluated only for a usable density); `None` when the density
+    /// or the weight is not a finite positive number, so no lobe returns a NaN or infinite
+    /// throughput.
+    #[inline]
+    pub fn continuous(wi: Vec3, pdf: f32, f: impl FnOnce() -> Vec3) -> Option<BsdfSample> {
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let weight = f() * (wi.z / pdf);
+        weight.is_finite().then_some(BsdfSample { wi, weight, pdf, delta: false })
+    }
+}
+
 /// A material's scattering model, ready to shade (the file's parameters turned into what
 /// the formulas need, once per render).
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -95,12 +95,7 @@ impl Pbr {
         } else {
             warp::cosine_hemisphere(u[0], u[1])
         };
-        let pdf = self.pdf(wo, wi);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        let weight = self.eval(wo, wi) * (wi.z / pdf);
-        weight.is_finite().then_some(BsdfSample { wi, weight, pdf, delta: false })
+        BsdfSample::continuous(wi, self.pdf(wo, wi), || self.eval(wo, wi))
     }
 
     #[inline]

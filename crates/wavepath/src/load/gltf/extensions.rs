@@ -4,11 +4,9 @@
 //! extension's JSON (the gltf crate has no accessors for them); the others through the
 //! crate's.
 
-use super::{Images, uv_transform};
-use crate::scene::texture::{Filter, Wrap};
-use crate::scene::{Layers, Material, Relief, ReliefMap, SpecularGlossinessMap, Texture};
+use super::{Images, texture_of, uv_transform};
+use crate::scene::{Layers, Material, Relief, ReliefMap, SpecularGlossinessMap};
 use glam::{Affine2, Vec3};
-use gltf::texture::{MagFilter, WrappingMode};
 use serde_json::Value;
 
 /// The extensions read here (the loader's list of known extensions includes them).
@@ -128,28 +126,4 @@ fn raw_transform(v: Option<&Value>) -> Affine2 {
             .unwrap_or(d)
     };
     uv_transform(pair("offset", [0.0, 0.0]), number(v, "rotation", 0.0), pair("scale", [1.0, 1.0]))
-}
-
-/// A glTF texture (image, sampler) with a uv transform, scaled by `factor`; `linear`: data.
-fn texture_of(tex: gltf::texture::Texture, transform: Affine2, images: &Images, linear: bool, factor: Vec3) -> Texture {
-    let sampler = tex.sampler();
-    let wrap = |w: WrappingMode| match w {
-        WrappingMode::Repeat => Wrap::Repeat,
-        WrappingMode::ClampToEdge => Wrap::ClampToEdge,
-        WrappingMode::MirroredRepeat => Wrap::MirroredRepeat,
-    };
-    let source = images.by_texture.get(tex.index()).copied().flatten();
-    let decoded = if linear { &images.linear } else { &images.srgb };
-    Texture {
-        path: source.and_then(|i| images.paths.get(i).cloned()).unwrap_or_default(),
-        image: source.and_then(|i| decoded.get(i).cloned().flatten()),
-        wrap: [wrap(sampler.wrap_s()), wrap(sampler.wrap_t())],
-        filter: match sampler.mag_filter() {
-            Some(MagFilter::Nearest) => Filter::Nearest,
-            _ => Filter::Linear,
-        },
-        flip_v: false,
-        factor,
-        transform,
-    }
 }

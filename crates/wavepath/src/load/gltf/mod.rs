@@ -550,7 +550,14 @@ fn uv_set(m: &gltf::Material, path: &Path, notes: &mut Vec<String>) -> u32 {
 /// A glTF texture (its image, sampler and uv transform) scaled by `factor`; `linear`: the
 /// image holds data, not colours.
 fn texture(info: &gltf::texture::Info, images: &Images, linear: bool, factor: Vec3) -> Texture {
-    let tex = info.texture();
+    let transform =
+        info.texture_transform().map_or(Affine2::IDENTITY, |t| uv_transform(t.offset(), t.rotation(), t.scale()));
+    texture_of(info.texture(), transform, images, linear, factor)
+}
+
+/// A glTF texture (image, sampler) with the uv transform given (the extensions read theirs
+/// from raw JSON), scaled by `factor`; `linear`: the image holds data, not colours.
+fn texture_of(tex: gltf::texture::Texture, transform: Affine2, images: &Images, linear: bool, factor: Vec3) -> Texture {
     let sampler = tex.sampler();
     let wrap = |w: WrappingMode| match w {
         WrappingMode::Repeat => Wrap::Repeat,
@@ -570,9 +577,7 @@ fn texture(info: &gltf::texture::Info, images: &Images, linear: bool, factor: Ve
         },
         flip_v: false,
         factor,
-        transform: info
-            .texture_transform()
-            .map_or(Affine2::IDENTITY, |t| uv_transform(t.offset(), t.rotation(), t.scale())),
+        transform,
     }
 }
 
