@@ -49,6 +49,7 @@ def test_other_python_threads_run_during_a_render():
     assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
 
 
+@pytest.mark.parametrize("how", ["interrupt_main", "SIGINT"])
 def test_ctrl_c_interrupts_a_render_within_a_second(how):
     fired = {}
 
