@@ -50,6 +50,8 @@ pub struct Transport<'a> {
     pub metal_rough: Vec<Vec2>,
     /// Per material: its scattering model (used only when `non_diffuse`).
     pub models: Vec<crate::bsdf::Model>,
+    /// Per material: it is Lambertian (its hits are shaded by the diffuse lane kernel).
+    pub lambertian: Vec<bool>,
     /// Some material is not Lambertian: shading goes through [`material::ShadingFrame`].
     pub non_diffuse: bool,
     /// Diffuse vertices weigh their light samples against their BSDF sample by MIS
@@ -185,6 +187,7 @@ impl<'a> Transport<'a> {
             })
             .collect();
         Transport {
+            lambertian: models.iter().map(|m| matches!(m, crate::bsdf::Model::Lambert(_))).collect(),
             area_lights,
             shadow_margins,
             layers: layers::LayerData::new(scene),
@@ -335,41 +338,68 @@ impl<'a> Transport<'a> {
             }
             return;
         }
-        let sp = v.shading_point();
         let mis = self.diffuse_mis(depth);
-        for (i, light) in self.lights.lights.iter().enumerate() {
-            let ns = self.lights.samples_for(i, self.light_samples);
-            let inv = f / ns as f32;
-            if let (Some(al), SampledLight::Area { radiance, .. }) = (&self.area_lights[i], light) {
-                let c = inv * *radiance;
-                for _ in 0..ns {
-                    let (a, b) = rng.next_2d();
-                    let r = area::area_ray(&sp, al, a, b);
-                    if r.valid && v.consistent(r.ray.dir) {
-                        out(DirectRay { ray: r.ray, weight: c * area::mis_weighted(r.g, ns, mis) });
-                    }
+        for i in 0..self.lights.lights.len() {
+            self.direct_light(v, f, i, mis, &mut rng, &mut out);
+        }
+    }
+
+    /// The light samples of the diffuse vertex `v` (BSDF value `f`) toward light `i`, drawn
+    /// from `rng` at its current dimension ([`light_dims`](Self::light_dims) of them): one
+    /// light's part of [`direct_rays`](Self::direct_rays), which the lane kernel also calls
+    /// for a lane whose light has no lane-parallel sampler.
+    #[inline(always)]
+    pub fn direct_light(
+        &self,
+        v: &Vertex,
+        f: Vec3,
+        i: usize,
+        mis: bool,
+        rng: &mut Sampler,
+        out: &mut impl FnMut(DirectRay),
+    ) {
+        let light = &self.lights.lights[i];
+        let ns = self.lights.samples_for(i, self.light_samples);
+        let inv = f / ns as f32;
+        if let (Some(al), SampledLight::Area { radiance, .. }) = (&self.area_lights[i], light) {
+            let sp = v.shading_point();
+            let c = inv * *radiance;
+            for _ in 0..ns {
+                let (a, b) = rng.next_2d();
+                let r = area::area_ray(&sp, al, a, b);
+                if r.valid && v.consistent(r.ray.dir) {
+                    out(DirectRay { ray: r.ray, weight: c * area::mis_weighted(r.g, ns, mis) });
                 }
+            }
+            return;
+        }
+        for _ in 0..ns {
+            let u = light_numbers(rng, light);
+            let (ls, w) = if mis {
+                let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
+                let w = power_heuristic(ns as f32 * pdf_l, ls.wi.dot(v.ns).max(0.0) * FRAC_1_PI);
+                (ls, w)
+            } else {
+                let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
+                (ls, 1.0)
+            };
+            let cos = ls.wi.dot(v.ns);
+            if cos <= 0.0 || w <= 0.0 || !v.consistent(ls.wi) {
                 continue;
             }
-            for _ in 0..ns {
-                let u = light_numbers(&mut rng, light);
-                let (ls, w) = if mis {
-                    let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
-                    let w = power_heuristic(ns as f32 * pdf_l, ls.wi.dot(v.ns).max(0.0) * FRAC_1_PI);
-                    (ls, w)
-                } else {
-                    let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
-                    (ls, 1.0)
-                };
-                let cos = ls.wi.dot(v.ns);
-                if cos <= 0.0 || w <= 0.0 || !v.consistent(ls.wi) {
-                    continue;
-                }
-                let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
-                let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
-                out(DirectRay { ray, weight: inv * ls.weight * (cos * w) });
-            }
+            let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
+            let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
+            out(DirectRay { ray, weight: inv * ls.weight * (cos * w) });
         }
+    }
+
+    /// Dimensions of a vertex stream that the light samples of light `i` take (one per 2-d
+    /// sample, two for a light that also reads a third number).
+    #[inline(always)]
+    pub fn light_dims(&self, i: usize) -> u32 {
+        let ns = self.lights.samples_for(i, self.light_samples);
+        let third = self.area_lights[i].is_none() && self.lights.lights[i].uses_third_number();
+        ns * (1 + third as u32)
     }
 
     /// The shadow ray of light `i` from `origin` along `dir` or, for a light point `target`,

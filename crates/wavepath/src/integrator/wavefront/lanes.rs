@@ -1,50 +1,56 @@
-//! Shade for the common case, eight paths at a time: Lambertian materials, light sampling,
-//! only area lights. What is per path and irregular (the hit's surface point, the random
-//! numbers) is gathered one path at a time into structure-of-arrays lanes; the light
-//! samples, offsets, shadow-ray setup and the continuation rays then run lane-parallel:
-//! [`crate::integrator::area`]'s branch-free per-sample functions in fixed loops of 8 lanes
-//! that the compiler vectorises (8 square roots and divisions per instruction instead of
-//! one). The functions are the ones the one-vertex-at-a-time code calls, so the image is
-//! the same, bit for bit, as [`super::shade::shade`]'s.
+//! Shade for the Lambertian hits of a wave, eight paths at a time (the diffuse kind's
+//! kernel; [`super::shade`] sorts the paths by kind first). What is per path and irregular
+//! (the hit's surface point or whole vertex, the random numbers, a light that has no lane
+//! sampler) is gathered or computed one lane at a time; the area lights' samples, offsets,
+//! shadow-ray setup, MIS weights and the continuation rays then run lane-parallel:
+//! [`crate::integrator::area`]'s branch-free per-sample functions in fixed loops over the
+//! lanes that the compiler vectorises (8 square roots and divisions per instruction instead
+//! of one). The functions are the ones the one-vertex-at-a-time code calls, so the image is
+//! the same, bit for bit, as [`super::shade::shade_scalar`]'s.
 //!
-//! The lane kernel is compiled with AVX2 and FMA enabled (behind run-time detection; Rust
-//! never contracts `a * b + c` into an FMA, so the bits do not change) and everything it
-//! calls is `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
+//! Any light, MIS, one-sided emitters, textures, vertex colours, relief maps, volumes and
+//! hemisphere sampling run here: a lane whose light has no lane-parallel sampler calls the
+//! one-vertex function for that light ([`Transport::direct_light`]) in its lane's turn.
+//!
+//! The kernel is compiled with AVX2 and FMA enabled (behind run-time detection; Rust never
+//! contracts `a * b + c` into an FMA, so the bits do not change) and everything it calls is
+//! `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
 
 use super::Features;
-use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
+use super::Lanes;
+use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
 use crate::cpu::Avx2;
 use crate::geometry::{Hit, Ray};
-use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray};
-use crate::integrator::{Bounce, DIM_DIRECT, DIM_ROULETTE, Transport, orient};
+use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted};
+use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
 use crate::lights::SampledLight;
 use crate::sampling::{Sampler, SamplerKind, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 /// Paths per group.
 const L: usize = 8;
 
-/// Whether the lane kernel can shade this render's paths: Lambertian materials without
-/// textures, light sampling (not hemisphere probes) without MIS, and nothing but area lights. Decided once
-/// per render, with the kernel (`super::Lanes`).
-pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
-    !non_diffuse
-        && !t.hemisphere
-        && !t.mis
-        && t.two_sided_emission.iter().all(|&two| two)
-        && !t.textures.any()
-        && !t.layers.any_relief
-        && t.scene.mesh.colors.is_none()
-        && t.area_lights.iter().all(Option::is_some)
-}
-
-/// [`super::shade::shade`] eight paths at a time (for renders where [`can_shade`] holds).
-#[cfg(target_arch = "x86_64")]
-pub fn shade_lanes<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
-    // SAFETY: the token proves the CPU has AVX2 and FMA.
-    unsafe { shade_avx2::<F>(avx, t, q, shadow) }
+/// [`super::shade::shade`] for the Lambertian hits listed in `idx` (paths that hit, whose
+/// material is Lambertian), eight at a time.
+pub fn shade_diffuse<F: Features>(
+    lanes: Lanes,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(avx) = lanes.shade {
+        // SAFETY: the token proves the CPU has AVX2 and FMA.
+        unsafe { shade_avx2::<F>(avx, t, q, idx, shadow) };
+        return;
+    }
+    let _ = lanes;
+    for &i in idx {
+        super::shade::shade_path::<F>(t, q, i as usize, shadow);
+    }
 }
 
 /// The kernel compiled with exactly the features it uses: run through `cpu::with_avx2` (which
@@ -52,8 +58,18 @@ pub fn shade_lanes<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, sha
 /// (callgrind, CBspheres_lambertian 128x96, shade stage).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn shade_avx2<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
-    shade_groups::<F>(avx, t, q, shadow)
+fn shade_avx2<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
+    // Whole vertices (`Transport::vertex`, one lane at a time) where the surface has more than
+    // a position and normals to reconstruct; the lane-parallel reconstruction elsewhere.
+    let whole = t.textures.any()
+        || t.scene.mesh.colors.is_some()
+        || t.layers.any_relief
+        || (F::NON_DIFFUSE && t.layers.volumes);
+    if whole {
+        shade_groups::<F, true>(avx, t, q, idx, shadow)
+    } else {
+        shade_groups::<F, false>(avx, t, q, idx, shadow)
+    }
 }
 
 /// The shading points of a group, one array per component.
@@ -239,14 +255,63 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
     }
 }
 
-/// The lanes of a wave, eight paths at a time; the random numbers are drawn eight streams
-/// at a time (hence the token).
+/// A vertex with nothing in it, for lanes a group leaves empty.
+const NO_VERTEX: Vertex = Vertex {
+    p: Vec3::ZERO,
+    p_error: Vec3::ZERO,
+    ng: Vec3::Z,
+    ns: Vec3::Z,
+    albedo: Vec3::ZERO,
+    emission: Vec3::ZERO,
+    metal_rough: Vec2::ZERO,
+    material: 0,
+    front: true,
+    uv: Vec2::ZERO,
+    bumped: false,
+};
+
+/// What a lane's gather leaves for the lane-parallel part.
+struct Group {
+    /// Path index of each lane.
+    path: [usize; L],
+    /// Lanes in use (the first `n`).
+    n: usize,
+    vertex: [Vertex; L],
+    /// The lane takes light samples / a continuation ray (as `Transport::direct_rays` and
+    /// `Transport::scatter` decide).
+    direct: [bool; L],
+    cont: [bool; L],
+    /// The lane's light samples are weighted by MIS (`Transport::diffuse_mis`).
+    mis: [bool; L],
+    depth: [u32; L],
+}
+
+/// The emission of a hit on material `m` seen from `ray` (as `Transport::vertex` computes it
+/// where the material has no emission texture).
+#[inline(always)]
+fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
+    let e = t.emission[m];
+    if e == Vec3::ZERO || t.two_sided_emission[m] {
+        e
+    } else {
+        // One-sided emitters are rare: the whole vertex says which side was hit.
+        t.vertex(ray, hit).emission
+    }
+}
+
+/// The Lambertian paths `idx`, eight at a time; the random numbers are drawn eight streams
+/// at a time (hence the token). `WHOLE`: gather whole vertices (see `shade_avx2`).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
-    shadow.clear();
+fn shade_groups<F: Features, const WHOLE: bool>(
+    avx: Avx2,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+) {
     let sees_emission = t.counts_emission();
-    let n = q.len();
+    let arrivals = F::NON_DIFFUSE || t.mis;
     let mut pts = Points::default();
     let mut rays = Rays::default();
     let mut surf = Surfaces::default();
@@ -255,27 +320,49 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
     let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays> = Vec::new();
     let hashed = t.pattern.kind == SamplerKind::Independent;
-    for base in (0..n).step_by(L) {
-        let m = (n - base).min(L);
+    let mut g = Group {
+        path: [0; L],
+        n: 0,
+        vertex: [NO_VERTEX; L],
+        direct: [false; L],
+        cont: [false; L],
+        mis: [false; L],
+        depth: [0; L],
+    };
+    for chunk in idx.chunks(L) {
         let mut vertex_input = [0u64; L];
         let mut patterned = [Sampler::default(); L];
-        let mut albedo = [Vec3::ZERO; L];
-        let mut direct = [false; L];
-        let mut cont = [false; L];
+        g.direct = [false; L];
+        g.cont = [false; L];
+        g.n = chunk.len();
         // Gather, one path at a time.
-        for j in 0..m {
-            let i = base + j;
-            let depth = q.depth[i];
+        for (j, &pi) in chunk.iter().enumerate() {
+            let i = pi as usize;
+            g.path[j] = i;
             q.alive[i] = false;
-            let Some(hit) = q.hit[i] else {
-                if F::ENVIRONMENT && depth == 0 && sees_emission {
-                    q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
+            let depth = q.depth[i];
+            g.depth[j] = depth;
+            let hit = q.hit[i].expect("the diffuse queue holds hits only");
+            let ray = q.ray[i];
+            let emission = if WHOLE {
+                let v = t.vertex(&ray, &hit);
+                if F::NON_DIFFUSE && t.layers.volumes {
+                    q.throughput[i] *= t.layers.absorbed(&v, hit.t);
                 }
-                continue;
+                g.vertex[j] = v;
+                v.emission
+            } else {
+                let m = t.material_of(hit.prim);
+                surf.set(t, corner_normals, j, &ray, &hit);
+                g.vertex[j].albedo = t.albedo[m];
+                g.vertex[j].material = m as u32;
+                emission_of(t, m, &ray, &hit)
             };
-            let m = t.material_of(hit.prim);
             if F::EMISSION && depth == 0 && sees_emission {
-                q.radiance[i] += t.emission[m];
+                q.radiance[i] += emission;
+            }
+            if arrivals && depth > 0 {
+                q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &ray, Some(&hit), emission, depth);
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;
@@ -285,86 +372,141 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
             if !hashed {
                 patterned[j] = t.vertex_sampler(q.key[i], depth);
             }
-            surf.set(t, corner_normals, j, &q.ray[i], &hit);
-            albedo[j] = t.albedo[m];
-            // As `Transport::direct_rays` and `Transport::scatter` decide.
-            direct[j] = F::DIRECT && t.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
-            cont[j] = F::INDIRECT && t.continues(depth) && albedo[j] != Vec3::ZERO;
+            let albedo = g.vertex[j].albedo;
+            g.direct[j] = F::DIRECT && t.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
+            g.cont[j] = F::INDIRECT && t.continues(depth) && albedo != Vec3::ZERO;
+            g.mis[j] = t.diffuse_mis(depth);
         }
-        if !direct.iter().chain(&cont).any(|&b| b) {
+        if !g.direct.iter().chain(&g.cont).any(|&b| b) {
             continue;
         }
         // Patterned streams (stratified, Sobol) are drawn one lane at a time by `rng8`.
         let rng = if hashed { rng8::for_vertex_x8(avx, &vertex_input) } else { patterned };
-        surface_points(&surf, normals, spheres, &mut pts);
-        if F::DIRECT && direct.iter().any(|&d| d) {
-            let mut dim = DIM_DIRECT;
-            for (li, light) in t.lights.lights.iter().enumerate() {
-                let (Some(al), SampledLight::Area { radiance, .. }) = (&t.area_lights[li], light) else {
-                    unreachable!("the lane kernel runs only with area lights")
-                };
-                let ns = t.lights.samples_for(li, t.light_samples);
-                let mut c = [Vec3::ZERO; L];
-                for j in 0..L {
-                    c[j] = albedo[j] * FRAC_1_PI / ns as f32 * *radiance;
-                }
-                // Sample-major here (lane-parallel), pushed path-major below: the rays of
-                // one point sit together in the queue, where the shadow stage traces them
-                // as one packet (each path still adds its own in sample order).
-                if pending.len() < ns as usize {
-                    pending.resize_with(ns as usize, Rays::default);
-                }
-                for p in pending.iter_mut().take(ns as usize) {
-                    let (ua, ub) = rng8::next_2d_x8(avx, &rng, dim);
-                    let (ua, ub) = (unused_half(ua, &direct), unused_half(ub, &direct));
-                    dim += 1;
-                    area_rays(&pts, al, &ua, &ub, p);
-                }
-                // Every candidate is stored; the cursor moves past the valid ones only.
-                let samples = &pending[..ns as usize];
-                let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(m * samples.len());
-                let mut w = 0;
-                for j in 0..m {
-                    if !direct[j] {
-                        continue;
-                    }
-                    let tp = q.throughput[base + j];
-                    let owner = (base + j) as u32;
-                    for p in samples {
-                        rs[w] = p.ray(j);
-                        ws[w] = c[j] * p.g[j] * tp;
-                        os[w] = owner;
-                        w += p.valid[j] as usize;
-                    }
-                }
-                shadow.commit(w);
+        if WHOLE {
+            for j in 0..L {
+                pts.set(j, &g.vertex[j].shading_point());
+            }
+        } else {
+            surface_points(&surf, normals, spheres, &mut pts);
+            for j in 0..L {
+                let sp = pts.get(j);
+                let v = &mut g.vertex[j];
+                (v.p, v.p_error, v.ng, v.ns) = (sp.p, sp.p_error, sp.ng, sp.ns);
             }
         }
-        if F::INDIRECT && cont.iter().any(|&c| c) {
+        if F::DIRECT && g.direct.iter().any(|&d| d) {
+            direct_light(avx, t, q, &g, &pts, &rng, &mut pending, shadow);
+        }
+        if F::INDIRECT && g.cont.iter().any(|&c| c) {
             let (ua, ub) = rng8::next_2d_x8(avx, &rng, 0);
-            let (ua, ub) = (unused_half(ua, &cont), unused_half(ub, &cont));
+            let (ua, ub) = (unused_half(ua, &g.cont), unused_half(ub, &g.cont));
             let rr = if F::ROULETTE { rng8::next_f32_x8(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
-            for j in 0..m {
-                if cont[j] {
-                    let i = base + j;
-                    let depth = q.depth[i];
-                    q.ray[i] = rays.ray(j);
-                    // As `Transport::diffuse_bounce` without MIS.
-                    q.bounce[i] = Bounce::DIFFUSE;
-                    q.throughput[i] *= albedo[j];
-                    q.depth[i] = depth + 1;
-                    q.alive[i] = true;
-                    // As `super::shade::roulette`.
-                    if F::ROULETTE && t.plays_roulette(depth) {
-                        match t.roulette_with(rr[j], q.throughput[i]) {
-                            Some(f) => q.throughput[i] *= f,
-                            None => q.alive[i] = false,
-                        }
+            for j in 0..g.n {
+                let r = rays.ray(j);
+                if !(g.cont[j] && g.vertex[j].consistent(r.dir)) {
+                    continue;
+                }
+                let i = g.path[j];
+                let depth = g.depth[j];
+                q.ray[i] = r;
+                q.bounce[i] = t.diffuse_bounce(&pts.get(j), &r, depth);
+                q.throughput[i] *= g.vertex[j].albedo;
+                q.depth[i] = depth + 1;
+                q.alive[i] = true;
+                // As `super::shade::roulette`.
+                if F::ROULETTE && t.plays_roulette(depth) {
+                    match t.roulette_with(rr[j], q.throughput[i]) {
+                        Some(f) => q.throughput[i] *= f,
+                        None => q.alive[i] = false,
                     }
                 }
             }
         }
+    }
+}
+
+/// The direct-light rays of a group (as `Transport::direct_rays`, throughput applied), light
+/// by light: each light's rays sample-major (lane-parallel), pushed path-major, so the rays
+/// of one point sit together in the queue, where the shadow stage traces them as one packet,
+/// and each path still adds its own in the order the one-path code makes them.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn direct_light(
+    avx: Avx2,
+    t: &Transport,
+    q: &PathQueue,
+    g: &Group,
+    pts: &Points,
+    rng: &[Sampler; L],
+    pending: &mut Vec<Rays>,
+    shadow: &mut ShadowQueue,
+) {
+    if t.hemisphere {
+        for j in 0..g.n {
+            if g.direct[j] {
+                let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
+                t.direct_rays(&g.vertex[j], g.depth[j], rng[j], |d| {
+                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+                });
+            }
+        }
+        return;
+    }
+    let mut dim = DIM_DIRECT;
+    for (li, light) in t.lights.lights.iter().enumerate() {
+        let ns = t.lights.samples_for(li, t.light_samples);
+        let (Some(al), SampledLight::Area { radiance, .. }) = (&t.area_lights[li], light) else {
+            // No lane sampler for this light: each lane draws its samples itself.
+            for j in 0..g.n {
+                if g.direct[j] {
+                    let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
+                    let v = &g.vertex[j];
+                    let mut r = rng[j].at(dim);
+                    t.direct_light(v, v.albedo * FRAC_1_PI, li, g.mis[j], &mut r, &mut |d| {
+                        shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+                    });
+                }
+            }
+            dim += t.light_dims(li);
+            continue;
+        };
+        let mut c = [Vec3::ZERO; L];
+        for j in 0..L {
+            c[j] = g.vertex[j].albedo * FRAC_1_PI / ns as f32 * *radiance;
+        }
+        if pending.len() < ns as usize {
+            pending.resize_with(ns as usize, Rays::default);
+        }
+        for p in pending.iter_mut().take(ns as usize) {
+            let (ua, ub) = rng8::next_2d_x8(avx, rng, dim);
+            let (ua, ub) = (unused_half(ua, &g.direct), unused_half(ub, &g.direct));
+            dim += 1;
+            area_rays(pts, al, &ua, &ub, p);
+            for j in 0..L {
+                p.g[j] = mis_weighted(p.g[j], ns, g.mis[j]);
+            }
+        }
+        // Every candidate is stored; the cursor moves past the valid ones only.
+        let samples = &pending[..ns as usize];
+        let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(g.n * samples.len());
+        let mut w = 0;
+        for j in 0..g.n {
+            if !g.direct[j] {
+                continue;
+            }
+            let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
+            let v = &g.vertex[j];
+            for p in samples {
+                let r = p.ray(j);
+                rs[w] = r;
+                ws[w] = c[j] * p.g[j] * tp;
+                os[w] = i as u32;
+                w += (p.valid[j] && v.consistent(r.dir)) as usize;
+            }
+        }
+        shadow.commit(w);
     }
 }
 
@@ -374,9 +516,8 @@ mod tests {
     use crate::accel::{BruteForce, TraceCounters};
     use crate::integrator::wavefront::generate::{Wave, generate};
     use crate::integrator::wavefront::{Kernel, compact, shade, traverse};
+    use crate::scene::{Bsdf, Light, Scene};
     use crate::settings::{RouletteKind, Settings, Shading};
-
-    type K = Kernel<true, false, true, true, true, false>;
 
     /// Each path's shadow rays (in the order they were made) and weights, by owner.
     fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
@@ -387,11 +528,75 @@ mod tests {
         out
     }
 
-    /// The lane kernel gives every path the same continuation, throughput, radiance and
-    /// shadow rays (bit for bit) as the one-path-at-a-time kernel, over five bounces, on
-    /// triangles with and without corner normals, with spheres and without any.
+    /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
+    /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
+    fn compare<F: crate::integrator::wavefront::Features>(scene: &Scene, s: &Settings, avx: Avx2) -> usize {
+        let t = Transport::new(scene, s);
+        let lanes = Lanes { camera: None, shade: Some(avx) };
+        let mut kinds = shade::Kinds::default();
+        let accel = BruteForce::new(scene);
+        let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
+        let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
+        let mut q = PathQueue::default();
+        generate(&t, None, &mut q, &wave, 24, 18, 8);
+        let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
+        let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
+        let mut shadow_rays = 0;
+        while !q.is_empty() {
+            traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
+            let mut qs = q.clone();
+            shade::shade::<F>(&t, lanes, &mut q, &mut sl, &mut kinds);
+            shade::shade_scalar::<F>(&t, &mut qs, &mut ss);
+            assert_eq!(q.ray, qs.ray);
+            assert_eq!(q.throughput, qs.throughput);
+            assert_eq!(q.radiance, qs.radiance);
+            assert_eq!(q.alive, qs.alive);
+            assert_eq!(q.depth, qs.depth);
+            assert_eq!(q.bounce, qs.bounce);
+            assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
+            shadow_rays += sl.len();
+            compact::compact(&mut q, &mut slot_radiance);
+        }
+        shadow_rays
+    }
+
+    fn settings(light_samples: u32, rr_throughput: bool) -> Settings {
+        let mut s = Settings::default();
+        s.image.width = 24;
+        s.image.height = 18;
+        s.sampling.spp = 8;
+        s.sampling.light_samples = light_samples;
+        s.paths.max_depth = 5;
+        s.paths.shading = Shading::Global;
+        s.paths.roulette.kind = if rr_throughput { RouletteKind::Throughput } else { RouletteKind::Fixed };
+        s.paths.roulette.start_depth = 1 + rr_throughput as u32;
+        s
+    }
+
+    /// Unit normals tilted differently at every vertex.
+    fn tilted_normals(scene: &mut Scene) {
+        let n = scene.mesh.positions.len();
+        let normals =
+            (0..n).map(|i| Vec3::new((i as f32 * 0.7).sin(), 1.0, (i as f32 * 1.3).cos()).normalize()).collect();
+        scene.mesh.normals = Some(normals);
+    }
+
+    /// The default scene's light quad as the only light: one-sided emissive triangles, which
+    /// turn MIS on under the standard dialect.
+    fn emissive_box() -> Scene {
+        let mut scene = crate::load::default_scene();
+        scene.lights.clear();
+        scene.source.dialect = crate::cs184::Dialect::Standard;
+        scene.materials[3].two_sided_emission = false;
+        scene
+    }
+
+    /// The lane kernel against the one-path-at-a-time kernel: area lights on triangles with
+    /// and without corner normals, with spheres and without any.
     #[test]
     fn lanes_match_the_scalar_kernel() {
+        type K = Kernel<true, false, true, true, true, false>;
+        let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
         for (with_normals, with_spheres, rr_throughput) in
             [(false, true, false), (true, true, false), (true, false, false), (true, true, true)]
         {
@@ -401,49 +606,58 @@ mod tests {
                 scene.spheres.clear();
             }
             if with_normals {
-                let n = scene.mesh.positions.len();
-                // Unit normals tilted differently at every vertex.
-                let normals = (0..n)
-                    .map(|i| Vec3::new((i as f32 * 0.7).sin(), 1.0, (i as f32 * 1.3).cos()).normalize())
-                    .collect();
-                scene.mesh.normals = Some(normals);
+                tilted_normals(&mut scene);
             }
-            let mut s = Settings::default();
-            s.image.width = 24;
-            s.image.height = 18;
-            s.sampling.spp = 8;
-            s.sampling.light_samples = 3;
-            s.paths.max_depth = 5;
-            s.paths.shading = Shading::Global;
-            s.paths.roulette.kind = if rr_throughput { RouletteKind::Throughput } else { RouletteKind::Fixed };
-            s.paths.roulette.start_depth = 1 + rr_throughput as u32;
-            let t = Transport::new(&scene, &s);
-            assert!(can_shade(&t, K::NON_DIFFUSE));
-            let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
-            let accel = BruteForce::new(&scene);
-            let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
-            let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
-            let mut q = PathQueue::default();
-            generate(&t, None, &mut q, &wave, 24, 18, 8);
-            let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
-            let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
-            let mut shadow_rays = 0;
-            while !q.is_empty() {
-                traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
-                let mut qs = q.clone();
-                shade_lanes::<K>(avx, &t, &mut q, &mut sl);
-                shade::shade_scalar::<K>(&t, &mut qs, &mut ss);
-                assert_eq!(q.ray, qs.ray);
-                assert_eq!(q.throughput, qs.throughput);
-                assert_eq!(q.radiance, qs.radiance);
-                assert_eq!(q.alive, qs.alive);
-                assert_eq!(q.depth, qs.depth);
-                assert_eq!(q.bounce, qs.bounce);
-                assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
-                shadow_rays += sl.len();
-                compact::compact(&mut q, &mut slot_radiance);
-            }
+            let shadow_rays = compare::<K>(&scene, &settings(3, rr_throughput), avx);
             assert!(shadow_rays > 1000, "{shadow_rays}");
         }
+    }
+
+    /// The same for what the first lane kernel left to the scalar one: emissive triangles
+    /// under MIS with a one-sided emitter, a point light beside an area light, vertex colours
+    /// (whole vertices gathered), hemisphere sampling, the Sobol and stratified samplers, and
+    /// glass and mirror spheres among Lambertian walls (the kinds sorted apart).
+    #[test]
+    fn lanes_match_the_scalar_kernel_for_every_light_and_vertex() {
+        type K = Kernel<true, false, true, true, true, false>;
+        type N = Kernel<true, false, true, true, true, true>;
+        let Some(avx) = Avx2::new() else { return };
+        let mut s = settings(2, false);
+        let scene = emissive_box();
+        assert!(Transport::new(&scene, &s).mis, "the emissive box should turn MIS on");
+        assert!(compare::<K>(&scene, &s, avx) > 500);
+        for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
+            s.sampling.sampler = sampler;
+            assert!(compare::<K>(&scene, &s, avx) > 500);
+        }
+        s.sampling.sampler = crate::sampling::SamplerKind::Independent;
+
+        let mut point = crate::load::default_scene();
+        point.lights.push(Light::Point {
+            position: Vec3::new(0.3, 1.2, 0.2),
+            intensity: Vec3::splat(2.0),
+            attenuation: [1.0, 0.0, 0.0],
+        });
+        tilted_normals(&mut point);
+        assert!(compare::<K>(&point, &s, avx) > 500);
+
+        let mut colours = emissive_box();
+        let n = colours.mesh.positions.len();
+        colours.mesh.colors = Some((0..n).map(|i| Vec3::new(0.5 + 0.1 * (i % 5) as f32, 0.7, 0.9)).collect());
+        assert!(compare::<K>(&colours, &s, avx) > 500);
+
+        let mut hemisphere = s.clone();
+        hemisphere.paths.hemisphere = true;
+        assert!(compare::<K>(&crate::load::default_scene(), &hemisphere, avx) > 500);
+
+        let mut mixed = emissive_box();
+        mixed.materials[4].bsdf =
+            Bsdf::Glass { reflectance: Vec3::ONE, transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
+        let mut mirror = mixed.materials[4].clone();
+        mirror.bsdf = Bsdf::Mirror { reflectance: Vec3::splat(0.9) };
+        mixed.materials.push(mirror);
+        mixed.spheres[1].material = 5;
+        assert!(Transport::new(&mixed, &s).non_diffuse);
+        assert!(compare::<N>(&mixed, &s, avx) > 500);
     }
 }

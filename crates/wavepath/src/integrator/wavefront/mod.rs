@@ -118,18 +118,18 @@ pub struct Lanes {
     /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers)
     /// and independent numbers (the lanes hash them).
     pub camera: Option<Avx2>,
-    /// Shading, eight paths at a time: see [`lanes::can_shade`].
+    /// Shading of the Lambertian hits, eight paths at a time ([`lanes`]).
     pub shade: Option<Avx2>,
 }
 
 impl Lanes {
     /// The lane kernels this render runs: those its scene allows, where the settings'
     /// instruction set and the CPU have AVX2.
-    pub fn of(t: &Transport, effects: &Effects, isa: Isa) -> Lanes {
+    pub fn of(t: &Transport, isa: Isa) -> Lanes {
         let avx2 = isa.avx2();
         Lanes {
             camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent),
-            shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)),
+            shade: avx2,
         }
     }
 }
@@ -139,6 +139,7 @@ impl Lanes {
 pub struct WaveQueues {
     pub paths: PathQueue,
     pub shadow: ShadowQueue,
+    kinds: shade::Kinds,
     occluded: Vec<bool>,
     slot_radiance: Vec<Vec3>,
 }
@@ -197,7 +198,7 @@ pub fn render_wavefront_until(
 ) -> Option<(Accumulator, RenderStats)> {
     let effects = Effects::of(scene, settings);
     let transport = Transport::new(scene, settings);
-    let lanes = Lanes::of(&transport, &effects, settings.execution.isa);
+    let lanes = Lanes::of(&transport, settings.execution.isa);
     let job = RenderJob { transport, accel, settings, effects, lanes, progress, stop };
     let e = &job.effects;
     with_kernel!(
@@ -297,7 +298,7 @@ fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: 
         }
         first = false;
         clock = lap(clock, &mut st.stages.traverse);
-        shade::shade::<F>(t, job.lanes.shade, &mut q.paths, &mut q.shadow);
+        shade::shade::<F>(t, job.lanes, &mut q.paths, &mut q.shadow, &mut q.kinds);
         clock = lap(clock, &mut st.stages.shade);
         if F::DIRECT {
             shadow::shadow(t, accel, &q.shadow, &mut q.occluded, &mut q.paths.radiance, &mut st.counters);
