@@ -1,10 +1,13 @@
-//! The per-sample math of direct light from an area light (and of the continuation ray),
+//! The per-sample math of direct light from an area light or an emissive triangle (and of
+//! the continuation ray),
 //! written once, branch-free, for both the one-vertex-at-a-time code and the wavefront's
 //! lane kernel: the lane kernel calls these same functions on each of 8 lanes in a
 //! fixed-size loop that the compiler vectorises, so both give the same bits.
 
+use crate::bsdf::power_heuristic;
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax_at};
+use crate::lights::{Emitter, area_to_solid_angle_lanes};
 use crate::sampling::{Frame, warp};
 use glam::Vec3;
 
@@ -85,4 +88,45 @@ pub fn cosine_ray(s: &ShadingPoint, a: f32, b: f32) -> Ray {
     let wi = Frame::new(s.ns).to_world(warp::cosine_hemisphere(a, b));
     let origin = offset_origin(s.p, s.p_error, s.ng, wi);
     Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }
+}
+
+/// A light sample's shadow ray and its weight (radiance over density, times the BSDF over the
+/// sample count, the cosine at the shading point and the MIS weight).
+#[derive(Clone, Copy, Debug)]
+pub struct LightRay {
+    pub ray: Ray,
+    pub weight: Vec3,
+    pub valid: bool,
+}
+
+/// The shadow ray from `s` toward the point `q` of emissive triangle `tri`, which emits `le`
+/// toward it, weighted by MIS against the cosine-sampled continuation when `mis` (the light
+/// strategy counted `ns` times); `margin` is the light's shadow margin, `inv` the BSDF over
+/// the sample count. Exactly the operations of the one-vertex code's sample of an emissive
+/// light (`Transport::direct_light`), without branches.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn triangle_ray(
+    s: &ShadingPoint,
+    tri: &Emitter,
+    q: Vec3,
+    le: Vec3,
+    inv: Vec3,
+    margin: f32,
+    ns: u32,
+    mis: bool,
+) -> LightRay {
+    let (wi, inv_pdf, ok) = area_to_solid_angle_lanes(s.p, q, tri.n, tri.inv_density, tri.one_sided);
+    let pdf_l = 1.0 / inv_pdf;
+    let w =
+        if mis { power_heuristic(ns as f32 * pdf_l, wi.dot(s.ns).max(0.0) * std::f32::consts::FRAC_1_PI) } else { 1.0 };
+    let cos = wi.dot(s.ns);
+    let origin = offset_origin(s.p, s.p_error, s.ng, wi);
+    let e = q - origin;
+    let len = e.length();
+    let rcp = 1.0 / len;
+    let dir = e * rcp;
+    let tmax = shadow_tmax_at(len, margin);
+    let valid = ok & tri.valid & (cos > 0.0) & (w > 0.0) & rcp.is_finite() & (rcp > 0.0) & (tmax > 0.0);
+    LightRay { ray: Ray { origin, dir, tmin: 0.0, tmax }, weight: inv * (le * inv_pdf) * (cos * w), valid }
 }

@@ -16,11 +16,9 @@ use glam::{Vec2, Vec3};
 /// nothing anywhere and is left out.
 #[derive(Clone, Debug)]
 pub struct EmissiveTriangles {
-    /// Corner 0 and the two edges from it.
-    corners: Vec<[Vec3; 3]>,
+    /// What a sample of each triangle reads, in one place.
+    triangles: Vec<Emitter>,
     emission: Vec<Vec3>,
-    /// Per triangle, whether it emits from its front face only.
-    one_sided: Vec<bool>,
     /// For a textured triangle: its material's emission texture and its corners' uvs.
     textured: Vec<Option<(u32, [Vec2; 3])>>,
     /// Per material, the decoded emission texture (when the mesh has uvs).
@@ -90,11 +88,19 @@ impl EmissiveTriangles {
                 prims.push(i as u32);
             }
         }
-        let density = powers.iter().map(|&b| b / total).collect();
+        let density: Vec<f32> = powers.iter().map(|&b| b / total).collect();
+        let triangles = corners
+            .iter()
+            .zip(&density)
+            .zip(&one_sided)
+            .map(|((&[a, e1, e2], &d), &one_sided)| {
+                let n = e1.cross(e2).try_normalize();
+                Emitter { a, e1, e2, n: n.unwrap_or(Vec3::Z), valid: n.is_some(), inv_density: 1.0 / d, one_sided }
+            })
+            .collect();
         (total > 0.0).then_some(EmissiveTriangles {
-            corners,
+            triangles,
             emission,
-            one_sided,
             textured,
             textures,
             cdf,
@@ -120,7 +126,7 @@ impl EmissiveTriangles {
 
     #[cfg(test)]
     pub fn len(&self) -> usize {
-        self.corners.len()
+        self.triangles.len()
     }
 
     #[inline]
@@ -131,23 +137,65 @@ impl EmissiveTriangles {
     /// [`sample`](Self::sample) and the solid-angle density of the drawn direction.
     #[inline]
     pub fn sample_pdf(&self, p: Vec3, u: [f32; 3]) -> Option<(LightSample, f32)> {
+        let i = self.pick(u[2])?;
+        let tri = &self.triangles[i];
+        let (q, bu, bv) = tri.point(u[0], u[1]);
+        if !tri.valid {
+            return None;
+        }
+        let (wi, inv_pdf) = area_to_solid_angle(p, q, tri.n, tri.inv_density, tri.one_sided)?;
+        let le = self.emitted(i, bu, bv);
+        Some((LightSample { wi, target: Some(q), weight: le * inv_pdf }, 1.0 / inv_pdf))
+    }
+
+    /// The triangle a light sample whose third number is `u` draws (in proportion to power).
+    #[inline(always)]
+    pub fn pick(&self, u: f32) -> Option<usize> {
         let total = *self.cdf.last()?;
-        let x = u[2] * total;
-        let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1);
-        let [a, e1, e2] = self.corners[i];
-        let (bu, bv) = warp::uniform_triangle(u[0], u[1]);
-        let q = a + bu * e1 + bv * e2;
-        let n = e1.cross(e2).try_normalize()?;
-        // Area density `density[i]`.
-        let (wi, inv_pdf) = area_to_solid_angle(p, q, n, 1.0 / self.density[i], self.one_sided[i])?;
-        let le = match self.textured[i] {
+        let x = u * total;
+        Some(self.cdf.partition_point(|&c| c <= x).min(self.cdf.len() - 1))
+    }
+
+    /// Triangle `i` of the light (an index [`pick`](Self::pick) gave).
+    #[inline(always)]
+    pub fn triangle(&self, i: usize) -> &Emitter {
+        &self.triangles[i]
+    }
+
+    /// The radiance triangle `i` emits at barycentrics (`bu`, `bv`).
+    #[inline(always)]
+    pub fn emitted(&self, i: usize, bu: f32, bv: f32) -> Vec3 {
+        match self.textured[i] {
             Some((m, [ua, ub, uc])) => {
                 let uv = ua + bu * (ub - ua) + bv * (uc - ua);
                 self.textures[m as usize].as_ref().and_then(|t| t.albedo(uv)).unwrap_or(self.emission[i])
             }
             None => self.emission[i],
-        };
-        Some((LightSample { wi, target: Some(q), weight: le * inv_pdf }, 1.0 / inv_pdf))
+        }
+    }
+}
+
+/// One emissive triangle as a light sample reads it (gathered per lane by the lane kernel).
+#[derive(Clone, Copy, Debug)]
+pub struct Emitter {
+    /// Corner 0 and the two edges from it.
+    pub a: Vec3,
+    pub e1: Vec3,
+    pub e2: Vec3,
+    /// Unit normal (`e1 x e2`); `valid` false when it cannot be normalised.
+    pub n: Vec3,
+    pub valid: bool,
+    /// 1 / the density of sampled points per unit area.
+    pub inv_density: f32,
+    pub one_sided: bool,
+}
+
+impl Emitter {
+    /// The point at (`u`, `v`) in [0, 1)^2, uniform over the triangle, and its barycentrics.
+    #[inline(always)]
+    pub fn point(&self, u: f32, v: f32) -> (Vec3, f32, f32) {
+        let (bu, bv) = warp::uniform_triangle(u, v);
+        (self.a + bu * self.e1 + bv * self.e2, bu, bv)
     }
 }
 

@@ -14,7 +14,7 @@
 mod emissive;
 mod infinite;
 
-pub use emissive::EmissiveTriangles;
+pub use emissive::{EmissiveTriangles, Emitter};
 pub use infinite::Infinite;
 
 use crate::geometry::error_bound::gamma;
@@ -223,19 +223,22 @@ impl SampledLight {
 /// lights), so points behind it get nothing. `None` for coincident points or grazing angles.
 #[inline]
 pub fn area_to_solid_angle(p: Vec3, q: Vec3, nl: Vec3, area: f32, one_sided: bool) -> Option<(Vec3, f32)> {
+    let (wi, inv_pdf, valid) = area_to_solid_angle_lanes(p, q, nl, area, one_sided);
+    valid.then_some((wi, inv_pdf))
+}
+
+/// [`area_to_solid_angle`] without branches, for the lane kernel (the same operations, so
+/// the same bits): the direction, the factor, and whether they are valid.
+#[inline(always)]
+pub fn area_to_solid_angle_lanes(p: Vec3, q: Vec3, nl: Vec3, area: f32, one_sided: bool) -> (Vec3, f32, bool) {
     let d = q - p;
     let dist2 = d.length_squared();
     let dist = dist2.sqrt();
-    if dist <= 0.0 || !dist.is_finite() {
-        return None;
-    }
     let wi = d / dist;
     let c = -wi.dot(nl);
     let cos_l = if one_sided { c } else { c.abs() };
-    if cos_l <= 0.0 {
-        return None;
-    }
-    Some((wi, area * cos_l / dist2))
+    let valid = (dist > 0.0) & dist.is_finite() & (cos_l > 0.0);
+    (wi, area * cos_l / dist2, valid)
 }
 
 /// All lights of a scene plus what rays that leave the scene see.

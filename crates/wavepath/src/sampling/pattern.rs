@@ -92,7 +92,7 @@ fn jitter(index: u32, hash: u64) -> u64 {
 /// less than half its cost (Sobol's first dimension is the bit reversal of the index and
 /// its second one two table lookups, where the crate walks the index's bits with a
 /// data-dependent loop). A render draws a few of these per path vertex.
-#[inline]
+#[inline(always)]
 pub fn sobol_2d(index: u32, seed: u32) -> (f32, f32) {
     let i = shuffled_index(index, seed);
     let y = SOBOL_DIM1[0][(i >> 24) as usize] ^ SOBOL_DIM1[1][((i >> 16) & 0xFF) as usize];
@@ -101,7 +101,7 @@ pub fn sobol_2d(index: u32, seed: u32) -> (f32, f32) {
 
 /// One number of Sobol point `index` (< [`SOBOL_LENGTH`]) in the dimension whose scramble is
 /// `seed`: exactly `sobol_burley::sample(index, 0, seed)`.
-#[inline]
+#[inline(always)]
 pub fn sobol_1d(index: u32, seed: u32) -> f32 {
     scrambled(sobol_dim0(shuffled_index(index, seed)), seed, 0x912f_69ba)
 }

@@ -168,6 +168,16 @@ impl Sampler {
         self.seq != Seq::Hashed
     }
 
+    /// The point index of a Sobol stream whose numbers all come from the sequence (its index
+    /// within [`SOBOL_LENGTH`]); `None` for other streams.
+    #[inline(always)]
+    pub(super) fn sobol_index(&self) -> Option<u32> {
+        match self.seq {
+            Seq::Sobol { index } if index < SOBOL_LENGTH => Some(index),
+            _ => None,
+        }
+    }
+
     /// Jumps to dimension `dim` of this stream.
     #[inline]
     pub fn at(mut self, dim: u32) -> Self {

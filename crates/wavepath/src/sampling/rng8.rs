@@ -5,6 +5,7 @@
 //! `wrapping_mul`s scalar.
 
 use super::Sampler;
+use super::pattern::{sobol_1d, sobol_2d};
 use super::splitmix::unit_f32;
 use crate::cpu::Avx2;
 #[cfg(target_arch = "x86_64")]
@@ -46,7 +47,15 @@ pub fn for_vertex_x8(avx: Avx2, inputs: &[u64; LANES]) -> [Sampler; LANES] {
 /// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn next_2d_x8(_: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+pub fn next_2d_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+    if let Some(index) = sobol_indices(s) {
+        let seeds = sobol_seeds(avx, s, dim);
+        let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
+        for j in 0..LANES {
+            (a[j], b[j]) = sobol_2d(index[j], seeds[j]);
+        }
+        return (a, b);
+    }
     if s.iter().any(Sampler::patterned) {
         let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
         for j in 0..LANES {
@@ -83,10 +92,41 @@ pub fn next_2d_x8(_: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f3
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
+    if let Some(index) = sobol_indices(s) {
+        let seeds = sobol_seeds(avx, s, dim);
+        let mut a = [0f32; LANES];
+        for j in 0..LANES {
+            a[j] = sobol_1d(index[j], seeds[j]);
+        }
+        return a;
+    }
     if s.iter().any(Sampler::patterned) {
         return s.map(|r| r.at(dim).next_f32());
     }
     next_2d_x8(avx, s, dim).0
+}
+
+/// The point indices of eight Sobol streams, when every lane's numbers come from the sequence.
+#[inline(always)]
+fn sobol_indices(s: &[Sampler; LANES]) -> Option<[u32; LANES]> {
+    let mut index = [0u32; LANES];
+    for j in 0..LANES {
+        index[j] = s[j].sobol_index()?;
+    }
+    Some(index)
+}
+
+/// The scramble seeds of dimension `dim` of eight Sobol streams: the top half of the
+/// dimension's hash, as [`Sampler::next_2d`] takes it. The sequence's own hashing and
+/// scrambling then run as plain loops over the lanes (32-bit products, which AVX2 has).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn sobol_seeds(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [u32; LANES] {
+    let mut z = [0u64; LANES];
+    for j in 0..LANES {
+        z[j] = s[j].dim_input(dim);
+    }
+    splitmix64_x8(avx, &z).map(|h| (h >> 32) as u32)
 }
 
 /// The low 64 bits of `a * c` in each 64-bit lane.
@@ -164,6 +204,32 @@ mod tests {
                 let (wa, wb) = s2.next_2d();
                 assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "{:#x}", keys[j]);
                 assert_eq!(f[j].to_bits(), s1.next_f32().to_bits(), "{:#x}", keys[j]);
+            }
+        }
+    }
+
+    /// Sobol streams (the default sampler) give the scalar numbers too, lanes with sample
+    /// indices inside the sequence and past it (hashed numbers) mixed or not.
+    #[test]
+    fn sobol_lanes_are_the_scalar_streams() {
+        let Some(avx) = Avx2::new() else { return };
+        let pattern = crate::sampling::Pattern::new(crate::sampling::SamplerKind::Sobol, 64);
+        let mut state = 0x0FED_CBA9_8765_4321u64;
+        for n in 0..3000u32 {
+            let mut s = [Sampler::default(); LANES];
+            for (j, lane) in s.iter_mut().enumerate() {
+                state = splitmix64(state);
+                // Sample indices below the sequence's length, and in every fourth group one
+                // lane past it.
+                let index = if n % 4 == 0 && j == 3 { (1 << 16) + n } else { (state as u32) % 4096 };
+                *lane = pattern.vertex((state & !0xFFFF_FFFF) | index as u64, 1 + n % 5);
+            }
+            let dim = n % 9;
+            let ((a, b), f) = crate::cpu::with_avx2(avx, |avx| (next_2d_x8(avx, &s, dim), next_f32_x8(avx, &s, dim)));
+            for j in 0..LANES {
+                let (wa, wb) = s[j].at(dim).next_2d();
+                assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "group {n} lane {j}");
+                assert_eq!(f[j].to_bits(), s[j].at(dim).next_f32().to_bits(), "group {n} lane {j}");
             }
         }
     }

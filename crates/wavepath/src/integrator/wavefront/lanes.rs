@@ -21,9 +21,9 @@ use super::Lanes;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
 use crate::cpu::Avx2;
 use crate::geometry::{Hit, Ray};
-use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted};
+use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
-use crate::lights::SampledLight;
+use crate::lights::{EmissiveTriangles, SampledLight};
 use crate::sampling::{Sampler, SamplerKind, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
@@ -203,6 +203,8 @@ struct Rays {
     d: [[f32; L]; 3],
     tmax: [f32; L],
     g: [f32; L],
+    /// A light sample's whole weight (emissive triangles).
+    w: [Vec3; L],
     valid: [bool; L],
 }
 
@@ -253,6 +255,77 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
         let r = cosine_ray(&pts.get(j), ua[j], ub[j]);
         out.set(j, &r);
     }
+}
+
+/// The samples of emissive-triangle light `li` (`e`) of a group, from dimension `dim` on: the
+/// triangle and its point picked one lane at a time, the rest lane-parallel
+/// ([`triangle_ray`]); pushed path-major as the area lights' are.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn emissive_rays(
+    avx: Avx2,
+    t: &Transport,
+    q: &PathQueue,
+    g: &Group,
+    pts: &Points,
+    rng: &[Sampler; L],
+    e: &EmissiveTriangles,
+    li: usize,
+    mut dim: u32,
+    pending: &mut Vec<Rays>,
+    shadow: &mut ShadowQueue,
+) {
+    let ns = t.lights.samples_for(li, t.light_samples);
+    let margin = t.shadow_margins[li];
+    let mut inv = [Vec3::ZERO; L];
+    for j in 0..L {
+        inv[j] = g.vertex[j].albedo * FRAC_1_PI / ns as f32;
+    }
+    if pending.len() < ns as usize {
+        pending.resize_with(ns as usize, Rays::default);
+    }
+    let first = *e.triangle(0);
+    for p in pending.iter_mut().take(ns as usize) {
+        let (ua, ub) = rng8::next_2d_x8(avx, rng, dim);
+        let uc = rng8::next_f32_x8(avx, rng, dim + 1);
+        dim += 2;
+        let mut tri = [first; L];
+        let mut point = [first.a; L];
+        let mut le = [Vec3::ZERO; L];
+        for j in 0..g.n {
+            if let (true, Some(i)) = (g.direct[j], e.pick(uc[j])) {
+                tri[j] = *e.triangle(i);
+                let (qp, bu, bv) = tri[j].point(ua[j], ub[j]);
+                point[j] = qp;
+                le[j] = e.emitted(i, bu, bv);
+            }
+        }
+        for j in 0..L {
+            let r = triangle_ray(&pts.get(j), &tri[j], point[j], le[j], inv[j], margin, ns, g.mis[j]);
+            p.set(j, &r.ray);
+            p.w[j] = r.weight;
+            p.valid[j] = r.valid;
+        }
+    }
+    let samples = &pending[..ns as usize];
+    let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(g.n * samples.len());
+    let mut w = 0;
+    for j in 0..g.n {
+        if !g.direct[j] {
+            continue;
+        }
+        let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
+        let v = &g.vertex[j];
+        for p in samples {
+            let r = p.ray(j);
+            rs[w] = r;
+            ws[w] = p.w[j] * tp;
+            os[w] = i as u32;
+            w += (p.valid[j] && v.consistent(r.dir)) as usize;
+        }
+    }
+    shadow.commit(w);
 }
 
 /// A vertex with nothing in it, for lanes a group leaves empty.
@@ -380,8 +453,19 @@ fn shade_groups<F: Features, const WHOLE: bool>(
         if !g.direct.iter().chain(&g.cont).any(|&b| b) {
             continue;
         }
-        // Patterned streams (stratified, Sobol) are drawn one lane at a time by `rng8`.
-        let rng = if hashed { rng8::for_vertex_x8(avx, &vertex_input) } else { patterned };
+        let rng = if hashed {
+            rng8::for_vertex_x8(avx, &vertex_input)
+        } else {
+            // Lanes that draw nothing take an active lane's stream, so that `rng8` sees eight
+            // streams of one pattern (Sobol's are drawn eight at a time).
+            let active = (0..g.n).find(|&j| g.direct[j] || g.cont[j]).unwrap_or(0);
+            for j in 0..L {
+                if !(j < g.n && (g.direct[j] || g.cont[j])) {
+                    patterned[j] = patterned[active];
+                }
+            }
+            patterned
+        };
         if WHOLE {
             for j in 0..L {
                 pts.set(j, &g.vertex[j].shading_point());
@@ -457,6 +541,11 @@ fn direct_light(
     let mut dim = DIM_DIRECT;
     for (li, light) in t.lights.lights.iter().enumerate() {
         let ns = t.lights.samples_for(li, t.light_samples);
+        if let SampledLight::Emissive(e) = light {
+            emissive_rays(avx, t, q, g, pts, rng, e, li, dim, pending, shadow);
+            dim += t.light_dims(li);
+            continue;
+        }
         let (Some(al), SampledLight::Area { radiance, .. }) = (&t.area_lights[li], light) else {
             // No lane sampler for this light: each lane draws its samples itself.
             for j in 0..g.n {
