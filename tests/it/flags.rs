@@ -170,9 +170,9 @@ fn no_mis_turns_off_mis_where_emissive_triangles_light_the_scene() {
     assert!(mis.bits() == no_mis.bits(), "--no-mis changed an area light's image");
 }
 
-/// The instruction set this CPU runs for a request, from the CPU's own feature flags: AVX2
-/// (with FMA, BMI1, POPCNT) for avx2 and avx512 (the AVX2 kernels fill 256-bit lanes), SSE4.1
-/// for sse, and the best of those below a request the CPU lacks.
+/// The instruction set the BVH runs for a request, from the CPU's own feature flags: AVX2
+/// (with FMA, BMI1, POPCNT) for avx2 and avx512 (its kernels stop at AVX2), SSE4.1 for sse,
+/// and the best of those below a request the CPU lacks.
 fn effective_isa(request: &str) -> &'static str {
     let avx2 = std::arch::is_x86_feature_detected!("avx2")
         && std::arch::is_x86_feature_detected!("fma")

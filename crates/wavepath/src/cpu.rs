@@ -11,25 +11,27 @@
 pub enum Isa {
     Scalar,
     Sse,
-    /// What the CPU has ([`Isa::detect`]) resolves to at most this.
-    #[default]
     Avx2,
+    /// What the CPU has ([`Isa::detect`]) resolves to at most this. Only the shading lanes
+    /// have AVX-512 kernels (sixteen paths per group); the BVH's run at most AVX2 (8 boxes
+    /// fill a 256-bit register).
+    #[default]
+    Avx512,
 }
 
 impl Isa {
     /// The best instruction set this CPU supports.
     pub fn detect() -> Isa {
-        Isa::Avx2.effective()
+        Isa::Avx512.effective()
     }
 
-    /// The instruction set a name asks for. `avx512` is accepted and means [`Isa::Avx2`]:
-    /// there is no AVX-512 kernel (8 boxes or 8 paths fill one 256-bit register, so 512-bit
-    /// lanes would sit half empty), and the best kernels there are run instead.
+    /// The instruction set a name asks for.
     pub fn parse(s: &str) -> Option<Isa> {
         match s.trim().to_ascii_lowercase().as_str() {
             "scalar" => Some(Isa::Scalar),
             "sse" | "sse4" | "sse4.1" => Some(Isa::Sse),
-            "avx2" | "avx512" => Some(Isa::Avx2),
+            "avx2" => Some(Isa::Avx2),
+            "avx512" => Some(Isa::Avx512),
             _ => None,
         }
     }
@@ -37,9 +39,18 @@ impl Isa {
     /// The path that actually runs for this request on this CPU (never one it lacks).
     pub fn effective(self) -> Isa {
         match self {
-            Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
-            Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
+            Isa::Avx512 if Avx512::new().is_some() => Isa::Avx512,
+            Isa::Avx512 | Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
+            Isa::Avx512 | Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
             _ => Isa::Scalar,
+        }
+    }
+
+    /// [`effective`](Self::effective) for kernels whose widest version is AVX2 (the BVH's).
+    pub fn at_most_avx2(self) -> Isa {
+        match self.effective() {
+            Isa::Avx512 => Isa::Avx2,
+            isa => isa,
         }
     }
 
@@ -48,6 +59,7 @@ impl Isa {
             Isa::Scalar => "scalar",
             Isa::Sse => "sse",
             Isa::Avx2 => "avx2",
+            Isa::Avx512 => "avx512",
         }
     }
 
@@ -62,7 +74,15 @@ impl Isa {
     /// The AVX2 token, if this request allows it and the CPU has it.
     pub fn avx2(self) -> Option<Avx2> {
         match self.effective() {
-            Isa::Avx2 => Avx2::new(),
+            Isa::Avx2 | Isa::Avx512 => Avx2::new(),
+            _ => None,
+        }
+    }
+
+    /// The AVX-512 token, if this request allows it and the CPU has it.
+    pub fn avx512(self) -> Option<Avx512> {
+        match self.effective() {
+            Isa::Avx512 => Avx512::new(),
             _ => None,
         }
     }
@@ -76,6 +96,29 @@ pub struct Sse(());
 /// every AVX2 CPU has the last two, and without them a popcount is five instructions).
 #[derive(Clone, Copy, Debug)]
 pub struct Avx2(());
+
+/// Proof that the CPU has AVX-512 F, VL, DQ and BW besides everything [`Avx2`] proves
+/// (constructed only after detection).
+#[derive(Clone, Copy, Debug)]
+pub struct Avx512 {
+    pub avx2: Avx2,
+}
+
+impl Avx512 {
+    pub fn new() -> Option<Self> {
+        let avx2 = Avx2::new()?;
+        #[cfg(target_arch = "x86_64")]
+        if is_x86_feature_detected!("avx512f")
+            && is_x86_feature_detected!("avx512vl")
+            && is_x86_feature_detected!("avx512dq")
+            && is_x86_feature_detected!("avx512bw")
+        {
+            return Some(Avx512 { avx2 });
+        }
+        let _ = avx2;
+        None
+    }
+}
 
 impl Sse {
     pub fn new() -> Option<Self> {

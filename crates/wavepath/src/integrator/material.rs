@@ -217,6 +217,11 @@ impl Transport<'_> {
                 None => self.lights.infinite.radiance(ray.dir),
             };
         }
+        if hit.is_some() && emission == Vec3::ZERO && !self.lit_by_area_lights {
+            // Only an area light (not geometry) is found on the way to a surface that does
+            // not emit.
+            return Vec3::ZERO;
+        }
         let seen = match hit {
             None => Seen::Miss,
             Some(h) => Seen::Hit { t: h.t, emitter: self.emitter(h, emission) },

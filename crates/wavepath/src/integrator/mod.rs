@@ -78,6 +78,8 @@ pub struct Transport<'a> {
     tan_half_fov: (f32, f32),
     /// Per light: its sampling data when it is an area light.
     pub area_lights: Vec<Option<AreaLight>>,
+    /// Some light is an area light, which a ray can reach before the surface it hits.
+    lit_by_area_lights: bool,
     /// Per light: [`shadow_margin`] of its points.
     shadow_margins: Vec<f32>,
     /// What the glTF material extensions need per render ([`layers::LayerData`]).
@@ -187,6 +189,7 @@ impl<'a> Transport<'a> {
             })
             .collect();
         Transport {
+            lit_by_area_lights: lights.lights.iter().any(|l| matches!(l, SampledLight::Area { .. })),
             lambertian: models.iter().map(|m| matches!(m, crate::bsdf::Model::Lambert(_))).collect(),
             area_lights,
             shadow_margins,

@@ -16,8 +16,9 @@ fn image(scene: &Scene, s: &Settings) -> Vec<[u32; 3]> {
     film.pixels.iter().map(|p| p.to_array().map(f32::to_bits)).collect()
 }
 
-/// Diffuse scenes (the shading-lanes kernel), mirrors and glass (the per-path kernel), a
-/// pinhole (camera lanes) and with the default scene's spheres: each instruction set the CPU
+/// Diffuse scenes (the shading-lanes kernel, with area lights and with emissive triangles),
+/// mirrors and glass (the per-path kernel), a pinhole (camera lanes) and with the default
+/// scene's spheres: each instruction set the CPU
 /// offers gives the scalar image bit for bit, with enough light in it to mean something.
 #[test]
 fn every_instruction_set_renders_the_scalar_image() {
@@ -27,6 +28,13 @@ fn every_instruction_set_renders_the_scalar_image() {
             scenes.push((name, scene));
         }
     }
+    // The light quad as one-sided emissive triangles, under MIS (the standard dialect): the
+    // lane kernel's lights that are not area lights.
+    let mut emissive = default_scene();
+    emissive.lights.clear();
+    emissive.source.dialect = crate::cs184::Dialect::Standard;
+    emissive.materials[3].two_sided_emission = false;
+    scenes.push(("default with an emissive quad", emissive));
     for (name, scene) in &scenes {
         let mut base = Settings::default();
         base.image.width = 40;
@@ -44,7 +52,7 @@ fn every_instruction_set_renders_the_scalar_image() {
         // Each path the CPU runs, once: a request this CPU cannot honour falls back to one
         // already compared.
         let mut ran = vec![Isa::Scalar];
-        for isa in [Isa::Sse, Isa::Avx2] {
+        for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
             if ran.contains(&isa.effective()) {
                 eprintln!("{name}: {} runs as {}, compared already", isa.name(), isa.effective().name());
                 continue;
@@ -64,8 +72,9 @@ fn every_instruction_set_renders_the_scalar_image() {
 }
 
 /// The comparisons above mean something only where the SIMD paths run: on a CPU that has
-/// AVX2 (with FMA, BMI1, POPCNT) or SSE4.1, by the standard library's own detection, the
-/// requests resolve to them, and the default request takes the widest.
+/// AVX-512 (F, VL, DQ, BW), AVX2 (with FMA, BMI1, POPCNT) or SSE4.1, by the standard
+/// library's own detection, the requests resolve to them, and the default request takes
+/// the widest.
 #[test]
 fn simd_paths_run_where_the_cpu_has_them() {
     #[cfg(target_arch = "x86_64")]
@@ -74,12 +83,26 @@ fn simd_paths_run_where_the_cpu_has_them() {
             && std::is_x86_feature_detected!("fma")
             && std::is_x86_feature_detected!("bmi1")
             && std::is_x86_feature_detected!("popcnt");
+        let avx512 = avx2
+            && std::is_x86_feature_detected!("avx512f")
+            && std::is_x86_feature_detected!("avx512vl")
+            && std::is_x86_feature_detected!("avx512dq")
+            && std::is_x86_feature_detected!("avx512bw");
         if avx2 {
             assert_eq!(Isa::Avx2.effective(), Isa::Avx2);
-            assert_eq!(Isa::default().effective(), Isa::Avx2);
             assert!(Isa::parse("avx512").unwrap().avx2().is_some());
+            assert!(Isa::Avx2.avx512().is_none());
+            assert_eq!(Isa::Avx512.at_most_avx2(), Isa::Avx2);
         } else {
             eprintln!("skipped the AVX2 check: this CPU has no AVX2");
+        }
+        if avx512 {
+            assert_eq!(Isa::default().effective(), Isa::Avx512);
+            assert!(Isa::Avx512.avx512().is_some());
+        } else {
+            assert_eq!(Isa::Avx512.effective(), if avx2 { Isa::Avx2 } else { Isa::Avx512.effective() });
+            assert!(Isa::Avx512.avx512().is_none());
+            eprintln!("skipped the AVX-512 check: this CPU has no AVX-512");
         }
         if std::is_x86_feature_detected!("sse4.1") {
             assert_eq!(Isa::Sse.effective(), Isa::Sse);

@@ -69,7 +69,7 @@ impl Bvh {
 
     /// The same tree with another box-test path (falls back to what the CPU has).
     pub fn with_isa(mut self, isa: Isa) -> Bvh {
-        self.isa = isa.effective();
+        self.isa = isa.at_most_avx2();
         self.tokens = Tokens::of(isa);
         self
     }

@@ -1,4 +1,5 @@
-//! Shade for the Lambertian hits of a wave, eight paths at a time (the diffuse kind's
+//! Shade for the Lambertian hits of a wave, eight paths at a time with AVX2 and sixteen with
+//! AVX-512 (the diffuse kind's
 //! kernel; [`super::shade`] sorts the paths by kind first). What is per path and irregular
 //! (the hit's surface point or whole vertex, the random numbers, a light that has no lane
 //! sampler) is gathered or computed one lane at a time; the area lights' samples, offsets,
@@ -17,9 +18,9 @@
 //! `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
 
 use super::Features;
-use super::Lanes;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
-use crate::cpu::Avx2;
+use super::{Lanes, ShadeWidth};
+use crate::cpu::{Avx2, Avx512};
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
@@ -29,11 +30,8 @@ use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
-/// Paths per group.
-const L: usize = 8;
-
 /// [`super::shade::shade`] for the Lambertian hits listed in `idx` (paths that hit, whose
-/// material is Lambertian), eight at a time.
+/// material is Lambertian), eight or sixteen at a time.
 pub fn shade_diffuse<F: Features>(
     lanes: Lanes,
     t: &Transport,
@@ -42,10 +40,12 @@ pub fn shade_diffuse<F: Features>(
     shadow: &mut ShadowQueue,
 ) {
     #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = lanes.shade {
-        // SAFETY: the token proves the CPU has AVX2 and FMA.
-        unsafe { shade_avx2::<F>(avx, t, q, idx, shadow) };
-        return;
+    match lanes.shade {
+        // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
+        Some(ShadeWidth::Sixteen(avx512)) => return unsafe { shade_avx512::<F>(avx512, t, q, idx, shadow) },
+        // SAFETY: as above.
+        Some(ShadeWidth::Eight(avx2)) => return unsafe { shade_avx2::<F>(avx2, t, q, idx, shadow) },
+        None => {}
     }
     let _ = lanes;
     for &i in idx {
@@ -59,6 +59,25 @@ pub fn shade_diffuse<F: Features>(
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn shade_avx2<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
+    shade_width::<F, 8>(avx, t, q, idx, shadow)
+}
+
+/// Sixteen paths per group: the lane-parallel loops fill 512-bit registers.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+fn shade_avx512<F: Features>(avx: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
+    shade_width::<F, 16>(avx.avx2, t, q, idx, shadow)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn shade_width<F: Features, const L: usize>(
+    avx: Avx2,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+) {
     // Whole vertices (`Transport::vertex`, one lane at a time) where the surface has more than
     // a position and normals to reconstruct; the lane-parallel reconstruction elsewhere.
     let whole = t.textures.any()
@@ -66,22 +85,59 @@ fn shade_avx2<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u
         || t.layers.any_relief
         || (F::NON_DIFFUSE && t.layers.volumes);
     if whole {
-        shade_groups::<F, true>(avx, t, q, idx, shadow)
+        shade_groups::<F, true, L>(avx, t, q, idx, shadow)
     } else {
-        shade_groups::<F, false>(avx, t, q, idx, shadow)
+        shade_groups::<F, false, L>(avx, t, q, idx, shadow)
     }
 }
 
+/// The streams of `L` vertices from their inputs, eight at a time ([`rng8`]).
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn streams<const L: usize>(avx: Avx2, inputs: &[u64; L]) -> [Sampler; L] {
+    let mut out = [Sampler::default(); L];
+    for c in (0..L).step_by(rng8::LANES) {
+        let part: &[u64; rng8::LANES] = inputs[c..c + rng8::LANES].try_into().expect("groups of eight");
+        out[c..c + rng8::LANES].copy_from_slice(&rng8::for_vertex_x8(avx, part));
+    }
+    out
+}
+
+/// [`rng8::next_2d_x8`] for `L` streams.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn next_2d<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
+    let (mut a, mut b) = ([0.0; L], [0.0; L]);
+    for c in (0..L).step_by(rng8::LANES) {
+        let part: &[Sampler; rng8::LANES] = s[c..c + rng8::LANES].try_into().expect("groups of eight");
+        let (pa, pb) = rng8::next_2d_x8(avx, part, dim);
+        a[c..c + rng8::LANES].copy_from_slice(&pa);
+        b[c..c + rng8::LANES].copy_from_slice(&pb);
+    }
+    (a, b)
+}
+
+/// [`rng8::next_f32_x8`] for `L` streams.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn next_f32<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> [f32; L] {
+    let mut a = [0.0; L];
+    for c in (0..L).step_by(rng8::LANES) {
+        let part: &[Sampler; rng8::LANES] = s[c..c + rng8::LANES].try_into().expect("groups of eight");
+        a[c..c + rng8::LANES].copy_from_slice(&rng8::next_f32_x8(avx, part, dim));
+    }
+    a
+}
+
 /// The shading points of a group, one array per component.
-#[derive(Default)]
-struct Points {
+struct Points<const L: usize> {
     p: [[f32; L]; 3],
     e: [[f32; L]; 3],
     ng: [[f32; L]; 3],
     ns: [[f32; L]; 3],
 }
 
-impl Points {
+impl<const L: usize> Points<L> {
     #[inline(always)]
     fn set(&mut self, j: usize, s: &ShadingPoint) {
         for (a, v) in [(&mut self.p, s.p), (&mut self.e, s.p_error), (&mut self.ng, s.ng), (&mut self.ns, s.ns)] {
@@ -97,10 +153,16 @@ impl Points {
     }
 }
 
+impl<const L: usize> Default for Points<L> {
+    fn default() -> Self {
+        let z = [[0.0; L]; 3];
+        Points { p: z, e: z, ng: z, ns: z }
+    }
+}
+
 /// What the surface points of a group are reconstructed from: a triangle's corners (and
 /// corner normals) and barycentrics, or a sphere and the ray's hit point on it.
-#[derive(Default)]
-struct Surfaces {
+struct Surfaces<const L: usize> {
     corner: [[[f32; L]; 3]; 3],
     normal: [[[f32; L]; 3]; 3],
     u: [f32; L],
@@ -112,19 +174,36 @@ struct Surfaces {
     triangle: [bool; L],
 }
 
+impl<const L: usize> Default for Surfaces<L> {
+    fn default() -> Self {
+        let z = [[0.0; L]; 3];
+        Surfaces {
+            corner: [z; 3],
+            normal: [z; 3],
+            u: [0.0; L],
+            v: [0.0; L],
+            center: z,
+            radius: [0.0; L],
+            hit: z,
+            dir: z,
+            triangle: [false; L],
+        }
+    }
+}
+
 #[inline(always)]
-fn put(a: &mut [[f32; L]; 3], j: usize, v: Vec3) {
+fn put<const L: usize>(a: &mut [[f32; L]; 3], j: usize, v: Vec3) {
     a[0][j] = v.x;
     a[1][j] = v.y;
     a[2][j] = v.z;
 }
 
 #[inline(always)]
-fn get(a: &[[f32; L]; 3], j: usize) -> Vec3 {
+fn get<const L: usize>(a: &[[f32; L]; 3], j: usize) -> Vec3 {
     Vec3::new(a[0][j], a[1][j], a[2][j])
 }
 
-impl Surfaces {
+impl<const L: usize> Surfaces<L> {
     /// Gathers lane `j`'s hit (prim `prim`, on `ray`); `normals` is the mesh's corner
     /// normals, looked up once per stage rather than once per corner.
     #[inline(always)]
@@ -179,26 +258,25 @@ impl Surfaces {
 
 /// Reconstructs the shading points of all lanes (lane-parallel).
 #[inline(always)]
-fn surface_points(s: &Surfaces, normals: bool, spheres: bool, out: &mut Points) {
+fn surface_points<const L: usize>(s: &Surfaces<L>, normals: bool, spheres: bool, out: &mut Points<L>) {
     // Plain loops, no closures: a closure may be compiled out of line, without AVX2.
     match (normals, spheres) {
-        (true, true) => points_of::<true, true>(s, out),
-        (true, false) => points_of::<true, false>(s, out),
-        (false, true) => points_of::<false, true>(s, out),
-        (false, false) => points_of::<false, false>(s, out),
+        (true, true) => points_of::<true, true, L>(s, out),
+        (true, false) => points_of::<true, false, L>(s, out),
+        (false, true) => points_of::<false, true, L>(s, out),
+        (false, false) => points_of::<false, false, L>(s, out),
     }
 }
 
 #[inline(always)]
-fn points_of<const NORMALS: bool, const SPHERES: bool>(s: &Surfaces, out: &mut Points) {
+fn points_of<const NORMALS: bool, const SPHERES: bool, const L: usize>(s: &Surfaces<L>, out: &mut Points<L>) {
     for j in 0..L {
         out.set(j, &s.point::<NORMALS, SPHERES>(j));
     }
 }
 
 /// A group's rays, one array per component.
-#[derive(Default)]
-struct Rays {
+struct Rays<const L: usize> {
     o: [[f32; L]; 3],
     d: [[f32; L]; 3],
     tmax: [f32; L],
@@ -208,7 +286,14 @@ struct Rays {
     valid: [bool; L],
 }
 
-impl Rays {
+impl<const L: usize> Default for Rays<L> {
+    fn default() -> Self {
+        let z = [[0.0; L]; 3];
+        Rays { o: z, d: z, tmax: [0.0; L], g: [0.0; L], w: [Vec3::ZERO; L], valid: [false; L] }
+    }
+}
+
+impl<const L: usize> Rays<L> {
     #[inline(always)]
     fn set(&mut self, j: usize, r: &Ray) {
         for (a, v) in [(&mut self.o, r.origin), (&mut self.d, r.dir)] {
@@ -227,7 +312,7 @@ impl Rays {
 
 /// `u` where `used`, else 0.5 (a lane whose sample is not taken computes on a harmless value).
 #[inline(always)]
-fn unused_half(u: [f32; L], used: &[bool; L]) -> [f32; L] {
+fn unused_half<const L: usize>(u: [f32; L], used: &[bool; L]) -> [f32; L] {
     let mut out = [0.5; L];
     for j in 0..L {
         if used[j] {
@@ -239,7 +324,7 @@ fn unused_half(u: [f32; L], used: &[bool; L]) -> [f32; L] {
 
 /// The shadow rays toward light `l` of all lanes (lane-parallel).
 #[inline(always)]
-fn area_rays(pts: &Points, l: &AreaLight, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
+fn area_rays<const L: usize>(pts: &Points<L>, l: &AreaLight, ua: &[f32; L], ub: &[f32; L], out: &mut Rays<L>) {
     for j in 0..L {
         let r = area_ray(&pts.get(j), l, ua[j], ub[j]);
         out.set(j, &r.ray);
@@ -250,7 +335,7 @@ fn area_rays(pts: &Points, l: &AreaLight, ua: &[f32; L], ub: &[f32; L], out: &mu
 
 /// The continuation rays of all lanes (lane-parallel).
 #[inline(always)]
-fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
+fn cosine_rays<const L: usize>(pts: &Points<L>, ua: &[f32; L], ub: &[f32; L], out: &mut Rays<L>) {
     for j in 0..L {
         let r = cosine_ray(&pts.get(j), ua[j], ub[j]);
         out.set(j, &r);
@@ -263,17 +348,17 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
 #[cfg(target_arch = "x86_64")]
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn emissive_rays(
+fn emissive_rays<const L: usize>(
     avx: Avx2,
     t: &Transport,
     q: &PathQueue,
-    g: &Group,
-    pts: &Points,
+    g: &Group<L>,
+    pts: &Points<L>,
     rng: &[Sampler; L],
     e: &EmissiveTriangles,
     li: usize,
     mut dim: u32,
-    pending: &mut Vec<Rays>,
+    pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
     let ns = t.lights.samples_for(li, t.light_samples);
@@ -287,8 +372,8 @@ fn emissive_rays(
     }
     let first = *e.triangle(0);
     for p in pending.iter_mut().take(ns as usize) {
-        let (ua, ub) = rng8::next_2d_x8(avx, rng, dim);
-        let uc = rng8::next_f32_x8(avx, rng, dim + 1);
+        let (ua, ub) = next_2d(avx, rng, dim);
+        let uc = next_f32(avx, rng, dim + 1);
         dim += 2;
         let mut tri = [first; L];
         let mut point = [first.a; L];
@@ -344,7 +429,7 @@ const NO_VERTEX: Vertex = Vertex {
 };
 
 /// What a lane's gather leaves for the lane-parallel part.
-struct Group {
+struct Group<const L: usize> {
     /// Path index of each lane.
     path: [usize; L],
     /// Lanes in use (the first `n`).
@@ -376,7 +461,7 @@ fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
 /// at a time (hence the token). `WHOLE`: gather whole vertices (see `shade_avx2`).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features, const WHOLE: bool>(
+fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
     avx: Avx2,
     t: &Transport,
     q: &mut PathQueue,
@@ -385,13 +470,13 @@ fn shade_groups<F: Features, const WHOLE: bool>(
 ) {
     let sees_emission = t.counts_emission();
     let arrivals = F::NON_DIFFUSE || t.mis;
-    let mut pts = Points::default();
-    let mut rays = Rays::default();
-    let mut surf = Surfaces::default();
+    let mut pts = Points::<L>::default();
+    let mut rays = Rays::<L>::default();
+    let mut surf = Surfaces::<L>::default();
     let corner_normals = t.scene.mesh.normals.as_deref();
     let normals = corner_normals.is_some();
     let spheres = !t.scene.spheres.is_empty();
-    let mut pending: Vec<Rays> = Vec::new();
+    let mut pending: Vec<Rays<L>> = Vec::new();
     let hashed = t.pattern.kind == SamplerKind::Independent;
     let mut g = Group {
         path: [0; L],
@@ -454,7 +539,7 @@ fn shade_groups<F: Features, const WHOLE: bool>(
             continue;
         }
         let rng = if hashed {
-            rng8::for_vertex_x8(avx, &vertex_input)
+            streams(avx, &vertex_input)
         } else {
             // Lanes that draw nothing take an active lane's stream, so that `rng8` sees eight
             // streams of one pattern (Sobol's are drawn eight at a time).
@@ -482,9 +567,9 @@ fn shade_groups<F: Features, const WHOLE: bool>(
             direct_light(avx, t, q, &g, &pts, &rng, &mut pending, shadow);
         }
         if F::INDIRECT && g.cont.iter().any(|&c| c) {
-            let (ua, ub) = rng8::next_2d_x8(avx, &rng, 0);
+            let (ua, ub) = next_2d(avx, &rng, 0);
             let (ua, ub) = (unused_half(ua, &g.cont), unused_half(ub, &g.cont));
-            let rr = if F::ROULETTE { rng8::next_f32_x8(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
+            let rr = if F::ROULETTE { next_f32(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..g.n {
                 let r = rays.ray(j);
@@ -517,14 +602,14 @@ fn shade_groups<F: Features, const WHOLE: bool>(
 #[cfg(target_arch = "x86_64")]
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn direct_light(
+fn direct_light<const L: usize>(
     avx: Avx2,
     t: &Transport,
     q: &PathQueue,
-    g: &Group,
-    pts: &Points,
+    g: &Group<L>,
+    pts: &Points<L>,
     rng: &[Sampler; L],
-    pending: &mut Vec<Rays>,
+    pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
     if t.hemisphere {
@@ -569,7 +654,7 @@ fn direct_light(
             pending.resize_with(ns as usize, Rays::default);
         }
         for p in pending.iter_mut().take(ns as usize) {
-            let (ua, ub) = rng8::next_2d_x8(avx, rng, dim);
+            let (ua, ub) = next_2d(avx, rng, dim);
             let (ua, ub) = (unused_half(ua, &g.direct), unused_half(ub, &g.direct));
             dim += 1;
             area_rays(pts, al, &ua, &ub, p);
@@ -620,8 +705,18 @@ mod tests {
     /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
     /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
     fn compare<F: crate::integrator::wavefront::Features>(scene: &Scene, s: &Settings, avx: Avx2) -> usize {
+        let mut widths = vec![ShadeWidth::Eight(avx)];
+        widths.extend(Avx512::new().map(ShadeWidth::Sixteen));
+        widths.into_iter().map(|w| compare_width::<F>(scene, s, w)).min().unwrap_or(0)
+    }
+
+    fn compare_width<F: crate::integrator::wavefront::Features>(
+        scene: &Scene,
+        s: &Settings,
+        width: ShadeWidth,
+    ) -> usize {
         let t = Transport::new(scene, s);
-        let lanes = Lanes { camera: None, shade: Some(avx) };
+        let lanes = Lanes { camera: None, shade: Some(width) };
         let mut kinds = shade::Kinds::default();
         let accel = BruteForce::new(scene);
         let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();

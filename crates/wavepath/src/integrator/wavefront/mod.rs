@@ -27,7 +27,7 @@ pub mod shadow;
 pub mod traverse;
 
 use crate::accel::{Intersector, TraceCounters};
-use crate::cpu::{Avx2, Isa};
+use crate::cpu::{Avx2, Avx512, Isa};
 use crate::effects::Effects;
 use crate::film::{Accumulator, PixelSums};
 use crate::integrator::Transport;
@@ -111,15 +111,22 @@ macro_rules! with_kernel {
     };
 }
 
-/// Which stages run eight paths in lanes (AVX2), decided once per render beside the kernel:
-/// the token when the stage's lane kernel runs, `None` when its one-path-at-a-time kernel does.
+/// How many paths the shading lanes hold: eight in 256-bit registers, sixteen in 512-bit ones.
+#[derive(Clone, Copy, Debug)]
+pub enum ShadeWidth {
+    Eight(Avx2),
+    Sixteen(Avx512),
+}
+
+/// Which stages run paths in lanes, decided once per render beside the kernel: the token
+/// when the stage's lane kernel runs, `None` when its one-path-at-a-time kernel does.
 #[derive(Clone, Copy, Debug)]
 pub struct Lanes {
     /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers)
     /// and independent numbers (the lanes hash them).
     pub camera: Option<Avx2>,
-    /// Shading of the Lambertian hits, eight paths at a time ([`lanes`]).
-    pub shade: Option<Avx2>,
+    /// Shading of the Lambertian hits, eight or sixteen paths at a time ([`lanes`]).
+    pub shade: Option<ShadeWidth>,
 }
 
 impl Lanes {
@@ -129,7 +136,7 @@ impl Lanes {
         let avx2 = isa.avx2();
         Lanes {
             camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent),
-            shade: avx2,
+            shade: isa.avx512().map(ShadeWidth::Sixteen).or(avx2.map(ShadeWidth::Eight)),
         }
     }
 }
