@@ -10,6 +10,7 @@
 pub mod area;
 pub mod layers;
 mod material;
+pub mod plan;
 
 pub mod recursive;
 pub mod wavefront;
@@ -150,7 +151,9 @@ pub struct DirectRay {
 }
 
 impl<'a> Transport<'a> {
-    pub fn new(scene: &'a Scene, settings: &Settings) -> Self {
+    /// The transport of `scene` under `settings`, whose effects (evaluated once per render,
+    /// by the [`plan`](plan::RenderPlan)) are `effects`.
+    pub fn new(scene: &'a Scene, settings: &Settings, effects: &crate::effects::Effects) -> Self {
         let mut lights = LightSet::new(scene);
         if settings.cs184.light_pdf {
             lights.use_cs184_area_pdf();
@@ -202,7 +205,7 @@ impl<'a> Transport<'a> {
                 .collect(),
             models,
             non_diffuse,
-            mis: crate::effects::Effects::of(scene, settings).mis,
+            mis: effects.mis,
             textures: Textures::new(scene),
             lights,
             max_depth,

@@ -7,7 +7,6 @@ use super::{DirectRay, Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::{Accumulator, PixelSums};
 use crate::geometry::Ray;
-use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::stats::RenderStats;
 use glam::Vec3;
@@ -104,28 +103,18 @@ impl PathTracer<'_, '_> {
     }
 }
 
-/// Renders with the recursive reference; `progress` is told how many samples finished.
-pub fn render_recursive(
-    scene: &Scene,
-    accel: &dyn Intersector,
-    settings: &Settings,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (Accumulator, RenderStats) {
-    let never = AtomicBool::new(false);
-    render_recursive_until(scene, accel, settings, progress, &never).expect("nothing sets the stop flag")
-}
-
-/// As [`render_recursive`], but gives up (`None`) once `stop` is set: rows not yet started
-/// are skipped, so the caller waits at most one row per thread.
+/// Renders with the recursive reference: the image part `settings` covers (its cell and
+/// sample range) with `transport` (its render plan's); `progress` is told how many samples
+/// finished. Gives up (`None`) once `stop` is set: rows not yet started are skipped, so the
+/// caller waits at most one row per thread.
 pub fn render_recursive_until(
-    scene: &Scene,
-    accel: &dyn Intersector,
+    transport: &Transport,
     settings: &Settings,
+    accel: &dyn Intersector,
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Option<(Accumulator, RenderStats)> {
     let start = Instant::now();
-    let transport = Transport::new(scene, settings);
     let (w, h) = (settings.image.width, settings.image.height);
     let region = settings.region();
     let spp = settings.sampling.spp.max(1);
@@ -153,7 +142,7 @@ pub fn render_recursive_until(
                         break;
                     }
                     let ray = transport.camera_ray(x as u32, y as u32, w, h, i, spp);
-                    let mut tracer = PathTracer { transport: &transport, accel, pixel, sample: i, st };
+                    let mut tracer = PathTracer { transport, accel, pixel, sample: i, st };
                     let l = tracer.radiance(&ray);
                     st = tracer.st;
                     sums.add(l);

@@ -125,7 +125,7 @@ mod tests {
             s.image.width = w;
             s.image.height = h;
             s.sampling.spp = spp;
-            let t = Transport::new(&scene, &s);
+            let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
             let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
             let wave = Wave { pixels: &pixels, base: 2, batch };
             for lanes in [None, crate::cpu::Avx2::new()] {

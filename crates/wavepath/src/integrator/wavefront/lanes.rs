@@ -417,7 +417,7 @@ mod tests {
             s.paths.shading = Shading::Global;
             s.paths.roulette.kind = if rr_throughput { RouletteKind::Throughput } else { RouletteKind::Fixed };
             s.paths.roulette.start_depth = 1 + rr_throughput as u32;
-            let t = Transport::new(&scene, &s);
+            let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
             assert!(can_shade(&t, K::NON_DIFFUSE));
             let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
             let accel = BruteForce::new(&scene);
