@@ -34,15 +34,15 @@ impl PathTracer<'_, '_> {
     fn radiance(&mut self, ray: &Ray) -> Vec3 {
         self.st.camera += 1;
         let Some(hit) = self.accel.closest_hit(ray, &mut self.st.trace) else {
-            return if self.transport.counts_emission() {
-                self.transport.lights.background_toward(ray.dir)
+            return if self.transport.rules.counts_emission() {
+                self.transport.lights.set.background_toward(ray.dir)
             } else {
                 Vec3::ZERO
             };
         };
         let v = self.transport.vertex(ray, &hit);
-        let mut l = if self.transport.counts_emission() { v.emission } else { Vec3::ZERO };
-        if self.transport.max_depth >= 1 {
+        let mut l = if self.transport.rules.counts_emission() { v.emission } else { Vec3::ZERO };
+        if self.transport.rules.max_depth >= 1 {
             l += self.at_least_one_bounce(ray, &v, 0, Vec3::ONE);
         }
         l
@@ -51,16 +51,16 @@ impl PathTracer<'_, '_> {
     /// Light leaving `v` (the vertex at `depth`) toward `ray`'s origin, for a path whose
     /// throughput up to `v` is `throughput` (what throughput roulette plays with).
     fn at_least_one_bounce(&mut self, ray: &Ray, v: &Vertex, depth: u32, throughput: Vec3) -> Vec3 {
-        let rng = self.transport.sampler(self.pixel, self.sample, depth);
+        let rng = self.transport.streams.sampler(self.pixel, self.sample, depth);
         let mut l = Vec3::ZERO;
-        let sh = self.transport.non_diffuse.then(|| self.transport.shading(v, ray.dir));
-        if self.transport.counts_direct(depth) {
+        let sh = self.transport.materials.non_diffuse.then(|| self.transport.shading(v, ray.dir));
+        if self.transport.rules.counts_direct(depth) {
             let (transport, accel) = (self.transport, self.accel);
             let mut shadow = 0;
             let mut trace = self.st.trace;
             let mut add = |d: DirectRay| {
                 shadow += 1;
-                if transport.hemisphere {
+                if transport.rules.hemisphere {
                     let hit = accel.closest_hit(&d.ray, &mut trace);
                     l += d.weight * transport.probe_radiance(&d.ray, hit.as_ref());
                 } else if !accel.any_hit(&d.ray, &mut trace) {
@@ -83,8 +83,8 @@ impl PathTracer<'_, '_> {
             match self.accel.closest_hit(&ray, &mut self.st.trace) {
                 Some(hit) => {
                     let next = self.transport.vertex(&ray, &hit);
-                    let w = if self.transport.layers.volumes {
-                        w * self.transport.layers.absorbed(&next, hit.t)
+                    let w = if self.transport.materials.layers.volumes {
+                        w * self.transport.materials.layers.absorbed(&next, hit.t)
                     } else {
                         w
                     };

@@ -31,13 +31,13 @@ const L: usize = 8;
 /// per render, with the kernel (`super::Lanes`).
 pub fn can_shade(t: &Transport, non_diffuse: bool) -> bool {
     !non_diffuse
-        && !t.hemisphere
-        && !t.mis
-        && t.two_sided_emission.iter().all(|&two| two)
-        && !t.textures.any()
-        && !t.layers.any_relief
+        && !t.rules.hemisphere
+        && !t.rules.mis
+        && t.materials.two_sided_emission.iter().all(|&two| two)
+        && !t.materials.textures.any()
+        && !t.materials.layers.any_relief
         && t.scene.mesh.colors.is_none()
-        && t.area_lights.iter().all(Option::is_some)
+        && t.lights.area_lights.iter().all(Option::is_some)
 }
 
 /// [`super::shade::shade`] eight paths at a time (for renders where [`can_shade`] holds).
@@ -245,7 +245,7 @@ fn cosine_rays(pts: &Points, ua: &[f32; L], ub: &[f32; L], out: &mut Rays) {
 #[inline(always)]
 fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
     shadow.clear();
-    let sees_emission = t.counts_emission();
+    let sees_emission = t.rules.counts_emission();
     let n = q.len();
     let mut pts = Points::default();
     let mut rays = Rays::default();
@@ -254,7 +254,7 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
     let normals = corner_normals.is_some();
     let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays> = Vec::new();
-    let hashed = t.pattern.kind == SamplerKind::Independent;
+    let hashed = t.streams.pattern.kind == SamplerKind::Independent;
     for base in (0..n).step_by(L) {
         let m = (n - base).min(L);
         let mut vertex_input = [0u64; L];
@@ -269,13 +269,13 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
             q.alive[i] = false;
             let Some(hit) = q.hit[i] else {
                 if F::ENVIRONMENT && depth == 0 && sees_emission {
-                    q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
+                    q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
                 }
                 continue;
             };
-            let m = t.material_of(hit.prim);
+            let m = t.materials.material_of(hit.prim);
             if F::EMISSION && depth == 0 && sees_emission {
-                q.radiance[i] += t.emission[m];
+                q.radiance[i] += t.materials.emission[m];
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;
@@ -283,13 +283,13 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
             // As `Transport::vertex_sampler`, hashed for all lanes below.
             vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
             if !hashed {
-                patterned[j] = t.vertex_sampler(q.key[i], depth);
+                patterned[j] = t.streams.vertex_sampler(q.key[i], depth);
             }
             surf.set(t, corner_normals, j, &q.ray[i], &hit);
-            albedo[j] = t.albedo[m];
+            albedo[j] = t.materials.albedo[m];
             // As `Transport::direct_rays` and `Transport::scatter` decide.
-            direct[j] = F::DIRECT && t.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
-            cont[j] = F::INDIRECT && t.continues(depth) && albedo[j] != Vec3::ZERO;
+            direct[j] = F::DIRECT && t.rules.counts_direct(depth) && albedo[j] * FRAC_1_PI != Vec3::ZERO;
+            cont[j] = F::INDIRECT && t.rules.continues(depth) && albedo[j] != Vec3::ZERO;
         }
         if !direct.iter().chain(&cont).any(|&b| b) {
             continue;
@@ -299,11 +299,11 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
         surface_points(&surf, normals, spheres, &mut pts);
         if F::DIRECT && direct.iter().any(|&d| d) {
             let mut dim = DIM_DIRECT;
-            for (li, light) in t.lights.lights.iter().enumerate() {
-                let (Some(al), SampledLight::Area { radiance, .. }) = (&t.area_lights[li], light) else {
+            for (li, light) in t.lights.set.lights.iter().enumerate() {
+                let (Some(al), SampledLight::Area { radiance, .. }) = (&t.lights.area_lights[li], light) else {
                     unreachable!("the lane kernel runs only with area lights")
                 };
-                let ns = t.lights.samples_for(li, t.light_samples);
+                let ns = t.lights.set.samples_for(li, t.rules.light_samples);
                 let mut c = [Vec3::ZERO; L];
                 for j in 0..L {
                     c[j] = albedo[j] * FRAC_1_PI / ns as f32 * *radiance;
@@ -356,8 +356,8 @@ fn shade_groups<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, shadow
                     q.depth[i] = depth + 1;
                     q.alive[i] = true;
                     // As `super::shade::roulette`.
-                    if F::ROULETTE && t.plays_roulette(depth) {
-                        match t.roulette_with(rr[j], q.throughput[i]) {
+                    if F::ROULETTE && t.rules.plays_roulette(depth) {
+                        match t.rules.roulette_with(rr[j], q.throughput[i]) {
                             Some(f) => q.throughput[i] *= f,
                             None => q.alive[i] = false,
                         }

@@ -127,7 +127,8 @@ impl Lanes {
     pub fn of(t: &Transport, effects: &Effects, isa: Isa) -> Lanes {
         let avx2 = isa.avx2();
         Lanes {
-            camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent),
+            camera: avx2
+                .filter(|_| t.camera.pinhole() && t.streams.pattern.kind == crate::sampling::SamplerKind::Independent),
             shade: avx2.filter(|_| lanes::can_shade(t, effects.non_diffuse)),
         }
     }

@@ -24,36 +24,36 @@ pub fn shade<F: Features>(t: &Transport, lanes: Option<Avx2>, q: &mut PathQueue,
 /// [`shade`] one path at a time (any features; the reference for the lane kernel).
 pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
     shadow.clear();
-    let sees_emission = t.counts_emission();
+    let sees_emission = t.rules.counts_emission();
     for i in 0..q.len() {
         let depth = q.depth[i];
         q.alive[i] = false;
         let Some(hit) = q.hit[i] else {
             if F::ENVIRONMENT && depth == 0 && sees_emission {
-                q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
+                q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
             }
-            if (F::NON_DIFFUSE || t.mis) && depth > 0 {
+            if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
                 q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
             }
             continue;
         };
         let v = t.vertex(&q.ray[i], &hit);
-        if F::NON_DIFFUSE && t.layers.volumes {
-            q.throughput[i] *= t.layers.absorbed(&v, hit.t);
+        if F::NON_DIFFUSE && t.materials.layers.volumes {
+            q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
         }
         if F::EMISSION && depth == 0 && sees_emission {
             q.radiance[i] += v.emission;
         }
-        if (F::NON_DIFFUSE || t.mis) && depth > 0 {
+        if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
             q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
         }
         if !F::DIRECT && !F::INDIRECT {
             continue;
         }
-        let rng = t.vertex_sampler(q.key[i], depth);
+        let rng = t.streams.vertex_sampler(q.key[i], depth);
         if F::NON_DIFFUSE {
             let sh = t.shading(&v, q.ray[i].dir);
-            if F::DIRECT && t.counts_direct(depth) {
+            if F::DIRECT && t.rules.counts_direct(depth) {
                 let tp = q.throughput[i];
                 t.direct_rays_shaded(&v, &sh, depth, rng, |d| {
                     shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
@@ -71,7 +71,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
             }
             continue;
         }
-        if F::DIRECT && t.counts_direct(depth) {
+        if F::DIRECT && t.rules.counts_direct(depth) {
             let tp = q.throughput[i];
             t.direct_rays(&v, depth, rng, |d| {
                 shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
@@ -96,7 +96,7 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
 #[inline(always)]
 pub(super) fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
     if F::ROULETTE {
-        match t.roulette(depth, rng, q.throughput[i]) {
+        match t.rules.roulette(depth, rng, q.throughput[i]) {
             Some(f) => q.throughput[i] *= f,
             None => q.alive[i] = false,
         }
