@@ -4,10 +4,11 @@ use super::RenderArgs;
 use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::AtomicBool;
 use std::time::Instant;
-use wavepath::Effects;
 use wavepath::RenderStats;
 use wavepath::Settings;
+use wavepath::{Extent, RenderPlan};
 use wavepath::{LoadOptions, default_scene};
 use wavepath::{Scene, read_camera_file};
 
@@ -66,7 +67,9 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     if s.accel.use_bvh {
         super::check_build_memory(&scene, s.accel.bvh.leaves, a.max_memory)?;
     }
-    let effects = Effects::of(&scene, &s);
+    // One plan for the render: the effects logged here are the ones it renders with.
+    let plan = RenderPlan::new(&scene, &s);
+    let effects = plan.effects();
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
     }
@@ -97,7 +100,8 @@ pub fn run(a: &RenderArgs) -> Result<()> {
                 b.inc(n);
             }
         };
-        let result = wavepath::render_with_progress(&scene, accel.as_ref(), &s, &tick)?;
+        let never = AtomicBool::new(false);
+        let result = wavepath::render_plan(&plan, accel.as_ref(), Extent::of(&s), &tick, &never)?;
         if let Some(b) = &bar {
             b.finish_and_clear();
         }
@@ -118,7 +122,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     }
     eprintln!("[wavepath] Wrote {}", out.display());
     if let Some(p) = &a.stats {
-        let json = wavepath::stats_json(&scene, &s, &effects, &build, &stats);
+        let json = wavepath::stats_json(&scene, &s, effects, &build, &stats);
         write_atomic(p, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     let _: &RenderStats = &stats;

@@ -9,13 +9,14 @@
 use super::controls::Change;
 use super::orbit::Orbit;
 use glam::Vec3;
+use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
-use wavepath::Effects;
 use wavepath::RouletteKind;
 use wavepath::{Accumulator, Film, Tonemap};
 use wavepath::{Bvh, Intersector};
 use wavepath::{Environment, Scene};
+use wavepath::{Extent, RenderPlan};
 use wavepath::{Settings, Shading};
 
 /// One published image and the figures shown beside it.
@@ -152,11 +153,14 @@ impl Session {
     /// Renders until [`stop`](Self::stop): the viewer's one render thread.
     pub fn run(&self, mut scene: Scene, bvh: &Bvh) {
         let environment = scene.env.clone();
+        let never = AtomicBool::new(false);
         let mut seq = 0u64;
         let mut shown = 0u64;
         let mut acc = Accumulator::new(1, 1);
         // The generation's coarse image, shown where the first pass has not been yet.
         let mut coarse: Option<Film> = None;
+        // The generation's render plan, built once and reused by every band of every pass.
+        let mut plan: Option<RenderPlan> = None;
         // Samples every pixel has (completed passes); the current pass renders band `band` of
         // `bands`, and has taken `pass_s` seconds so far.
         let mut taken = 0u32;
@@ -176,15 +180,18 @@ impl Session {
                 guard.clone()
             };
             let s = &st.settings;
-            scene.camera = st.orbit.camera;
-            scene.set_environment(if st.environment { environment.clone() } else { Environment::None });
             let fresh = st.generation != shown;
             if fresh {
+                // The scene changes with the generation: the old plan (which reads it) goes first.
+                plan = None;
+                scene.camera = st.orbit.camera;
+                scene.set_environment(if st.environment { environment.clone() } else { Environment::None });
                 shown = st.generation;
                 acc = Accumulator::new(s.image.width, s.image.height);
                 (taken, band, pass_s, coarse) = (0, 0, 0.0, None);
                 totals = Totals::default();
-                // A coarse image at once: a quarter of the resolution, one sample.
+                // A coarse image at once: a quarter of the resolution, one sample, a one-off
+                // render with its own settings and camera.
                 let (w, h) = ((s.image.width / 4).max(1), (s.image.height / 4).max(1));
                 let mut quick = s.clone();
                 quick.image.width = w;
@@ -194,47 +201,48 @@ impl Session {
                 quick.sampling.sample_range = None;
                 scene.camera.fit_to(w as f32, h as f32);
                 let t = Instant::now();
-                if let Ok(out) = wavepath::render_with_progress(&scene, bvh, &quick, &|_| {}) {
+                let quick_out = wavepath::render_with_progress(&scene, bvh, &quick, &|_| {});
+                let quick_s = t.elapsed();
+                // The plan of every pass: the full resolution's camera, all samples at once
+                // per pixel (no adaptive batches).
+                scene.camera = st.orbit.camera;
+                scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
+                let mut full = s.clone();
+                full.sampling.adaptive = None;
+                full.sampling.sample_range = None;
+                let p = plan.insert(RenderPlan::new(&scene, &full));
+                if let Ok(out) = quick_out {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
-                    let estimate = t.elapsed().as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.sampling.spp) as f64;
+                    let estimate = quick_s.as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.sampling.spp) as f64;
                     bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
-                    totals.add(&out.stats, t.elapsed());
+                    totals.add(&out.stats, quick_s);
                     seq += 1;
-                    let info = Self::info(&st, &scene, bvh, &totals, 0, (w, h));
+                    let info = Self::info(&st, p, bvh, &totals, 0, (w, h));
                     coarse = Some(out.film.clone());
                     self.publish(frame(seq, shown, out.film, 0, false, true, info));
                 }
                 if s.paths.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
-                    let mut full = s.clone();
-                    full.sampling.adaptive = None;
-                    full.sampling.sample_range = None;
-                    scene.camera = st.orbit.camera;
-                    scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
-                    if let Ok(out) = wavepath::render_with_progress(&scene, bvh, &full, &|_| {}) {
+                    if let Ok(out) = wavepath::render_plan(p, bvh, Extent::WHOLE, &|_| {}, &never) {
                         seq += 1;
-                        let info =
-                            Self::info(&st, &scene, bvh, &totals, s.sampling.spp, (s.image.width, s.image.height));
+                        let info = Self::info(&st, p, bvh, &totals, s.sampling.spp, (s.image.width, s.image.height));
                         self.publish(frame(seq, shown, out.film, s.sampling.spp, true, false, info));
                     }
                     taken = s.sampling.spp;
                 }
                 continue;
             }
-            scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
+            let Some(p) = plan.as_ref() else { continue };
             // One band of rows, the pass's samples for each of its pixels at once (as an
             // offline render takes them: a pixel's samples side by side in a wave trace
             // coherent rays; two samples per pixel over the whole image run 28% slower).
             let end = (taken + PASS_SAMPLES).min(s.sampling.spp);
             let (y0, y1) = (band * s.image.height / bands, (band + 1) * s.image.height / bands);
             let cell = wavepath::Cell { x: 0, y: y0, w: s.image.width, h: y1 - y0 };
-            let mut part = s.clone();
-            part.sampling.adaptive = None;
-            part.image.cell = Some(cell);
-            part.sampling.sample_range = Some((taken, end));
+            let extent = Extent { cell: Some(cell), samples: Some((taken, end)) };
             let t = Instant::now();
-            let Ok((sums, stats)) = wavepath::render_sums(&scene, bvh, &part, &|_| {}) else {
+            let Ok((sums, stats)) = wavepath::render_plan_sums(p, bvh, extent, &|_| {}, &never) else {
                 taken = s.sampling.spp;
                 continue;
             };
@@ -258,7 +266,7 @@ impl Session {
             }
             seq += 1;
             let converged = taken >= s.sampling.spp;
-            let info = Self::info(&st, &scene, bvh, &totals, taken, (s.image.width, s.image.height));
+            let info = Self::info(&st, p, bvh, &totals, taken, (s.image.width, s.image.height));
             let mut film = acc.to_film();
             if let Some(c) = coarse.as_ref().filter(|_| taken == 0) {
                 for (i, p) in film.pixels.iter_mut().enumerate() {
@@ -275,15 +283,16 @@ impl Session {
         }
     }
 
+    /// The figures of a frame; the effects are the generation's (its plan's).
     fn info(
         st: &ViewState,
-        scene: &Scene,
+        plan: &RenderPlan,
         bvh: &Bvh,
         t: &Totals,
         spp: u32,
         (w, h): (usize, usize),
     ) -> serde_json::Value {
-        let effects = Effects::of(scene, &st.settings);
+        let (scene, effects) = (plan.scene(), plan.effects());
         let boxes = st.bvh_depth.map(|d| outlines(bvh, scene, d, w, h)).unwrap_or_default();
         serde_json::json!({
             "spp": spp,

@@ -6,8 +6,8 @@ use pyo3::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 use wavepath::{
-    BuildInfo, Camera, Effects, IntegratorKind, Intersector, Isa, RenderOutput, RenderStats, RouletteKind, SamplerKind,
-    Scene, Settings, Shading,
+    BuildInfo, Camera, Extent, IntegratorKind, Intersector, Isa, RenderOutput, RenderPlan, RenderStats, RouletteKind,
+    SamplerKind, Scene, Settings, Shading,
 };
 
 /// How often the waiting loop looks at Ctrl-C and calls the progress callback.
@@ -215,8 +215,12 @@ pub fn run(
                 let tick = |n: u64| {
                     done.fetch_add(n, Ordering::Relaxed);
                 };
+                // The plan is built on the render's thread, without the GIL; its effects go
+                // back with the image for the stats.
                 let out = wavepath::with_threads(s.execution.threads, || {
-                    wavepath::render_until(scene, accel, s, &tick, stop)
+                    let plan = RenderPlan::new(scene, s);
+                    let out = wavepath::render_plan(&plan, accel, Extent::of(s), &tick, stop)?;
+                    Ok((out, plan.effects().clone()))
                 })
                 .and_then(|r| r);
                 let _ = tx.send(out);
@@ -249,11 +253,10 @@ pub fn run(
     if let Some(e) = raised {
         return Err(e);
     }
-    let out = result.map_err(to_py)?;
+    let (out, effects) = result.map_err(to_py)?;
     if let Some(cb) = progress {
         cb.call1(py, (done.load(Ordering::Relaxed), total))?;
     }
-    let effects = Effects::of(scene, s);
     let json = wavepath::stats_json(scene, s, &effects, &build, &out.stats);
     let stats_json = serde_json::to_string(&json).map_err(|e| value_error(e.to_string()))?;
     let log = log_lines(&out.stats);

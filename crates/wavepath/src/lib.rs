@@ -24,6 +24,11 @@
 //! # Ok(()) }
 //! ```
 //!
+//! A caller that renders one scene with one set of settings in pieces (cells of a split
+//! render, the viewer's bands and passes) builds a [`RenderPlan`] once and renders each piece
+//! as an [`Extent`] of it (`render_plan`, `render_plan_sums`); `render` and its siblings build
+//! the plan themselves.
+//!
 //! Inside, modules form layers, lowest first: each uses only layers before it
 //! (ARCHITECTURE.md; the layer test in `tests/layers.rs` checks it).
 
@@ -83,5 +88,9 @@ pub use raysets::{diffuse_rays, primary_rays};
 // Renders and what they produce.
 pub use effects::{Effect, Effects};
 pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
-pub use render::{INTERRUPTED, RenderOutput, render, render_sums, render_until, render_with_progress, with_threads};
+pub use integrator::plan::{Extent, RenderPlan};
+pub use render::{
+    INTERRUPTED, RenderOutput, render, render_plan, render_plan_sums, render_sums, render_until, render_with_progress,
+    with_threads,
+};
 pub use stats::{RenderStats, StageTimes, roulette_json, to_json as stats_json};

@@ -54,7 +54,7 @@ impl LayerData {
         let Some(l) = t.scene.materials[m].layers.as_deref() else {
             unreachable!("a layered model comes from a material with layers")
         };
-        let transmission = t.textures.transmission(m, v.uv).unwrap_or(l.transmission);
+        let transmission = t.materials.textures.transmission(m, v.uv).unwrap_or(l.transmission);
         let model = Layered::new(v.albedo, v.metal_rough.x, v.metal_rough.y, transmission, l);
         let model = if v.front || model.thin { model } else { model.inside() };
         match &self.sheen[m] {

@@ -4,7 +4,7 @@
 //! Light is counted exactly once per path:
 //! - Lambertian vertices: light sampling and the cosine-sampled continuation, weighted by the
 //!   power heuristic where the continuation is traced and its light counts
-//!   ([`Transport::diffuse_mis`]); light sampling alone elsewhere and with `--no-mis`.
+//!   ([`Rules::diffuse_mis`](super::rules::Rules::diffuse_mis)); light sampling alone elsewhere and with `--no-mis`.
 //! - Glossy vertices: light sampling and BSDF sampling, each weighted by the power
 //!   heuristic against the other (the light strategy counted `-l` times), so a small bright
 //!   light in a rough metal converges without fireflies. The BSDF-sampled ray counts what
@@ -61,13 +61,13 @@ impl Transport<'_> {
     /// arriving along `dir`.
     #[inline]
     pub fn shading(&self, v: &Vertex, dir: Vec3) -> ShadingFrame {
-        let model = match self.models[v.material as usize].oriented(v.front) {
+        let model = match self.materials.models[v.material as usize].oriented(v.front) {
             Model::Lambert(_) => Model::Lambert(Lambert { albedo: v.albedo }),
             // The base colour (textures, vertex colours) and metalness vary over the surface.
             Model::Pbr(p) => Model::Pbr(match self.scene.materials[v.material as usize].bsdf {
                 Bsdf::MetallicRoughness { .. } => Pbr::metallic_roughness(v.albedo, v.metal_rough.x, v.metal_rough.y),
                 Bsdf::SpecularGlossiness { specular, glossiness, .. } => {
-                    match self.textures.specular_glossiness(v.material as usize, v.uv) {
+                    match self.materials.textures.specular_glossiness(v.material as usize, v.uv) {
                         Some((s, g)) => Pbr::specular_glossiness(v.albedo, s, g),
                         None => Pbr::specular_glossiness(v.albedo, specular, glossiness),
                     }
@@ -85,7 +85,7 @@ impl Transport<'_> {
         let frame = Frame::new(v.ns);
         let wo = to_local(&frame, -dir);
         let model = match model {
-            Model::Layered(_) => Model::Layered(self.layers.at(self, v, wo.z)),
+            Model::Layered(_) => Model::Layered(self.materials.layers.at(self, v, wo.z)),
             m => m,
         };
         ShadingFrame { frame, wo, kind: model.kind(), model }
@@ -108,8 +108,8 @@ impl Transport<'_> {
             Kind::Glossy => {}
         }
         let mut rng = rng.at(DIM_DIRECT);
-        if self.hemisphere {
-            let n = self.direct_per_vertex;
+        if self.rules.hemisphere {
+            let n = self.rules.direct_per_vertex;
             for _ in 0..n {
                 let (a, b) = rng.next_2d();
                 let local = warp::uniform_hemisphere(a, b);
@@ -127,8 +127,8 @@ impl Transport<'_> {
             }
             return;
         }
-        for (i, light) in self.lights.lights.iter().enumerate() {
-            let ns = self.lights.samples_for(i, self.light_samples);
+        for (i, light) in self.lights.set.lights.iter().enumerate() {
+            let ns = self.lights.set.samples_for(i, self.rules.light_samples);
             for _ in 0..ns {
                 let u = super::light_numbers(&mut rng, light);
                 let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
@@ -142,7 +142,7 @@ impl Transport<'_> {
                 if w <= 0.0 || !v.consistent(ls.wi) {
                     continue;
                 }
-                let Some(ray) = self.light_shadow_ray(i, origin, ls.wi, ls.target) else { continue };
+                let Some(ray) = self.lights.shadow_ray(i, origin, ls.wi, ls.target) else { continue };
                 out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
             }
         }
@@ -160,10 +160,10 @@ impl Transport<'_> {
     ) -> Option<(Ray, Vec3, Bounce)> {
         let mis = match sh.kind {
             Kind::Diffuse => return self.scatter(v, depth, rng),
-            Kind::Glossy => !self.hemisphere,
+            Kind::Glossy => !self.rules.hemisphere,
             Kind::Delta => true,
         };
-        if !(self.continues(depth) || (mis && self.counts_direct(depth))) {
+        if !(self.rules.continues(depth) || (mis && self.rules.counts_direct(depth))) {
             return None;
         }
         let (a, b) = rng.at(0).next_2d();
@@ -187,7 +187,7 @@ impl Transport<'_> {
         Some((Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY }, s.weight, bounce))
     }
 
-    /// [`scatter_shaded`](Self::scatter_shaded) followed by [`roulette`](Self::roulette),
+    /// [`scatter_shaded`](Self::scatter_shaded) followed by [`roulette`](super::rules::Rules::roulette),
     /// for a path whose throughput before this vertex is `throughput`.
     #[inline]
     pub fn continuation_shaded(
@@ -199,7 +199,7 @@ impl Transport<'_> {
         throughput: Vec3,
     ) -> Option<(Ray, Vec3, Bounce)> {
         let (ray, w, b) = self.scatter_shaded(v, sh, depth, rng)?;
-        let k = self.roulette(depth, rng, throughput * w)?;
+        let k = self.rules.roulette(depth, rng, throughput * w)?;
         Some((ray, w * k, b))
     }
 
@@ -208,16 +208,16 @@ impl Transport<'_> {
     /// infinity; throughput not applied.
     #[inline]
     pub fn arrival(&self, prev: Bounce, ray: &Ray, hit: Option<&Hit>, emission: Vec3, depth: u32) -> Vec3 {
-        if prev.pdf == 0.0 || !(self.accumulate || depth == self.max_depth) {
+        if prev.pdf == 0.0 || !(self.rules.accumulate || depth == self.rules.max_depth) {
             return Vec3::ZERO;
         }
         if prev.pdf == f32::INFINITY {
             return match hit {
                 Some(_) => emission,
-                None => self.lights.infinite.radiance(ray.dir),
+                None => self.lights.set.infinite.radiance(ray.dir),
             };
         }
-        if hit.is_some() && emission == Vec3::ZERO && !self.lit_by_area_lights {
+        if hit.is_some() && emission == Vec3::ZERO && !self.lights.area_arrivals {
             // Only an area light (not geometry) is found on the way to a surface that does
             // not emit.
             return Vec3::ZERO;
@@ -227,9 +227,9 @@ impl Transport<'_> {
             Some(h) => Seen::Hit { t: h.t, emitter: self.emitter(h, emission) },
         };
         let mut l = Vec3::ZERO;
-        for (i, light) in self.lights.lights.iter().enumerate() {
+        for (i, light) in self.lights.set.lights.iter().enumerate() {
             if let Some((le, pdf_l)) = light.radiance_pdf(ray.origin, prev.n, ray.dir, seen) {
-                let ns = self.lights.samples_for(i, self.light_samples) as f32;
+                let ns = self.lights.set.samples_for(i, self.rules.light_samples) as f32;
                 l += le * power_heuristic(prev.pdf, ns * pdf_l);
             }
         }

@@ -7,7 +7,6 @@ use super::{DirectRay, Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::{Accumulator, PixelSums};
 use crate::geometry::Ray;
-use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::stats::RenderStats;
 use glam::Vec3;
@@ -35,15 +34,15 @@ impl PathTracer<'_, '_> {
     fn radiance(&mut self, ray: &Ray) -> Vec3 {
         self.st.camera += 1;
         let Some(hit) = self.accel.closest_hit(ray, &mut self.st.trace) else {
-            return if self.transport.counts_emission() {
-                self.transport.lights.background_toward(ray.dir)
+            return if self.transport.rules.counts_emission() {
+                self.transport.lights.set.background_toward(ray.dir)
             } else {
                 Vec3::ZERO
             };
         };
         let v = self.transport.vertex(ray, &hit);
-        let mut l = if self.transport.counts_emission() { v.emission } else { Vec3::ZERO };
-        if self.transport.max_depth >= 1 {
+        let mut l = if self.transport.rules.counts_emission() { v.emission } else { Vec3::ZERO };
+        if self.transport.rules.max_depth >= 1 {
             l += self.at_least_one_bounce(ray, &v, 0, Vec3::ONE);
         }
         l
@@ -52,16 +51,16 @@ impl PathTracer<'_, '_> {
     /// Light leaving `v` (the vertex at `depth`) toward `ray`'s origin, for a path whose
     /// throughput up to `v` is `throughput` (what throughput roulette plays with).
     fn at_least_one_bounce(&mut self, ray: &Ray, v: &Vertex, depth: u32, throughput: Vec3) -> Vec3 {
-        let rng = self.transport.sampler(self.pixel, self.sample, depth);
+        let rng = self.transport.streams.sampler(self.pixel, self.sample, depth);
         let mut l = Vec3::ZERO;
-        let sh = self.transport.non_diffuse.then(|| self.transport.shading(v, ray.dir));
-        if self.transport.counts_direct(depth) {
+        let sh = self.transport.materials.non_diffuse.then(|| self.transport.shading(v, ray.dir));
+        if self.transport.rules.counts_direct(depth) {
             let (transport, accel) = (self.transport, self.accel);
             let mut shadow = 0;
             let mut trace = self.st.trace;
             let mut add = |d: DirectRay| {
                 shadow += 1;
-                if transport.hemisphere {
+                if transport.rules.hemisphere {
                     let hit = accel.closest_hit(&d.ray, &mut trace);
                     l += d.weight * transport.probe_radiance(&d.ray, hit.as_ref());
                 } else if !accel.any_hit(&d.ray, &mut trace) {
@@ -84,8 +83,8 @@ impl PathTracer<'_, '_> {
             match self.accel.closest_hit(&ray, &mut self.st.trace) {
                 Some(hit) => {
                     let next = self.transport.vertex(&ray, &hit);
-                    let w = if self.transport.layers.volumes {
-                        w * self.transport.layers.absorbed(&next, hit.t)
+                    let w = if self.transport.materials.layers.volumes {
+                        w * self.transport.materials.layers.absorbed(&next, hit.t)
                     } else {
                         w
                     };
@@ -104,28 +103,18 @@ impl PathTracer<'_, '_> {
     }
 }
 
-/// Renders with the recursive reference; `progress` is told how many samples finished.
-pub fn render_recursive(
-    scene: &Scene,
-    accel: &dyn Intersector,
-    settings: &Settings,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (Accumulator, RenderStats) {
-    let never = AtomicBool::new(false);
-    render_recursive_until(scene, accel, settings, progress, &never).expect("nothing sets the stop flag")
-}
-
-/// As [`render_recursive`], but gives up (`None`) once `stop` is set: rows not yet started
-/// are skipped, so the caller waits at most one row per thread.
+/// Renders with the recursive reference: the image part `settings` covers (its cell and
+/// sample range) with `transport` (its render plan's); `progress` is told how many samples
+/// finished. Gives up (`None`) once `stop` is set: rows not yet started are skipped, so the
+/// caller waits at most one row per thread.
 pub fn render_recursive_until(
-    scene: &Scene,
-    accel: &dyn Intersector,
+    transport: &Transport,
     settings: &Settings,
+    accel: &dyn Intersector,
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Option<(Accumulator, RenderStats)> {
     let start = Instant::now();
-    let transport = Transport::new(scene, settings);
     let (w, h) = (settings.image.width, settings.image.height);
     let region = settings.region();
     let spp = settings.sampling.spp.max(1);
@@ -153,7 +142,7 @@ pub fn render_recursive_until(
                         break;
                     }
                     let ray = transport.camera_ray(x as u32, y as u32, w, h, i, spp);
-                    let mut tracer = PathTracer { transport: &transport, accel, pixel, sample: i, st };
+                    let mut tracer = PathTracer { transport, accel, pixel, sample: i, st };
                     let l = tracer.radiance(&ray);
                     st = tracer.st;
                     sums.add(l);

@@ -6,8 +6,9 @@ pub use normals::render_normals;
 
 use crate::accel::Intersector;
 use crate::film::{Accumulator, Film};
-use crate::integrator::recursive::{render_recursive, render_recursive_until};
-use crate::integrator::wavefront::{render_wavefront, render_wavefront_until};
+use crate::integrator::plan::{Extent, RenderPlan};
+use crate::integrator::recursive::render_recursive_until;
+use crate::integrator::wavefront::render_wavefront_until;
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, Settings, Shading};
 use crate::stats::RenderStats;
@@ -53,18 +54,26 @@ pub fn render_until(
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Result<RenderOutput> {
-    let done = match settings.paths.shading {
-        Shading::Normals => {
-            let (film, stats) = render_normals(scene, accel, settings);
-            let samples = vec![settings.sampling.spp; film.pixels.len()];
-            return Ok(RenderOutput { film, stats, samples });
-        }
-        Shading::Direct | Shading::Global => match settings.execution.integrator {
-            IntegratorKind::Wavefront => render_wavefront_until(scene, accel, settings, progress, stop),
-            IntegratorKind::Recursive => render_recursive_until(scene, accel, settings, progress, stop),
-        },
-    };
-    let Some((acc, stats)) = done else { return Err(anyhow::anyhow!(INTERRUPTED)) };
+    render_plan(&RenderPlan::new(scene, settings), accel, Extent::of(settings), progress, stop)
+}
+
+/// Renders `extent` of `plan` (see [`render_until`] for `progress` and `stop`); the film
+/// covers the whole image, pixels outside the extent's cell stay black. One plan renders any
+/// number of extents without deriving anything from the scene again.
+pub fn render_plan(
+    plan: &RenderPlan,
+    accel: &dyn Intersector,
+    extent: Extent,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Result<RenderOutput> {
+    let settings = plan.settings_in(extent);
+    if settings.paths.shading == Shading::Normals {
+        let (film, stats) = render_normals(plan.scene(), accel, &settings);
+        let samples = vec![settings.sampling.spp; film.pixels.len()];
+        return Ok(RenderOutput { film, stats, samples });
+    }
+    let (acc, stats) = transport(plan, &settings, accel, progress, stop)?;
     Ok(RenderOutput { film: acc.to_film(), samples: acc.samples_taken(), stats })
 }
 
@@ -76,11 +85,41 @@ pub fn render_sums(
     settings: &Settings,
     progress: &(dyn Fn(u64) + Sync),
 ) -> Result<(Accumulator, RenderStats)> {
-    Ok(match (settings.paths.shading, settings.execution.integrator) {
-        (Shading::Normals, _) => anyhow::bail!("normals shading keeps no per-pixel sums"),
-        (_, IntegratorKind::Wavefront) => render_wavefront(scene, accel, settings, progress),
-        (_, IntegratorKind::Recursive) => render_recursive(scene, accel, settings, progress),
-    })
+    let plan = RenderPlan::new(scene, settings);
+    render_plan_sums(&plan, accel, Extent::of(settings), progress, &AtomicBool::new(false))
+}
+
+/// [`render_sums`] of `extent` of `plan`, which may be stopped as [`render_until`]: the
+/// sums of every pixel inside the extent, zero outside, so extents' sums merge into the
+/// whole render's.
+pub fn render_plan_sums(
+    plan: &RenderPlan,
+    accel: &dyn Intersector,
+    extent: Extent,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Result<(Accumulator, RenderStats)> {
+    if plan.settings().paths.shading == Shading::Normals {
+        anyhow::bail!("normals shading keeps no per-pixel sums");
+    }
+    transport(plan, &plan.settings_in(extent), accel, progress, stop)
+}
+
+/// Light transport of the part `settings` covers with the integrator it asks for.
+fn transport(
+    plan: &RenderPlan,
+    settings: &Settings,
+    accel: &dyn Intersector,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+) -> Result<(Accumulator, RenderStats)> {
+    let done = match settings.execution.integrator {
+        IntegratorKind::Wavefront => {
+            render_wavefront_until(plan.transport(), plan.effects(), plan.lanes(), settings, accel, progress, stop)
+        }
+        IntegratorKind::Recursive => render_recursive_until(plan.transport(), settings, accel, progress, stop),
+    };
+    done.ok_or_else(|| anyhow::anyhow!(INTERRUPTED))
 }
 
 /// Runs `f` on a rayon pool with `threads` workers (0 = all cores).

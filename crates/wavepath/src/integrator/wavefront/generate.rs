@@ -56,9 +56,9 @@ pub fn generate(
     }
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
-        let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
+        let pixel_key = Sampler::pixel_key(t.streams.seed, pixel as u64);
         for sample in wave.base..wave.base + wave.batch {
-            let key = t.pattern.sample_key(pixel_key, sample as u64);
+            let key = t.streams.pattern.sample_key(pixel_key, sample as u64);
             q.ray.push(t.camera_ray_keyed(x, y, width, height, key, spp));
             q.key.push(key);
         }
@@ -77,7 +77,7 @@ const L: usize = 8;
 fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
-        let pixel_key = Sampler::pixel_key(t.seed, pixel as u64);
+        let pixel_key = Sampler::pixel_key(t.streams.seed, pixel as u64);
         let mut sample = wave.base;
         let end = wave.base + wave.batch;
         while sample < end {
@@ -100,7 +100,7 @@ fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width
             };
             let mut rays = [crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
             for j in 0..L {
-                rays[j] = t.pinhole_ray(x, y, width, height, jx[j], jy[j]);
+                rays[j] = t.camera.pinhole_ray(x, y, width, height, jx[j], jy[j]);
             }
             q.ray.extend_from_slice(&rays[..m]);
             q.key.extend_from_slice(&keys[..m]);
@@ -125,7 +125,7 @@ mod tests {
             s.image.width = w;
             s.image.height = h;
             s.sampling.spp = spp;
-            let t = Transport::new(&scene, &s);
+            let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
             let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
             let wave = Wave { pixels: &pixels, base: 2, batch };
             for lanes in [None, crate::cpu::Avx2::new()] {
@@ -134,7 +134,7 @@ mod tests {
                 assert_eq!(q.len(), wave.len());
                 for slot in 0..wave.len() as u32 {
                     let (pixel, sample) = wave.pixel_sample(slot);
-                    let key = t.path_key(pixel, sample);
+                    let key = t.streams.path_key(pixel, sample);
                     let (x, y) = (pixel % w as u32, pixel / w as u32);
                     assert_eq!(q.key[slot as usize], key);
                     assert_eq!(q.ray[slot as usize], t.camera_ray_keyed(x, y, w, h, key, spp), "slot {slot}");

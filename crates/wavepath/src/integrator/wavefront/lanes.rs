@@ -18,8 +18,8 @@
 //! `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
 
 use super::Features;
+use super::ShadeWidth;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
-use super::{Lanes, ShadeWidth};
 use crate::cpu::{Avx2, Avx512};
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
@@ -33,23 +33,17 @@ use std::f32::consts::FRAC_1_PI;
 /// [`super::shade::shade`] for the Lambertian hits listed in `idx` (paths that hit, whose
 /// material is Lambertian), eight or sixteen at a time.
 pub fn shade_diffuse<F: Features>(
-    lanes: Lanes,
+    width: ShadeWidth,
     t: &Transport,
     q: &mut PathQueue,
     idx: &[u32],
     shadow: &mut ShadowQueue,
 ) {
-    #[cfg(target_arch = "x86_64")]
-    match lanes.shade {
+    match width {
         // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        Some(ShadeWidth::Sixteen(avx512)) => return unsafe { shade_avx512::<F>(avx512, t, q, idx, shadow) },
+        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512::<F>(avx512, t, q, idx, shadow) },
         // SAFETY: as above.
-        Some(ShadeWidth::Eight(avx2)) => return unsafe { shade_avx2::<F>(avx2, t, q, idx, shadow) },
-        None => {}
-    }
-    let _ = lanes;
-    for &i in idx {
-        super::shade::shade_path::<F>(t, q, i as usize, shadow);
+        ShadeWidth::Eight(avx2) => unsafe { shade_avx2::<F>(avx2, t, q, idx, shadow) },
     }
 }
 
@@ -80,10 +74,10 @@ fn shade_width<F: Features, const L: usize>(
 ) {
     // Whole vertices (`Transport::vertex`, one lane at a time) where the surface has more than
     // a position and normals to reconstruct; the lane-parallel reconstruction elsewhere.
-    let whole = t.textures.any()
+    let whole = t.materials.textures.any()
         || t.scene.mesh.colors.is_some()
-        || t.layers.any_relief
-        || (F::NON_DIFFUSE && t.layers.volumes);
+        || t.materials.layers.any_relief
+        || (F::NON_DIFFUSE && t.materials.layers.volumes);
     if whole {
         shade_groups::<F, true, L>(avx, t, q, idx, shadow)
     } else {
@@ -361,8 +355,8 @@ fn emissive_rays<const L: usize>(
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
-    let ns = t.lights.samples_for(li, t.light_samples);
-    let margin = t.shadow_margins[li];
+    let ns = t.lights.set.samples_for(li, t.rules.light_samples);
+    let margin = t.lights.shadow_margins[li];
     let mut inv = [Vec3::ZERO; L];
     for j in 0..L {
         inv[j] = g.vertex[j].albedo * FRAC_1_PI / ns as f32;
@@ -448,8 +442,8 @@ struct Group<const L: usize> {
 /// where the material has no emission texture).
 #[inline(always)]
 fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
-    let e = t.emission[m];
-    if e == Vec3::ZERO || t.two_sided_emission[m] {
+    let e = t.materials.emission[m];
+    if e == Vec3::ZERO || t.materials.two_sided_emission[m] {
         e
     } else {
         // One-sided emitters are rare: the whole vertex says which side was hit.
@@ -468,8 +462,8 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
     idx: &[u32],
     shadow: &mut ShadowQueue,
 ) {
-    let sees_emission = t.counts_emission();
-    let arrivals = F::NON_DIFFUSE || t.mis;
+    let sees_emission = t.rules.counts_emission();
+    let arrivals = F::NON_DIFFUSE || t.rules.mis;
     let mut pts = Points::<L>::default();
     let mut rays = Rays::<L>::default();
     let mut surf = Surfaces::<L>::default();
@@ -477,7 +471,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
     let normals = corner_normals.is_some();
     let spheres = !t.scene.spheres.is_empty();
     let mut pending: Vec<Rays<L>> = Vec::new();
-    let hashed = t.pattern.kind == SamplerKind::Independent;
+    let hashed = t.streams.pattern.kind == SamplerKind::Independent;
     let mut g = Group {
         path: [0; L],
         n: 0,
@@ -504,15 +498,15 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             let ray = q.ray[i];
             let emission = if WHOLE {
                 let v = t.vertex(&ray, &hit);
-                if F::NON_DIFFUSE && t.layers.volumes {
-                    q.throughput[i] *= t.layers.absorbed(&v, hit.t);
+                if F::NON_DIFFUSE && t.materials.layers.volumes {
+                    q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
                 }
                 g.vertex[j] = v;
                 v.emission
             } else {
-                let m = t.material_of(hit.prim);
+                let m = t.materials.material_of(hit.prim);
                 surf.set(t, corner_normals, j, &ray, &hit);
-                g.vertex[j].albedo = t.albedo[m];
+                g.vertex[j].albedo = t.materials.albedo[m];
                 g.vertex[j].material = m as u32;
                 emission_of(t, m, &ray, &hit)
             };
@@ -528,12 +522,12 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             // As `Transport::vertex_sampler`, hashed for all lanes below.
             vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
             if !hashed {
-                patterned[j] = t.vertex_sampler(q.key[i], depth);
+                patterned[j] = t.streams.vertex_sampler(q.key[i], depth);
             }
             let albedo = g.vertex[j].albedo;
-            g.direct[j] = F::DIRECT && t.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
-            g.cont[j] = F::INDIRECT && t.continues(depth) && albedo != Vec3::ZERO;
-            g.mis[j] = t.diffuse_mis(depth);
+            g.direct[j] = F::DIRECT && t.rules.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
+            g.cont[j] = F::INDIRECT && t.rules.continues(depth) && albedo != Vec3::ZERO;
+            g.mis[j] = t.rules.diffuse_mis(depth);
         }
         if !g.direct.iter().chain(&g.cont).any(|&b| b) {
             continue;
@@ -584,8 +578,8 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                 q.depth[i] = depth + 1;
                 q.alive[i] = true;
                 // As `super::shade::roulette`.
-                if F::ROULETTE && t.plays_roulette(depth) {
-                    match t.roulette_with(rr[j], q.throughput[i]) {
+                if F::ROULETTE && t.rules.plays_roulette(depth) {
+                    match t.rules.roulette_with(rr[j], q.throughput[i]) {
                         Some(f) => q.throughput[i] *= f,
                         None => q.alive[i] = false,
                     }
@@ -612,7 +606,7 @@ fn direct_light<const L: usize>(
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
-    if t.hemisphere {
+    if t.rules.hemisphere {
         for j in 0..g.n {
             if g.direct[j] {
                 let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
@@ -624,14 +618,14 @@ fn direct_light<const L: usize>(
         return;
     }
     let mut dim = DIM_DIRECT;
-    for (li, light) in t.lights.lights.iter().enumerate() {
-        let ns = t.lights.samples_for(li, t.light_samples);
+    for (li, light) in t.lights.set.lights.iter().enumerate() {
+        let ns = t.lights.set.samples_for(li, t.rules.light_samples);
         if let SampledLight::Emissive(e) = light {
             emissive_rays(avx, t, q, g, pts, rng, e, li, dim, pending, shadow);
             dim += t.light_dims(li);
             continue;
         }
-        let (Some(al), SampledLight::Area { radiance, .. }) = (&t.area_lights[li], light) else {
+        let (Some(al), SampledLight::Area { radiance, .. }) = (&t.lights.area_lights[li], light) else {
             // No lane sampler for this light: each lane draws its samples itself.
             for j in 0..g.n {
                 if g.direct[j] {
@@ -681,167 +675,5 @@ fn direct_light<const L: usize>(
             }
         }
         shadow.commit(w);
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::accel::{BruteForce, TraceCounters};
-    use crate::integrator::wavefront::generate::{Wave, generate};
-    use crate::integrator::wavefront::{Kernel, compact, shade, traverse};
-    use crate::scene::{Bsdf, Light, Scene};
-    use crate::settings::{RouletteKind, Settings, Shading};
-
-    /// Each path's shadow rays (in the order they were made) and weights, by owner.
-    fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
-        let mut out = vec![Vec::new(); n];
-        for k in 0..s.len() {
-            out[s.owner()[k] as usize].push((s.ray()[k], s.weight()[k]));
-        }
-        out
-    }
-
-    /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
-    /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
-    fn compare<F: crate::integrator::wavefront::Features>(scene: &Scene, s: &Settings, avx: Avx2) -> usize {
-        let mut widths = vec![ShadeWidth::Eight(avx)];
-        widths.extend(Avx512::new().map(ShadeWidth::Sixteen));
-        widths.into_iter().map(|w| compare_width::<F>(scene, s, w)).min().unwrap_or(0)
-    }
-
-    fn compare_width<F: crate::integrator::wavefront::Features>(
-        scene: &Scene,
-        s: &Settings,
-        width: ShadeWidth,
-    ) -> usize {
-        let t = Transport::new(scene, s);
-        let lanes = Lanes { camera: None, shade: Some(width) };
-        let mut kinds = shade::Kinds::default();
-        let accel = BruteForce::new(scene);
-        let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
-        let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
-        let mut q = PathQueue::default();
-        generate(&t, None, &mut q, &wave, 24, 18, 8);
-        let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
-        let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
-        let mut shadow_rays = 0;
-        while !q.is_empty() {
-            traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
-            let mut qs = q.clone();
-            shade::shade::<F>(&t, lanes, &mut q, &mut sl, &mut kinds);
-            shade::shade_scalar::<F>(&t, &mut qs, &mut ss);
-            assert_eq!(q.ray, qs.ray);
-            assert_eq!(q.throughput, qs.throughput);
-            assert_eq!(q.radiance, qs.radiance);
-            assert_eq!(q.alive, qs.alive);
-            assert_eq!(q.depth, qs.depth);
-            assert_eq!(q.bounce, qs.bounce);
-            assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
-            shadow_rays += sl.len();
-            compact::compact(&mut q, &mut slot_radiance);
-        }
-        shadow_rays
-    }
-
-    fn settings(light_samples: u32, rr_throughput: bool) -> Settings {
-        let mut s = Settings::default();
-        s.image.width = 24;
-        s.image.height = 18;
-        s.sampling.spp = 8;
-        s.sampling.light_samples = light_samples;
-        s.paths.max_depth = 5;
-        s.paths.shading = Shading::Global;
-        s.paths.roulette.kind = if rr_throughput { RouletteKind::Throughput } else { RouletteKind::Fixed };
-        s.paths.roulette.start_depth = 1 + rr_throughput as u32;
-        s
-    }
-
-    /// Unit normals tilted differently at every vertex.
-    fn tilted_normals(scene: &mut Scene) {
-        let n = scene.mesh.positions.len();
-        let normals =
-            (0..n).map(|i| Vec3::new((i as f32 * 0.7).sin(), 1.0, (i as f32 * 1.3).cos()).normalize()).collect();
-        scene.mesh.normals = Some(normals);
-    }
-
-    /// The default scene's light quad as the only light: one-sided emissive triangles, which
-    /// turn MIS on under the standard dialect.
-    fn emissive_box() -> Scene {
-        let mut scene = crate::load::default_scene();
-        scene.lights.clear();
-        scene.source.dialect = crate::cs184::Dialect::Standard;
-        scene.materials[3].two_sided_emission = false;
-        scene
-    }
-
-    /// The lane kernel against the one-path-at-a-time kernel: area lights on triangles with
-    /// and without corner normals, with spheres and without any.
-    #[test]
-    fn lanes_match_the_scalar_kernel() {
-        type K = Kernel<true, false, true, true, true, false>;
-        let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
-        for (with_normals, with_spheres, rr_throughput) in
-            [(false, true, false), (true, true, false), (true, false, false), (true, true, true)]
-        {
-            let mut scene = crate::load::default_scene();
-            assert!(!scene.spheres.is_empty());
-            if !with_spheres {
-                scene.spheres.clear();
-            }
-            if with_normals {
-                tilted_normals(&mut scene);
-            }
-            let shadow_rays = compare::<K>(&scene, &settings(3, rr_throughput), avx);
-            assert!(shadow_rays > 1000, "{shadow_rays}");
-        }
-    }
-
-    /// The same for what the first lane kernel left to the scalar one: emissive triangles
-    /// under MIS with a one-sided emitter, a point light beside an area light, vertex colours
-    /// (whole vertices gathered), hemisphere sampling, the Sobol and stratified samplers, and
-    /// glass and mirror spheres among Lambertian walls (the kinds sorted apart).
-    #[test]
-    fn lanes_match_the_scalar_kernel_for_every_light_and_vertex() {
-        type K = Kernel<true, false, true, true, true, false>;
-        type N = Kernel<true, false, true, true, true, true>;
-        let Some(avx) = Avx2::new() else { return };
-        let mut s = settings(2, false);
-        let scene = emissive_box();
-        assert!(Transport::new(&scene, &s).mis, "the emissive box should turn MIS on");
-        assert!(compare::<K>(&scene, &s, avx) > 500);
-        for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
-            s.sampling.sampler = sampler;
-            assert!(compare::<K>(&scene, &s, avx) > 500);
-        }
-        s.sampling.sampler = crate::sampling::SamplerKind::Independent;
-
-        let mut point = crate::load::default_scene();
-        point.lights.push(Light::Point {
-            position: Vec3::new(0.3, 1.2, 0.2),
-            intensity: Vec3::splat(2.0),
-            attenuation: [1.0, 0.0, 0.0],
-        });
-        tilted_normals(&mut point);
-        assert!(compare::<K>(&point, &s, avx) > 500);
-
-        let mut colours = emissive_box();
-        let n = colours.mesh.positions.len();
-        colours.mesh.colors = Some((0..n).map(|i| Vec3::new(0.5 + 0.1 * (i % 5) as f32, 0.7, 0.9)).collect());
-        assert!(compare::<K>(&colours, &s, avx) > 500);
-
-        let mut hemisphere = s.clone();
-        hemisphere.paths.hemisphere = true;
-        assert!(compare::<K>(&crate::load::default_scene(), &hemisphere, avx) > 500);
-
-        let mut mixed = emissive_box();
-        mixed.materials[4].bsdf =
-            Bsdf::Glass { reflectance: Vec3::ONE, transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
-        let mut mirror = mixed.materials[4].clone();
-        mirror.bsdf = Bsdf::Mirror { reflectance: Vec3::splat(0.9) };
-        mixed.materials.push(mirror);
-        mixed.spheres[1].material = 5;
-        assert!(Transport::new(&mixed, &s).non_diffuse);
-        assert!(compare::<N>(&mixed, &s, avx) > 500);
     }
 }

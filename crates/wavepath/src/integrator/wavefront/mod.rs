@@ -31,7 +31,6 @@ use crate::cpu::{Avx2, Avx512, Isa};
 use crate::effects::Effects;
 use crate::film::{Accumulator, PixelSums};
 use crate::integrator::Transport;
-use crate::scene::Scene;
 use crate::settings::Settings;
 use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
@@ -135,7 +134,8 @@ impl Lanes {
     pub fn of(t: &Transport, isa: Isa) -> Lanes {
         let avx2 = isa.avx2();
         Lanes {
-            camera: avx2.filter(|_| t.pinhole() && t.pattern.kind == crate::sampling::SamplerKind::Independent),
+            camera: avx2
+                .filter(|_| t.camera.pinhole() && t.streams.pattern.kind == crate::sampling::SamplerKind::Independent),
             shade: isa.avx512().map(ShadeWidth::Sixteen).or(avx2.map(ShadeWidth::Eight)),
         }
     }
@@ -174,43 +174,40 @@ impl WaveStats {
 
 /// Everything the waves of one render share.
 struct RenderJob<'a, 's> {
-    transport: Transport<'s>,
+    transport: &'a Transport<'s>,
     accel: &'a dyn Intersector,
     settings: &'a Settings,
-    effects: Effects,
+    effects: &'a Effects,
     lanes: Lanes,
     progress: &'a (dyn Fn(u64) + Sync),
     stop: &'a AtomicBool,
 }
 
-/// Renders with the wavefront integrator; `progress` is told how many samples finished.
-pub fn render_wavefront(
-    scene: &Scene,
-    accel: &dyn Intersector,
-    settings: &Settings,
-    progress: &(dyn Fn(u64) + Sync),
-) -> (Accumulator, RenderStats) {
-    let never = AtomicBool::new(false);
-    render_wavefront_until(scene, accel, settings, progress, &never).expect("nothing sets the stop flag")
-}
-
-/// As [`render_wavefront`], but gives up (`None`) once `stop` is set: no new wave starts,
-/// so a caller that wants the render to end (Ctrl-C) waits at most one wave per thread.
+/// Renders with the wavefront integrator: the image part `settings` covers (its cell and
+/// sample range), with the transport, effects and lane kernels of its render plan
+/// ([`RenderPlan`](crate::integrator::plan::RenderPlan)); `progress` is told how many
+/// samples finished. Gives up (`None`) once `stop` is set: no new wave starts, so a caller
+/// that wants the render to end (Ctrl-C) waits at most one wave per thread.
 pub fn render_wavefront_until(
-    scene: &Scene,
-    accel: &dyn Intersector,
+    transport: &Transport,
+    effects: &Effects,
+    lanes: Lanes,
     settings: &Settings,
+    accel: &dyn Intersector,
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Option<(Accumulator, RenderStats)> {
-    let effects = Effects::of(scene, settings);
-    let transport = Transport::new(scene, settings);
-    let lanes = Lanes::of(&transport, settings.execution.isa);
     let job = RenderJob { transport, accel, settings, effects, lanes, progress, stop };
-    let e = &job.effects;
     with_kernel!(
         render_frames(&job),
-        [e.emission, e.environment, e.direct, e.indirect, e.russian_roulette, e.non_diffuse]
+        [
+            effects.emission,
+            effects.environment,
+            effects.direct,
+            effects.indirect,
+            effects.russian_roulette,
+            effects.non_diffuse
+        ]
     )
 }
 

@@ -18,15 +18,15 @@ use glam::Vec3;
 /// time. Each path's shadow rays stay in the order it made them, so its radiance is the same
 /// bits whatever the grouping.
 pub fn shade<F: Features>(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
-    if lanes.shade.is_none() {
+    let Some(width) = lanes.shade else {
         return shade_scalar::<F>(t, q, shadow);
-    }
+    };
     shadow.clear();
     kinds.sort::<F>(t, q);
     for &i in &kinds.one_at_a_time {
         shade_path::<F>(t, q, i as usize, shadow);
     }
-    super::lanes::shade_diffuse::<F>(lanes, t, q, &kinds.diffuse, shadow);
+    super::lanes::shade_diffuse::<F>(width, t, q, &kinds.diffuse, shadow);
 }
 
 /// A wave's paths by what shades them, as index lists into the path queue.
@@ -45,7 +45,7 @@ impl Kinds {
         for (i, hit) in q.hit.iter().enumerate() {
             let lane = match hit {
                 None => false,
-                Some(h) => !F::NON_DIFFUSE || t.lambertian[t.material_of(h.prim)],
+                Some(h) => !F::NON_DIFFUSE || t.materials.lambertian[t.materials.material_of(h.prim)],
             };
             if lane { &mut self.diffuse } else { &mut self.one_at_a_time }.push(i as u32);
         }
@@ -63,36 +63,36 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
 /// Shades path `i` (see [`shade`]).
 #[inline]
 pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut ShadowQueue) {
-    let sees_emission = t.counts_emission();
+    let sees_emission = t.rules.counts_emission();
     {
         let depth = q.depth[i];
         q.alive[i] = false;
         let Some(hit) = q.hit[i] else {
             if F::ENVIRONMENT && depth == 0 && sees_emission {
-                q.radiance[i] += q.throughput[i] * t.lights.background_toward(q.ray[i].dir);
+                q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
             }
-            if (F::NON_DIFFUSE || t.mis) && depth > 0 {
+            if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
                 q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
             }
             return;
         };
         let v = t.vertex(&q.ray[i], &hit);
-        if F::NON_DIFFUSE && t.layers.volumes {
-            q.throughput[i] *= t.layers.absorbed(&v, hit.t);
+        if F::NON_DIFFUSE && t.materials.layers.volumes {
+            q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
         }
         if F::EMISSION && depth == 0 && sees_emission {
             q.radiance[i] += v.emission;
         }
-        if (F::NON_DIFFUSE || t.mis) && depth > 0 {
+        if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
             q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
         }
         if !F::DIRECT && !F::INDIRECT {
             return;
         }
-        let rng = t.vertex_sampler(q.key[i], depth);
+        let rng = t.streams.vertex_sampler(q.key[i], depth);
         if F::NON_DIFFUSE {
             let sh = t.shading(&v, q.ray[i].dir);
-            if F::DIRECT && t.counts_direct(depth) {
+            if F::DIRECT && t.rules.counts_direct(depth) {
                 let tp = q.throughput[i];
                 t.direct_rays_shaded(&v, &sh, depth, rng, |d| {
                     shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
@@ -110,7 +110,7 @@ pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shado
             }
             return;
         }
-        if F::DIRECT && t.counts_direct(depth) {
+        if F::DIRECT && t.rules.counts_direct(depth) {
             let tp = q.throughput[i];
             t.direct_rays(&v, depth, rng, |d| {
                 shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
@@ -135,9 +135,177 @@ pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shado
 #[inline(always)]
 pub(super) fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
     if F::ROULETTE {
-        match t.roulette(depth, rng, q.throughput[i]) {
+        match t.rules.roulette(depth, rng, q.throughput[i]) {
             Some(f) => q.throughput[i] *= f,
             None => q.alive[i] = false,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{BruteForce, TraceCounters};
+    use crate::cpu::{Avx2, Avx512};
+    use crate::geometry::Ray;
+    use crate::integrator::wavefront::generate::{Wave, generate};
+    use crate::integrator::wavefront::{Kernel, compact, traverse};
+    use crate::integrator::wavefront::{Lanes, ShadeWidth};
+    use crate::scene::{Bsdf, Light, Scene};
+    use crate::settings::{RouletteKind, Settings, Shading};
+
+    /// Each path's shadow rays (in the order they were made) and weights, by owner.
+    fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
+        let mut out = vec![Vec::new(); n];
+        for k in 0..s.len() {
+            out[s.owner()[k] as usize].push((s.ray()[k], s.weight()[k]));
+        }
+        out
+    }
+
+    /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
+    /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
+    fn compare<F: crate::integrator::wavefront::Features>(scene: &Scene, s: &Settings, avx: Avx2) -> usize {
+        let mut widths = vec![ShadeWidth::Eight(avx)];
+        widths.extend(Avx512::new().map(ShadeWidth::Sixteen));
+        widths.into_iter().map(|w| compare_width::<F>(scene, s, w)).min().unwrap_or(0)
+    }
+
+    fn compare_width<F: crate::integrator::wavefront::Features>(
+        scene: &Scene,
+        s: &Settings,
+        width: ShadeWidth,
+    ) -> usize {
+        let t = Transport::new(scene, s, &crate::effects::Effects::of(scene, s));
+        let lanes = Lanes { camera: None, shade: Some(width) };
+        let mut kinds = Kinds::default();
+        let accel = BruteForce::new(scene);
+        let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
+        let wave = Wave { pixels: &pixels, base: 0, batch: 8 };
+        let mut q = PathQueue::default();
+        generate(&t, None, &mut q, &wave, 24, 18, 8);
+        let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
+        let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
+        let mut shadow_rays = 0;
+        while !q.is_empty() {
+            traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
+            let mut qs = q.clone();
+            shade::<F>(&t, lanes, &mut q, &mut sl, &mut kinds);
+            shade_scalar::<F>(&t, &mut qs, &mut ss);
+            assert_eq!(q.ray, qs.ray);
+            assert_eq!(q.throughput, qs.throughput);
+            assert_eq!(q.radiance, qs.radiance);
+            assert_eq!(q.alive, qs.alive);
+            assert_eq!(q.depth, qs.depth);
+            assert_eq!(q.bounce, qs.bounce);
+            assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
+            shadow_rays += sl.len();
+            compact::compact(&mut q, &mut slot_radiance);
+        }
+        shadow_rays
+    }
+
+    fn settings(light_samples: u32, rr_throughput: bool) -> Settings {
+        let mut s = Settings::default();
+        s.image.width = 24;
+        s.image.height = 18;
+        s.sampling.spp = 8;
+        s.sampling.light_samples = light_samples;
+        s.paths.max_depth = 5;
+        s.paths.shading = Shading::Global;
+        s.paths.roulette.kind = if rr_throughput { RouletteKind::Throughput } else { RouletteKind::Fixed };
+        s.paths.roulette.start_depth = 1 + rr_throughput as u32;
+        s
+    }
+
+    /// Unit normals tilted differently at every vertex.
+    fn tilted_normals(scene: &mut Scene) {
+        let n = scene.mesh.positions.len();
+        let normals =
+            (0..n).map(|i| Vec3::new((i as f32 * 0.7).sin(), 1.0, (i as f32 * 1.3).cos()).normalize()).collect();
+        scene.mesh.normals = Some(normals);
+    }
+
+    /// The default scene's light quad as the only light: one-sided emissive triangles, which
+    /// turn MIS on under the standard dialect.
+    fn emissive_box() -> Scene {
+        let mut scene = crate::load::default_scene();
+        scene.lights.clear();
+        scene.source.dialect = crate::cs184::Dialect::Standard;
+        scene.materials[3].two_sided_emission = false;
+        scene
+    }
+
+    /// The lane kernel against the one-path-at-a-time kernel: area lights on triangles with
+    /// and without corner normals, with spheres and without any.
+    #[test]
+    fn lanes_match_the_scalar_kernel() {
+        type K = Kernel<true, false, true, true, true, false>;
+        let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
+        for (with_normals, with_spheres, rr_throughput) in
+            [(false, true, false), (true, true, false), (true, false, false), (true, true, true)]
+        {
+            let mut scene = crate::load::default_scene();
+            assert!(!scene.spheres.is_empty());
+            if !with_spheres {
+                scene.spheres.clear();
+            }
+            if with_normals {
+                tilted_normals(&mut scene);
+            }
+            let shadow_rays = compare::<K>(&scene, &settings(3, rr_throughput), avx);
+            assert!(shadow_rays > 1000, "{shadow_rays}");
+        }
+    }
+
+    /// The same for what the first lane kernel left to the scalar one: emissive triangles
+    /// under MIS with a one-sided emitter, a point light beside an area light, vertex colours
+    /// (whole vertices gathered), hemisphere sampling, the Sobol and stratified samplers, and
+    /// glass and mirror spheres among Lambertian walls (the kinds sorted apart).
+    #[test]
+    fn lanes_match_the_scalar_kernel_for_every_light_and_vertex() {
+        type K = Kernel<true, false, true, true, true, false>;
+        type N = Kernel<true, false, true, true, true, true>;
+        let Some(avx) = Avx2::new() else { return };
+        let mut s = settings(2, false);
+        let scene = emissive_box();
+        assert!(
+            Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s)).rules.mis,
+            "the emissive box should turn MIS on"
+        );
+        assert!(compare::<K>(&scene, &s, avx) > 500);
+        for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
+            s.sampling.sampler = sampler;
+            assert!(compare::<K>(&scene, &s, avx) > 500);
+        }
+        s.sampling.sampler = crate::sampling::SamplerKind::Independent;
+
+        let mut point = crate::load::default_scene();
+        point.lights.push(Light::Point {
+            position: Vec3::new(0.3, 1.2, 0.2),
+            intensity: Vec3::splat(2.0),
+            attenuation: [1.0, 0.0, 0.0],
+        });
+        tilted_normals(&mut point);
+        assert!(compare::<K>(&point, &s, avx) > 500);
+
+        let mut colours = emissive_box();
+        let n = colours.mesh.positions.len();
+        colours.mesh.colors = Some((0..n).map(|i| Vec3::new(0.5 + 0.1 * (i % 5) as f32, 0.7, 0.9)).collect());
+        assert!(compare::<K>(&colours, &s, avx) > 500);
+
+        let mut hemisphere = s.clone();
+        hemisphere.paths.hemisphere = true;
+        assert!(compare::<K>(&crate::load::default_scene(), &hemisphere, avx) > 500);
+
+        let mut mixed = emissive_box();
+        mixed.materials[4].bsdf =
+            Bsdf::Glass { reflectance: Vec3::ONE, transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
+        let mut mirror = mixed.materials[4].clone();
+        mirror.bsdf = Bsdf::Mirror { reflectance: Vec3::splat(0.9) };
+        mixed.materials.push(mirror);
+        mixed.spheres[1].material = 5;
+        assert!(Transport::new(&mixed, &s, &crate::effects::Effects::of(&mixed, &s)).materials.non_diffuse);
+        assert!(compare::<N>(&mixed, &s, avx) > 500);
     }
 }

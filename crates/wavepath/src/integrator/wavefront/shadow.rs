@@ -17,7 +17,7 @@ pub fn shadow(
     radiance: &mut [Vec3],
     c: &mut TraceCounters,
 ) {
-    if t.hemisphere {
+    if t.rules.hemisphere {
         for ((ray, &owner), &weight) in q.ray().iter().zip(q.owner()).zip(q.weight()) {
             let hit = accel.closest_hit(ray, c);
             radiance[owner as usize] += weight * t.probe_radiance(ray, hit.as_ref());

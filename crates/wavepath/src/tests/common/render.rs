@@ -1,7 +1,9 @@
 //! Small-image settings and the two integrators over brute-force intersection, shared by the
 //! tests that compare renders (the engine's and the applications': only the face is used).
 
-use wavepath::{Accumulator, BruteForce, IntegratorKind, RenderStats, Scene, Settings, Shading, render_sums};
+use wavepath::{
+    Accumulator, BruteForce, IntegratorKind, Intersector, RenderStats, Scene, Settings, Shading, render_sums,
+};
 
 /// A `width` x `height` render at depth `max_depth` (direct light at 1, global above) with
 /// `spp` samples, the rest default.
@@ -20,10 +22,21 @@ pub fn small_settings(width: usize, height: usize, max_depth: u32, spp: u32) -> 
     settings(width, height, max_depth, spp).with(|s| s.sampling.light_samples = 2)
 }
 
-fn with(scene: &Scene, s: &Settings, integrator: IntegratorKind) -> (Accumulator, RenderStats) {
+/// The sums of a render of `scene` with `integrator`, whatever `s` names, over `accel`.
+pub fn sums_with(
+    integrator: IntegratorKind,
+    scene: &Scene,
+    accel: &dyn Intersector,
+    s: &Settings,
+    progress: &(dyn Fn(u64) + Sync),
+) -> (Accumulator, RenderStats) {
     let mut s = s.clone();
     s.execution.integrator = integrator;
-    render_sums(scene, &BruteForce::new(scene), &s, &|_| {}).expect("light transport keeps sums")
+    render_sums(scene, accel, &s, progress).expect("light transport keeps sums")
+}
+
+fn with(scene: &Scene, s: &Settings, integrator: IntegratorKind) -> (Accumulator, RenderStats) {
+    sums_with(integrator, scene, &BruteForce::new(scene), s, &|_| {})
 }
 
 pub fn wavefront(scene: &Scene, s: &Settings) -> (Accumulator, RenderStats) {

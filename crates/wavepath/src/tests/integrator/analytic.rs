@@ -4,11 +4,11 @@
 
 use crate::accel::BruteForce;
 use crate::film::Accumulator;
-use crate::integrator::recursive::render_recursive;
-use crate::integrator::wavefront::render_wavefront;
 use crate::scene::{Camera, Environment, Light, Material, Mesh, Scene, Sphere};
+use crate::settings::IntegratorKind;
 use crate::settings::Settings;
 use crate::tests::common::meshgen::quad;
+use crate::tests::common::render::sums_with;
 use crate::tests::common::{agree, render};
 use glam::{Vec3, vec3};
 use std::f32::consts::PI;
@@ -26,7 +26,7 @@ fn settings(max_depth: u32, spp: u32) -> Settings {
 }
 
 fn render(scene: &Scene, s: &Settings) -> Accumulator {
-    let (acc, st) = render_wavefront(scene, &BruteForce::new(scene), s, &|_| {});
+    let (acc, st) = sums_with(IntegratorKind::Wavefront, scene, &BruteForce::new(scene), s, &|_| {});
     assert_eq!(st.invalid_samples, 0);
     acc
 }
@@ -200,7 +200,8 @@ fn plane_under_an_emissive_rectangle() {
         }),
     );
     assert_regions(&hemi, expect, "emitter, hemisphere sampling");
-    let reference = render_recursive(
+    let reference = sums_with(
+        IntegratorKind::Recursive,
         &scene,
         &BruteForce::new(&scene),
         &settings(1, 64).with(|s| {

@@ -4,12 +4,13 @@
 
 use crate::accel::{self, BruteForce};
 use crate::effects::Effects;
-use crate::integrator::wavefront::render_wavefront;
 use crate::load::default_scene;
 use crate::scene::Scene;
+use crate::settings::IntegratorKind;
 use crate::settings::{Settings, Shading};
 use crate::stats::RenderStats;
 use crate::tests::common;
+use crate::tests::common::render::sums_with;
 use crate::tests::common::render::wavefront;
 use glam::Vec3;
 
@@ -104,8 +105,8 @@ fn forcing_all_effects_on_gives_the_same_image() {
         forced.execution.all_effects = true;
         let e = Effects::of(&scene, &forced);
         assert!(e.forced && e.indirect && e.russian_roulette && e.direct && e.environment && e.adaptive);
-        let (a, sa) = render_wavefront(&scene, bvh.as_ref(), &s, &|_| {});
-        let (b, sb) = render_wavefront(&scene, bvh.as_ref(), &forced, &|_| {});
+        let (a, sa) = sums_with(IntegratorKind::Wavefront, &scene, bvh.as_ref(), &s, &|_| {});
+        let (b, sb) = sums_with(IntegratorKind::Wavefront, &scene, bvh.as_ref(), &forced, &|_| {});
         let what = format!("-m {depth} -H {hemisphere} --rr {rr}");
         assert_eq!(a.to_film(), b.to_film(), "{what}");
         assert_eq!(a.samples_taken(), b.samples_taken(), "{what}");

@@ -10,6 +10,7 @@ mod envmap;
 mod lens;
 pub mod mis;
 mod offsets;
+mod plan;
 mod stability;
 mod stop;
 mod transport;

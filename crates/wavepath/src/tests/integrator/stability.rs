@@ -6,14 +6,15 @@
 use crate::accel::{BruteForce, Intersector, TraceCounters, build};
 use crate::film::{Accumulator, Film};
 use crate::geometry::Ray;
-use crate::integrator::wavefront::render_wavefront;
 use crate::load::{LoadOptions, default_scene, load};
 use crate::render::render_normals;
 use crate::sampling::Sampler;
 use crate::scene::{Camera, Light, Material, Mesh, Scene};
+use crate::settings::IntegratorKind;
 use crate::settings::Settings;
 use crate::tests::common;
 use crate::tests::common::meshgen;
+use crate::tests::common::render::sums_with;
 use crate::tests::common::{agree, render};
 use glam::{Vec3, vec3};
 
@@ -23,7 +24,7 @@ fn settings(w: usize, h: usize, spp: u32, max_depth: u32) -> Settings {
 
 fn render(scene: &Scene, s: &Settings) -> Accumulator {
     let (accel, _) = build(scene, &crate::settings::Settings::default());
-    let (acc, st) = render_wavefront(scene, accel.as_ref(), s, &|_| {});
+    let (acc, st) = sums_with(IntegratorKind::Wavefront, scene, accel.as_ref(), s, &|_| {});
     assert_eq!(st.invalid_samples, 0, "{}: NaN/Inf samples", scene.name);
     assert!(acc.to_film().all_finite(), "{}: non-finite film", scene.name);
     acc

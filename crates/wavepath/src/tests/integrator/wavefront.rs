@@ -5,9 +5,11 @@
 use crate::load::default_scene;
 use crate::sampling::SamplerKind;
 use crate::scene::Scene;
+use crate::settings::IntegratorKind;
 use crate::settings::Settings;
 use crate::tests::common;
 use crate::tests::common::agree::assert_regions_agree;
+use crate::tests::common::render::sums_with;
 use crate::tests::common::render::{recursive, wavefront};
 use glam::Vec3;
 
@@ -126,7 +128,7 @@ fn image_is_identical_for_any_thread_count() {
             let waves = std::sync::atomic::AtomicUsize::new(0);
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             let acc = pool.install(|| {
-                crate::integrator::wavefront::render_wavefront(&scene, accel.as_ref(), s, &|_| {
+                sums_with(IntegratorKind::Wavefront, &scene, accel.as_ref(), s, &|_| {
                     waves.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
                 })
                 .0

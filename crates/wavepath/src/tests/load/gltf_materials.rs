@@ -115,7 +115,7 @@ fn metallic_roughness_texture_is_linear_and_scales_the_factors() {
     // A shaded point takes its texel's values: at (x, y) the uv is (0.1 + 0.8 x, 0.2 + 0.6 y),
     // so (0.2, 0.2) reads the first texel and (0.7, 0.1) the second. White base:
     // f0 = lerp(0.04, 1, metallic), alpha = roughness^2.
-    let t = Transport::new(&s, &Settings::default());
+    let t = Transport::new(&s, &Settings::default(), &crate::effects::Effects::of(&s, &Settings::default()));
     let accel = BruteForce::new(&s);
     for (x, y, metallic, roughness) in [(0.2, 0.2, 0.5, 0.8 * 128.0 / 255.0), (0.7, 0.1, 0.0, 0.8)] {
         let ray = Ray { origin: vec3(x, y, 1.0), dir: -Vec3::Z, tmin: 0.0, tmax: f32::INFINITY };

@@ -1,0 +1,116 @@
+//! The path rules: what a pixel counts, how deep paths go, how direct light is estimated
+//! (light or hemisphere samples, MIS) and when Russian roulette stops a path.
+
+use super::DIM_ROULETTE;
+use crate::effects::Effects;
+use crate::lights::LightSet;
+use crate::sampling::Sampler;
+use crate::settings::{RouletteKind, Settings, Shading};
+use glam::Vec3;
+
+#[derive(Clone, Copy, Debug)]
+pub struct Rules {
+    pub max_depth: u32,
+    pub accumulate: bool,
+    pub hemisphere: bool,
+    pub light_samples: u32,
+    /// Shadow (or hemisphere probe) rays one vertex casts at most.
+    pub direct_per_vertex: u32,
+    pub rr_continue: f32,
+    /// Continue probability from the path's throughput instead of `rr_continue`.
+    pub rr_throughput: bool,
+    /// First depth that plays roulette.
+    pub rr_depth: u32,
+    /// Diffuse vertices weigh their light samples against their BSDF sample by MIS
+    /// ([`diffuse_mis`](Self::diffuse_mis)) where the scene calls for it (the `mis` effect).
+    pub mis: bool,
+}
+
+impl Rules {
+    pub fn new(settings: &Settings, effects: &Effects, lights: &LightSet) -> Rules {
+        let max_depth = if settings.paths.shading == Shading::Direct {
+            settings.paths.max_depth.min(1)
+        } else {
+            settings.paths.max_depth
+        };
+        let light_samples = settings.sampling.light_samples.max(1);
+        let direct_per_vertex = if settings.paths.hemisphere {
+            // As the seed: as many hemisphere samples as light sampling would take for
+            // area lights, lights x -l.
+            (lights.lights.len() as u32 * light_samples).max(light_samples)
+        } else {
+            lights.samples_per_point(light_samples)
+        };
+        Rules {
+            max_depth,
+            accumulate: settings.paths.accumulate,
+            hemisphere: settings.paths.hemisphere,
+            light_samples,
+            direct_per_vertex,
+            rr_continue: settings.paths.roulette.continue_prob.clamp(1e-3, 1.0),
+            rr_throughput: settings.paths.roulette.kind == RouletteKind::Throughput,
+            rr_depth: settings.paths.roulette.start_depth.max(1),
+            mis: effects.mis,
+        }
+    }
+
+    /// Whether emission seen directly by the camera is part of the image.
+    #[inline]
+    pub fn counts_emission(&self) -> bool {
+        self.accumulate || self.max_depth == 0
+    }
+
+    /// Whether direct light at a vertex of `depth` (0 = the camera's hit) is part of the image:
+    /// it took `depth + 1` bounces.
+    #[inline]
+    pub fn counts_direct(&self, depth: u32) -> bool {
+        depth < self.max_depth && (self.accumulate || depth + 1 == self.max_depth)
+    }
+
+    /// Whether a diffuse vertex at `depth` combines its light samples with its continuation
+    /// ray by the power heuristic. Only where that ray is traced and the light it finds
+    /// counts: a vertex at the last depth keeps light sampling alone (no extra ray), as does
+    /// every vertex under `-o 0`.
+    #[inline(always)]
+    pub fn diffuse_mis(&self, depth: u32) -> bool {
+        self.mis && self.continues(depth) && self.counts_direct(depth)
+    }
+
+    /// Whether a vertex of `depth` spawns a continuation ray.
+    #[inline]
+    pub fn continues(&self, depth: u32) -> bool {
+        depth + 1 < self.max_depth
+    }
+
+    /// Russian roulette for the continuation of a vertex at `depth` whose path throughput,
+    /// the continuation's BSDF weight included, is `throughput`: `None` stops the path,
+    /// otherwise the factor (1 / continue probability) its throughput is multiplied by. It
+    /// is played from depth `rr_depth` on (at least 1: it never stops the first indirect
+    /// bounce, the continuation of the camera's hit).
+    #[inline]
+    pub fn roulette(&self, depth: u32, rng: Sampler, throughput: Vec3) -> Option<f32> {
+        if !self.plays_roulette(depth) {
+            return Some(1.0);
+        }
+        self.roulette_with(rng.at(DIM_ROULETTE).next_f32(), throughput)
+    }
+
+    /// Whether the continuation of a vertex at `depth` plays Russian roulette.
+    #[inline(always)]
+    pub fn plays_roulette(&self, depth: u32) -> bool {
+        depth >= self.rr_depth && (self.rr_throughput || self.rr_continue < 1.0)
+    }
+
+    /// [`roulette`](Self::roulette) where it is played, from the vertex stream's number at
+    /// [`DIM_ROULETTE`] (drawn eight paths at a time by the lane kernel). By throughput, the
+    /// surviving path's throughput has its largest component at most 1: its weight stays
+    /// bounded, and paths that carry little are the ones that stop.
+    #[inline(always)]
+    pub fn roulette_with(&self, u: f32, throughput: Vec3) -> Option<f32> {
+        let p = if self.rr_throughput { throughput.max_element().min(1.0) } else { self.rr_continue };
+        if p >= 1.0 {
+            return Some(1.0);
+        }
+        (u < p).then(|| 1.0 / p)
+    }
+}

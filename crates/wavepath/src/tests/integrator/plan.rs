@@ -1,0 +1,125 @@
+//! The render plan: built once, it renders any extent (cell, sample range) of its image, and
+//! the extents' sums are the whole render's.
+
+use crate::integrator::plan::{Extent, RenderPlan};
+use crate::render::{render_plan, render_plan_sums, render_sums};
+use crate::settings::{Cell, IntegratorKind, Settings};
+use crate::tests::common::render;
+use std::sync::atomic::AtomicBool;
+
+const W: usize = 23;
+const H: usize = 17;
+
+/// Uneven cells that tile the image (rows and columns of different sizes, one a single pixel).
+fn cells() -> Vec<Cell> {
+    let (xs, ys) = ([0, 1, 9, W], [0, 6, 7, H]);
+    let mut out = Vec::new();
+    for j in 0..3 {
+        for i in 0..3 {
+            out.push(Cell { x: xs[i], y: ys[j], w: xs[i + 1] - xs[i], h: ys[j + 1] - ys[j] });
+        }
+    }
+    out
+}
+
+/// The default scene (CS184 area light) and one lit by an emissive mesh with MIS, both
+/// integrators, global illumination with roulette.
+fn cases() -> Vec<(&'static str, crate::scene::Scene, Settings)> {
+    let base = render::small_settings(W, H, 4, 6).with(|s| s.paths.roulette.continue_prob = 0.7);
+    let mut out = Vec::new();
+    for integrator in [IntegratorKind::Wavefront, IntegratorKind::Recursive] {
+        let s = base.clone().with(|s| s.execution.integrator = integrator);
+        out.push(("default", crate::load::default_scene(), s.clone()));
+        out.push(("mis", super::mis::scene(), s));
+    }
+    out
+}
+
+/// One plan, rendered cell by cell, gives every pixel the bits of the whole-image render (the
+/// split render's and the viewer's bands' promise), and nothing outside the cell.
+#[test]
+fn one_plan_renders_cells_bit_identical_to_the_whole_image() {
+    let never = AtomicBool::new(false);
+    for (name, scene, s) in cases() {
+        let (accel, _) = crate::accel::build(&scene, &s);
+        let (whole, _) = render_sums(&scene, accel.as_ref(), &s, &|_| {}).unwrap();
+        assert!(whole.pixels.iter().all(|p| p.taken == 6), "{name}");
+        let plan = RenderPlan::new(&scene, &s);
+        let mut merged = crate::film::Accumulator::new(W, H);
+        for cell in cells() {
+            let extent = Extent { cell: Some(cell), samples: None };
+            let (sums, _) = render_plan_sums(&plan, accel.as_ref(), extent, &|_| {}, &never).unwrap();
+            for y in 0..H {
+                for x in 0..W {
+                    let (p, inside) =
+                        (y * W + x, (cell.x..cell.x + cell.w).contains(&x) && (cell.y..cell.y + cell.h).contains(&y));
+                    if inside {
+                        merged.pixels[p] = sums.pixels[p];
+                    } else {
+                        assert_eq!(sums.pixels[p].taken, 0, "{name}: ({x}, {y}) outside {cell:?}");
+                    }
+                }
+            }
+        }
+        assert_eq!(merged.pixels, whole.pixels, "{name} {:?}", s.execution.integrator);
+        // The film of the whole extent is the plain render's too.
+        let film = render_plan(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &never).unwrap().film;
+        assert_eq!(film, whole.to_film(), "{name}");
+    }
+}
+
+/// Sample ranges of one plan take exactly their samples: merged, they are the whole
+/// render's sums up to the order of the f64 additions (a wrong index would change a pixel's
+/// sum by a whole sample's radiance, orders of magnitude above the 1e-12 allowed).
+#[test]
+fn one_plan_renders_sample_ranges_that_merge_into_the_whole_render() {
+    let never = AtomicBool::new(false);
+    for (name, scene, s) in cases() {
+        let (accel, _) = crate::accel::build(&scene, &s);
+        let (whole, _) = render_sums(&scene, accel.as_ref(), &s, &|_| {}).unwrap();
+        let plan = RenderPlan::new(&scene, &s);
+        let mut merged = crate::film::Accumulator::new(W, H);
+        for range in [(0, 1), (1, 4), (4, 6)] {
+            let extent = Extent { cell: None, samples: Some(range) };
+            let (sums, _) = render_plan_sums(&plan, accel.as_ref(), extent, &|_| {}, &never).unwrap();
+            assert!(sums.pixels.iter().all(|p| p.taken == range.1 - range.0), "{name} {range:?}");
+            for (m, p) in merged.pixels.iter_mut().zip(&sums.pixels) {
+                m.merge(p);
+            }
+        }
+        let mut lit = 0;
+        for (i, (m, w)) in merged.pixels.iter().zip(&whole.pixels).enumerate() {
+            assert_eq!((m.taken, m.valid), (w.taken, w.valid), "{name}: pixel {i}");
+            let err = (m.sum - w.sum).abs().max_element();
+            assert!(err <= 1e-12 * w.sum.abs().max_element().max(1.0), "{name}: pixel {i}: {} vs {}", m.sum, w.sum);
+            lit += (w.sum.max_element() > 0.0) as usize;
+        }
+        assert!(lit > W * H / 4, "{name}: {lit} lit pixels");
+    }
+}
+
+/// A cell or sample range in the settings is not part of the plan: the plan renders the
+/// extent it is given, and the settings' extent is what the old entry points pass.
+#[test]
+fn the_plan_leaves_the_extent_out() {
+    let scene = crate::load::default_scene();
+    let cell = Cell { x: 2, y: 3, w: 5, h: 4 };
+    let s = render::small_settings(W, H, 2, 3).with(|s| {
+        s.image.cell = Some(cell);
+        s.sampling.sample_range = Some((1, 3));
+    });
+    let plan = RenderPlan::new(&scene, &s);
+    assert_eq!(plan.settings().image.cell, None);
+    assert_eq!(plan.settings().sampling.sample_range, None);
+    assert_eq!(Extent::of(&s), Extent { cell: Some(cell), samples: Some((1, 3)) });
+    let (accel, _) = crate::accel::build(&scene, &s);
+    let never = AtomicBool::new(false);
+    let (sums, _) = render_plan_sums(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &never).unwrap();
+    assert!(sums.pixels.iter().all(|p| p.taken == 3));
+    let (part, _) = render_sums(&scene, accel.as_ref(), &s, &|_| {}).unwrap();
+    let inside =
+        |i: usize| (cell.x..cell.x + cell.w).contains(&(i % W)) && (cell.y..cell.y + cell.h).contains(&(i / W));
+    for (i, p) in part.pixels.iter().enumerate() {
+        assert_eq!(p.taken, if inside(i) { 2 } else { 0 }, "pixel {i}");
+    }
+}
