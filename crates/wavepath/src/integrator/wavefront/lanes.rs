@@ -17,6 +17,10 @@
 //! contracts `a * b + c` into an FMA, so the bits do not change) and everything it calls is
 //! `#[inline(always)]`: a helper left out of line would be compiled without AVX2.
 
+// Lane loops run over lane indices by design: each reads and writes several arrays of one
+// lane, the shape the compiler vectorises.
+#![allow(clippy::needless_range_loop)]
+
 use super::Features;
 use super::ShadeWidth;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
