@@ -279,7 +279,7 @@ struct Rays<const L: usize> {
     d: [[f32; L]; 3],
     tmax: [f32; L],
     g: [f32; L],
-    /// A light sample's whole weight (emissive triangles).
+    /// A light sample's whole weight, throughput not applied.
     w: [Vec3; L],
     valid: [bool; L],
 }
@@ -391,7 +391,14 @@ fn emissive_rays<const L: usize>(
             p.valid[j] = r.valid;
         }
     }
-    let samples = &pending[..ns as usize];
+    push_samples(q, g, &pending[..ns as usize], shadow);
+}
+
+/// A light's samples of a group (`samples`, sample-major, each with its whole weight) into the
+/// shadow queue path-major, throughput applied: every candidate is stored and the cursor moves
+/// past the valid ones only.
+#[inline(always)]
+fn push_samples<const L: usize>(q: &PathQueue, g: &Group<L>, samples: &[Rays<L>], shadow: &mut ShadowQueue) {
     let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(g.n * samples.len());
     let mut w = 0;
     for j in 0..g.n {
@@ -657,27 +664,9 @@ fn direct_light<const L: usize>(
             dim += 1;
             area_rays(pts, al, &ua, &ub, p);
             for j in 0..L {
-                p.g[j] = mis_weighted(p.g[j], ns, g.mis[j]);
+                p.w[j] = c[j] * mis_weighted(p.g[j], ns, g.mis[j]);
             }
         }
-        // Every candidate is stored; the cursor moves past the valid ones only.
-        let samples = &pending[..ns as usize];
-        let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(g.n * samples.len());
-        let mut w = 0;
-        for j in 0..g.n {
-            if !g.direct[j] {
-                continue;
-            }
-            let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
-            let v = &g.vertex[j];
-            for p in samples {
-                let r = p.ray(j);
-                rs[w] = r;
-                ws[w] = c[j] * p.g[j] * tp;
-                os[w] = i as u32;
-                w += (p.valid[j] && v.consistent(r.dir)) as usize;
-            }
-        }
-        shadow.commit(w);
+        push_samples(q, g, &pending[..ns as usize], shadow);
     }
 }
