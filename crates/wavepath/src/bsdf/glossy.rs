@@ -83,11 +83,7 @@ impl Glossy {
         if wo.z <= 0.0 || self.diffuse.max(self.specular).max_element() <= 0.0 {
             return None;
         }
-        let wi = if u[2] < self.specular_probability() {
-            self.lobe().sample_visible(wo, [u[0], u[1]])?
-        } else {
-            warp::cosine_hemisphere(u[0], u[1])
-        };
+        let wi = self.lobe().sample_with_diffuse(wo, u, self.specular_probability())?;
         BsdfSample::continuous(wi, self.pdf(wo, wi), || self.eval(wo, wi))
     }
 

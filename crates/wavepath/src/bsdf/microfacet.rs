@@ -177,6 +177,18 @@ impl Microfacet {
         if p.is_finite() { p } else { 0.0 }
     }
 
+    /// The direction of a diffuse-plus-specular model's sample: this lobe's visible normals
+    /// with probability `specular`, a cosine-weighted diffuse direction otherwise (the third
+    /// number chooses).
+    #[inline]
+    pub fn sample_with_diffuse(&self, wo: Vec3, u: [f32; 3], specular: f32) -> Option<Vec3> {
+        if u[2] < specular {
+            self.sample_visible(wo, [u[0], u[1]])
+        } else {
+            Some(crate::sampling::warp::cosine_hemisphere(u[0], u[1]))
+        }
+    }
+
     /// GGX only: `wo` reflected about a normal drawn from those visible from `wo` (Heitz
     /// 2018, the stretched hemisphere construction). Its sample weight F G / G1(wo) stays
     /// below F at grazing angles, where drawing from D alone gives weights of order 1 / alpha.

@@ -90,11 +90,7 @@ impl Pbr {
         if wo.z <= 0.0 {
             return None;
         }
-        let wi = if u[2] < self.specular_probability(wo) {
-            self.lobe().sample_visible(wo, [u[0], u[1]])?
-        } else {
-            warp::cosine_hemisphere(u[0], u[1])
-        };
+        let wi = self.lobe().sample_with_diffuse(wo, u, self.specular_probability(wo))?;
         BsdfSample::continuous(wi, self.pdf(wo, wi), || self.eval(wo, wi))
     }
 

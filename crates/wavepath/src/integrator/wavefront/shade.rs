@@ -64,60 +64,41 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
 #[inline]
 pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut ShadowQueue) {
     let sees_emission = t.rules.counts_emission();
-    {
-        let depth = q.depth[i];
-        q.alive[i] = false;
-        let Some(hit) = q.hit[i] else {
-            if F::ENVIRONMENT && depth == 0 && sees_emission {
-                q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
-            }
-            if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
-                q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
-            }
-            return;
-        };
-        let v = t.vertex(&q.ray[i], &hit);
-        if F::NON_DIFFUSE && t.materials.layers.volumes {
-            q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
-        }
-        if F::EMISSION && depth == 0 && sees_emission {
-            q.radiance[i] += v.emission;
+    let depth = q.depth[i];
+    q.alive[i] = false;
+    let Some(hit) = q.hit[i] else {
+        if F::ENVIRONMENT && depth == 0 && sees_emission {
+            q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
         }
         if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
-            q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
+            q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
         }
-        if !F::DIRECT && !F::INDIRECT {
-            return;
-        }
-        let rng = t.streams.vertex_sampler(q.key[i], depth);
-        if F::NON_DIFFUSE {
-            let sh = t.shading(&v, q.ray[i].dir);
-            if F::DIRECT && t.rules.counts_direct(depth) {
-                let tp = q.throughput[i];
-                t.direct_rays_shaded(&v, &sh, depth, rng, |d| {
-                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-                });
-            }
-            if F::INDIRECT
-                && let Some((next, w, bounce)) = t.scatter_shaded(&v, &sh, depth, rng)
-            {
-                q.ray[i] = next;
-                q.throughput[i] *= w;
-                q.depth[i] = depth + 1;
-                q.alive[i] = true;
-                q.bounce[i] = bounce;
-                roulette::<F>(t, q, i, depth, rng);
-            }
-            return;
-        }
+        return;
+    };
+    let v = t.vertex(&q.ray[i], &hit);
+    if F::NON_DIFFUSE && t.materials.layers.volumes {
+        q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
+    }
+    if F::EMISSION && depth == 0 && sees_emission {
+        q.radiance[i] += v.emission;
+    }
+    if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
+        q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
+    }
+    if !F::DIRECT && !F::INDIRECT {
+        return;
+    }
+    let rng = t.streams.vertex_sampler(q.key[i], depth);
+    if F::NON_DIFFUSE {
+        let sh = t.shading(&v, q.ray[i].dir);
         if F::DIRECT && t.rules.counts_direct(depth) {
             let tp = q.throughput[i];
-            t.direct_rays(&v, depth, rng, |d| {
+            t.direct_rays_shaded(&v, &sh, depth, rng, |d| {
                 shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
             });
         }
         if F::INDIRECT
-            && let Some((next, w, bounce)) = t.scatter(&v, depth, rng)
+            && let Some((next, w, bounce)) = t.scatter_shaded(&v, &sh, depth, rng)
         {
             q.ray[i] = next;
             q.throughput[i] *= w;
@@ -126,6 +107,23 @@ pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shado
             q.bounce[i] = bounce;
             roulette::<F>(t, q, i, depth, rng);
         }
+        return;
+    }
+    if F::DIRECT && t.rules.counts_direct(depth) {
+        let tp = q.throughput[i];
+        t.direct_rays(&v, depth, rng, |d| {
+            shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+        });
+    }
+    if F::INDIRECT
+        && let Some((next, w, bounce)) = t.scatter(&v, depth, rng)
+    {
+        q.ray[i] = next;
+        q.throughput[i] *= w;
+        q.depth[i] = depth + 1;
+        q.alive[i] = true;
+        q.bounce[i] = bounce;
+        roulette::<F>(t, q, i, depth, rng);
     }
 }
 
