@@ -21,7 +21,7 @@ use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin};
 use crate::bsdf::{Glossy, Kind, Lambert, Model, Pbr, power_heuristic, to_local};
 use crate::geometry::{Hit, Ray};
 use crate::lights::Seen;
-use crate::sampling::{Frame, Sampler, warp};
+use crate::sampling::{Frame, Numbers, warp};
 use crate::scene::Bsdf;
 use glam::Vec3;
 
@@ -99,7 +99,7 @@ impl Transport<'_> {
         v: &Vertex,
         sh: &ShadingFrame,
         depth: u32,
-        rng: Sampler,
+        rng: impl Numbers,
         mut out: impl FnMut(DirectRay),
     ) {
         match sh.kind {
@@ -156,7 +156,7 @@ impl Transport<'_> {
         v: &Vertex,
         sh: &ShadingFrame,
         depth: u32,
-        rng: Sampler,
+        rng: impl Numbers,
     ) -> Option<(Ray, Vec3, Bounce)> {
         let mis = match sh.kind {
             Kind::Diffuse => return self.scatter(v, depth, rng),
@@ -195,7 +195,7 @@ impl Transport<'_> {
         v: &Vertex,
         sh: &ShadingFrame,
         depth: u32,
-        rng: Sampler,
+        rng: impl Numbers,
         throughput: Vec3,
     ) -> Option<(Ray, Vec3, Bounce)> {
         let (ray, w, b) = self.scatter_shaded(v, sh, depth, rng)?;

@@ -36,7 +36,8 @@ use streams::Streams;
 use crate::bsdf::power_heuristic;
 use crate::geometry::{Hit, Ray};
 use crate::lights::SampledLight;
-use crate::sampling::{Frame, Sampler, warp};
+use crate::sampling::numbers::Layout;
+use crate::sampling::{Frame, Numbers, warp};
 use crate::scene::Scene;
 use crate::settings::Settings;
 use glam::{Vec2, Vec3};
@@ -64,6 +65,39 @@ pub struct Transport<'a> {
     pub lights: LightSampler,
     /// Depth, what counts, direct-light strategy, MIS and roulette.
     pub rules: Rules,
+    /// The numbers a non-Lambertian vertex reads, by dimension ([`shaded_layout`]): what a
+    /// lane kernel draws ahead for it.
+    pub shaded_numbers: Layout,
+}
+
+/// Most dimensions a lane kernel draws ahead per vertex; a vertex reading more (many lights,
+/// many samples) draws the rest from its stream.
+const MAX_DRAWN: usize = 48;
+
+/// The dimensions [`Transport::direct_rays_shaded`] and [`Transport::scatter_shaded`] read,
+/// and as what: the continuation's pair (0), the lobe choice ([`DIM_LOBE`]), roulette
+/// ([`DIM_ROULETTE`]), then the hemisphere's pairs or each light's samples (a pair, and a
+/// third number for a light that reads one).
+fn shaded_layout(lights: &LightSampler, rules: &Rules) -> Layout {
+    let mut one_d = vec![false, true, true];
+    debug_assert_eq!((DIM_LOBE, DIM_ROULETTE, DIM_DIRECT), (1, 2, 3));
+    if rules.hemisphere {
+        one_d.extend(std::iter::repeat_n(false, rules.direct_per_vertex as usize));
+    } else {
+        for (i, light) in lights.set.lights.iter().enumerate() {
+            for _ in 0..lights.set.samples_for(i, rules.light_samples) {
+                one_d.push(false);
+                if light.uses_third_number() {
+                    one_d.push(true);
+                }
+                if one_d.len() >= MAX_DRAWN {
+                    break;
+                }
+            }
+        }
+    }
+    one_d.truncate(MAX_DRAWN);
+    Layout { one_d }
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -119,7 +153,7 @@ pub fn orient(geometric: Vec3, shading: Vec3, dir: Vec3) -> (Vec3, Vec3, bool) {
 /// The uniform numbers one sample of `light` takes from `rng`: a 2-d pair (one hash) and a
 /// third number only for a light that reads it.
 #[inline]
-pub fn light_numbers(rng: &mut Sampler, light: &SampledLight) -> [f32; 3] {
+pub fn light_numbers(rng: &mut impl Numbers, light: &SampledLight) -> [f32; 3] {
     let (a, b) = rng.next_2d();
     let c = if light.uses_third_number() { rng.next_f32() } else { 0.0 };
     [a, b, c]
@@ -138,12 +172,14 @@ impl<'a> Transport<'a> {
     /// by the [`plan`](plan::RenderPlan)) are `effects`.
     pub fn new(scene: &'a Scene, settings: &Settings, effects: &crate::effects::Effects) -> Self {
         let lights = LightSampler::new(scene, settings);
+        let rules = Rules::new(settings, effects, &lights.set);
         Transport {
             scene,
             camera: CameraTerms::new(&scene.camera),
             streams: Streams::new(settings),
             materials: MaterialTable::new(scene),
-            rules: Rules::new(settings, effects, &lights.set),
+            shaded_numbers: shaded_layout(&lights, &rules),
+            rules,
             lights,
         }
     }
@@ -191,7 +227,7 @@ impl<'a> Transport<'a> {
     /// to `out`; weighted by MIS against the cosine-sampled continuation where
     /// [`diffuse_mis`](rules::Rules::diffuse_mis) says so.
     #[inline]
-    pub fn direct_rays(&self, v: &Vertex, depth: u32, mut rng: Sampler, mut out: impl FnMut(DirectRay)) {
+    pub fn direct_rays(&self, v: &Vertex, depth: u32, mut rng: impl Numbers, mut out: impl FnMut(DirectRay)) {
         let f = v.albedo * FRAC_1_PI;
         if f == Vec3::ZERO {
             return;
@@ -231,7 +267,7 @@ impl<'a> Transport<'a> {
         f: Vec3,
         i: usize,
         mis: bool,
-        rng: &mut Sampler,
+        rng: &mut impl Numbers,
         out: &mut impl FnMut(DirectRay),
     ) {
         let light = &self.lights.set.lights[i];
@@ -302,7 +338,7 @@ impl<'a> Transport<'a> {
     /// roulette not yet applied, and what the light the ray finds means ([`Bounce`]).
     /// `None`: the path ends here.
     #[inline]
-    pub fn scatter(&self, v: &Vertex, depth: u32, rng: Sampler) -> Option<(Ray, Vec3, Bounce)> {
+    pub fn scatter(&self, v: &Vertex, depth: u32, rng: impl Numbers) -> Option<(Ray, Vec3, Bounce)> {
         if !self.rules.continues(depth) || v.albedo == Vec3::ZERO {
             return None;
         }
@@ -328,7 +364,13 @@ impl<'a> Transport<'a> {
     /// [`scatter`](Self::scatter) followed by [`roulette`](rules::Rules::roulette), for a path whose
     /// throughput before this vertex is `throughput`.
     #[inline]
-    pub fn continuation(&self, v: &Vertex, depth: u32, rng: Sampler, throughput: Vec3) -> Option<(Ray, Vec3, Bounce)> {
+    pub fn continuation(
+        &self,
+        v: &Vertex,
+        depth: u32,
+        rng: impl Numbers,
+        throughput: Vec3,
+    ) -> Option<(Ray, Vec3, Bounce)> {
         let (ray, w, b) = self.scatter(v, depth, rng)?;
         let k = self.rules.roulette(depth, rng, throughput * w)?;
         Some((ray, w * k, b))

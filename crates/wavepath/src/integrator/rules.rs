@@ -4,7 +4,7 @@
 use super::DIM_ROULETTE;
 use crate::effects::Effects;
 use crate::lights::LightSet;
-use crate::sampling::Sampler;
+use crate::sampling::Numbers;
 use crate::settings::{RouletteKind, Settings, Shading};
 use glam::Vec3;
 
@@ -88,7 +88,7 @@ impl Rules {
     /// is played from depth `rr_depth` on (at least 1: it never stops the first indirect
     /// bounce, the continuation of the camera's hit).
     #[inline]
-    pub fn roulette(&self, depth: u32, rng: Sampler, throughput: Vec3) -> Option<f32> {
+    pub fn roulette(&self, depth: u32, rng: impl Numbers, throughput: Vec3) -> Option<f32> {
         if !self.plays_roulette(depth) {
             return Some(1.0);
         }

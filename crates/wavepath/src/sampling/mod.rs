@@ -5,12 +5,14 @@
 //! numbers of one pixel's samples are independent or follow a pattern (`pattern`).
 
 pub mod distribution;
+pub mod numbers;
 mod pattern;
 mod rng;
 pub mod rng8;
 mod splitmix;
 pub mod warp;
 
+pub use numbers::Numbers;
 pub use pattern::SamplerKind;
 pub use rng::{Pattern, Sampler};
 pub use splitmix::splitmix64;

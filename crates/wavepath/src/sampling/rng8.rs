@@ -106,6 +106,44 @@ pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
     next_2d_x8(avx, s, dim).0
 }
 
+/// The streams of `L` vertices (a multiple of eight) from their inputs, eight at a time.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub fn for_vertex_lanes<const L: usize>(avx: Avx2, inputs: &[u64; L]) -> [Sampler; L] {
+    let mut out = [Sampler::default(); L];
+    for c in (0..L).step_by(LANES) {
+        let part: &[u64; LANES] = inputs[c..c + LANES].try_into().expect("groups of eight");
+        out[c..c + LANES].copy_from_slice(&for_vertex_x8(avx, part));
+    }
+    out
+}
+
+/// [`next_2d_x8`] for `L` streams.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub fn next_2d_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
+    let (mut a, mut b) = ([0.0; L], [0.0; L]);
+    for c in (0..L).step_by(LANES) {
+        let part: &[Sampler; LANES] = s[c..c + LANES].try_into().expect("groups of eight");
+        let (pa, pb) = next_2d_x8(avx, part, dim);
+        a[c..c + LANES].copy_from_slice(&pa);
+        b[c..c + LANES].copy_from_slice(&pb);
+    }
+    (a, b)
+}
+
+/// [`next_f32_x8`] for `L` streams.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub fn next_f32_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> [f32; L] {
+    let mut a = [0.0; L];
+    for c in (0..L).step_by(LANES) {
+        let part: &[Sampler; LANES] = s[c..c + LANES].try_into().expect("groups of eight");
+        a[c..c + LANES].copy_from_slice(&next_f32_x8(avx, part, dim));
+    }
+    a
+}
+
 /// The point indices of eight Sobol streams, when every lane's numbers come from the sequence.
 #[inline(always)]
 fn sobol_indices(s: &[Sampler; LANES]) -> Option<[u32; LANES]> {

@@ -89,44 +89,6 @@ fn shade_width<F: Features, const L: usize>(
     }
 }
 
-/// The streams of `L` vertices from their inputs, eight at a time ([`rng8`]).
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn streams<const L: usize>(avx: Avx2, inputs: &[u64; L]) -> [Sampler; L] {
-    let mut out = [Sampler::default(); L];
-    for c in (0..L).step_by(rng8::LANES) {
-        let part: &[u64; rng8::LANES] = inputs[c..c + rng8::LANES].try_into().expect("groups of eight");
-        out[c..c + rng8::LANES].copy_from_slice(&rng8::for_vertex_x8(avx, part));
-    }
-    out
-}
-
-/// [`rng8::next_2d_x8`] for `L` streams.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn next_2d<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
-    let (mut a, mut b) = ([0.0; L], [0.0; L]);
-    for c in (0..L).step_by(rng8::LANES) {
-        let part: &[Sampler; rng8::LANES] = s[c..c + rng8::LANES].try_into().expect("groups of eight");
-        let (pa, pb) = rng8::next_2d_x8(avx, part, dim);
-        a[c..c + rng8::LANES].copy_from_slice(&pa);
-        b[c..c + rng8::LANES].copy_from_slice(&pb);
-    }
-    (a, b)
-}
-
-/// [`rng8::next_f32_x8`] for `L` streams.
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn next_f32<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> [f32; L] {
-    let mut a = [0.0; L];
-    for c in (0..L).step_by(rng8::LANES) {
-        let part: &[Sampler; rng8::LANES] = s[c..c + rng8::LANES].try_into().expect("groups of eight");
-        a[c..c + rng8::LANES].copy_from_slice(&rng8::next_f32_x8(avx, part, dim));
-    }
-    a
-}
-
 /// The shading points of a group, one array per component.
 struct Points<const L: usize> {
     p: [[f32; L]; 3],
@@ -370,8 +332,8 @@ fn emissive_rays<const L: usize>(
     }
     let first = *e.triangle(0);
     for p in pending.iter_mut().take(ns as usize) {
-        let (ua, ub) = next_2d(avx, rng, dim);
-        let uc = next_f32(avx, rng, dim + 1);
+        let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
+        let uc = rng8::next_f32_lanes(avx, rng, dim + 1);
         dim += 2;
         let mut tri = [first; L];
         let mut point = [first.a; L];
@@ -544,7 +506,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             continue;
         }
         let rng = if hashed {
-            streams(avx, &vertex_input)
+            rng8::for_vertex_lanes(avx, &vertex_input)
         } else {
             // Lanes that draw nothing take an active lane's stream, so that `rng8` sees eight
             // streams of one pattern (Sobol's are drawn eight at a time).
@@ -572,9 +534,9 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             direct_light(avx, t, q, &g, &pts, &rng, &mut pending, shadow);
         }
         if F::INDIRECT && g.cont.iter().any(|&c| c) {
-            let (ua, ub) = next_2d(avx, &rng, 0);
+            let (ua, ub) = rng8::next_2d_lanes(avx, &rng, 0);
             let (ua, ub) = (unused_half(ua, &g.cont), unused_half(ub, &g.cont));
-            let rr = if F::ROULETTE { next_f32(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
+            let rr = if F::ROULETTE { rng8::next_f32_lanes(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..g.n {
                 let r = rays.ray(j);
@@ -588,7 +550,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                 q.throughput[i] *= g.vertex[j].albedo;
                 q.depth[i] = depth + 1;
                 q.alive[i] = true;
-                // As `super::shade::roulette`.
+                // As `super::one_path::roulette`.
                 if F::ROULETTE && t.rules.plays_roulette(depth) {
                     match t.rules.roulette_with(rr[j], q.throughput[i]) {
                         Some(f) => q.throughput[i] *= f,
@@ -659,7 +621,7 @@ fn direct_light<const L: usize>(
             pending.resize_with(ns as usize, Rays::default);
         }
         for p in pending.iter_mut().take(ns as usize) {
-            let (ua, ub) = next_2d(avx, rng, dim);
+            let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
             let (ua, ub) = (unused_half(ua, &g.direct), unused_half(ub, &g.direct));
             dim += 1;
             area_rays(pts, al, &ua, &ub, p);

@@ -21,6 +21,8 @@
 pub mod compact;
 pub mod generate;
 pub mod lanes;
+pub mod lanes_shaded;
+mod one_path;
 pub mod queues;
 pub mod shade;
 pub mod shadow;

@@ -2,10 +2,9 @@
 
 use super::Features;
 use super::Lanes;
-use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
+use super::one_path;
+use super::queues::{PathQueue, ShadowQueue};
 use crate::integrator::Transport;
-use crate::sampling::Sampler;
-use glam::Vec3;
 
 /// Shades every path against its hit: adds emission (and the environment) seen by camera
 /// rays, appends the path's shadow rays (throughput applied), and replaces the path's ray by
@@ -14,8 +13,8 @@ use glam::Vec3;
 ///
 /// The paths are first sorted by what shades them ([`Kinds`], pbrt-v4's queues after
 /// intersection): the Lambertian hits are shaded in lanes by [`super::lanes`] where the
-/// render's [`Lanes`] has a lane width, the rest (escaped paths, other materials) one at a
-/// time. Each path's shadow rays stay in the order it made them, so its radiance is the same
+/// render's [`Lanes`] has a lane width, the other materials' hits by [`super::lanes_shaded`]
+/// (their random numbers drawn in lanes), escaped paths one at a time. Each path's shadow rays stay in the order it made them, so its radiance is the same
 /// bits whatever the grouping.
 pub fn shade<F: Features>(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
     let Some(width) = lanes.shade else {
@@ -23,31 +22,40 @@ pub fn shade<F: Features>(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow
     };
     shadow.clear();
     kinds.sort::<F>(t, q);
-    for &i in &kinds.one_at_a_time {
+    for &i in &kinds.escaped {
         shade_path::<F>(t, q, i as usize, shadow);
     }
+    super::lanes_shaded::shade_shaded::<F>(width, t, q, &kinds.shaded, shadow, &mut kinds.numbers);
     super::lanes::shade_diffuse::<F>(width, t, q, &kinds.diffuse, shadow);
 }
 
 /// A wave's paths by what shades them, as index lists into the path queue.
 #[derive(Default)]
 pub struct Kinds {
-    /// Paths whose hit has a Lambertian material: the lane kernel's.
+    /// Paths whose hit has a Lambertian material: the diffuse lane kernel's.
     pub diffuse: Vec<u32>,
-    /// Escaped paths and hits on every other material: one path at a time.
-    pub one_at_a_time: Vec<u32>,
+    /// Hits on every other material: the lane kernel that draws their numbers in lanes.
+    pub shaded: Vec<u32>,
+    /// Escaped paths (the environment, light from infinity): one at a time.
+    pub escaped: Vec<u32>,
+    /// Scratch for the numbers the shaded kinds' kernel draws ahead.
+    numbers: Vec<[f32; 2]>,
 }
 
 impl Kinds {
     fn sort<F: Features>(&mut self, t: &Transport, q: &PathQueue) {
         self.diffuse.clear();
-        self.one_at_a_time.clear();
+        self.shaded.clear();
+        self.escaped.clear();
         for (i, hit) in q.hit.iter().enumerate() {
-            let lane = match hit {
-                None => false,
-                Some(h) => !F::NON_DIFFUSE || t.materials.lambertian[t.materials.material_of(h.prim)],
+            let list = match hit {
+                None => &mut self.escaped,
+                Some(h) if !F::NON_DIFFUSE || t.materials.lambertian[t.materials.material_of(h.prim)] => {
+                    &mut self.diffuse
+                }
+                Some(_) => &mut self.shaded,
             };
-            if lane { &mut self.diffuse } else { &mut self.one_at_a_time }.push(i as u32);
+            list.push(i as u32);
         }
     }
 }
@@ -60,83 +68,12 @@ pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut 
     }
 }
 
-/// Shades path `i` (see [`shade`]).
+/// Shades path `i` (see [`shade`]) from its vertex's own stream.
 #[inline]
 pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut ShadowQueue) {
-    let sees_emission = t.rules.counts_emission();
-    let depth = q.depth[i];
-    q.alive[i] = false;
-    let Some(hit) = q.hit[i] else {
-        if F::ENVIRONMENT && depth == 0 && sees_emission {
-            q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
-        }
-        if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
-            q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
-        }
-        return;
-    };
-    let v = t.vertex(&q.ray[i], &hit);
-    if F::NON_DIFFUSE && t.materials.layers.volumes {
-        q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
-    }
-    if F::EMISSION && depth == 0 && sees_emission {
-        q.radiance[i] += v.emission;
-    }
-    if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
-        q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
-    }
-    if !F::DIRECT && !F::INDIRECT {
-        return;
-    }
-    let rng = t.streams.vertex_sampler(q.key[i], depth);
-    if F::NON_DIFFUSE {
-        let sh = t.shading(&v, q.ray[i].dir);
-        if F::DIRECT && t.rules.counts_direct(depth) {
-            let tp = q.throughput[i];
-            t.direct_rays_shaded(&v, &sh, depth, rng, |d| {
-                shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-            });
-        }
-        if F::INDIRECT
-            && let Some((next, w, bounce)) = t.scatter_shaded(&v, &sh, depth, rng)
-        {
-            q.ray[i] = next;
-            q.throughput[i] *= w;
-            q.depth[i] = depth + 1;
-            q.alive[i] = true;
-            q.bounce[i] = bounce;
-            roulette::<F>(t, q, i, depth, rng);
-        }
-        return;
-    }
-    if F::DIRECT && t.rules.counts_direct(depth) {
-        let tp = q.throughput[i];
-        t.direct_rays(&v, depth, rng, |d| {
-            shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-        });
-    }
-    if F::INDIRECT
-        && let Some((next, w, bounce)) = t.scatter(&v, depth, rng)
-    {
-        q.ray[i] = next;
-        q.throughput[i] *= w;
-        q.depth[i] = depth + 1;
-        q.alive[i] = true;
-        q.bounce[i] = bounce;
-        roulette::<F>(t, q, i, depth, rng);
-    }
-}
-
-/// Russian roulette for path `i`'s new continuation, here where the vertex's stream is at
-/// hand (the bounce stage would have to derive it again), applied after the BSDF weight as
-/// [`Transport::continuation`] does; the shadow rays already took the throughput before it.
-#[inline(always)]
-pub(super) fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: Sampler) {
-    if F::ROULETTE {
-        match t.rules.roulette(depth, rng, q.throughput[i]) {
-            Some(f) => q.throughput[i] *= f,
-            None => q.alive[i] = false,
-        }
+    if let Some(v) = one_path::arrive::<F>(t, q, i) {
+        let rng = t.streams.vertex_sampler(q.key[i], q.depth[i]);
+        one_path::leave::<F>(t, q, i, &v, rng, shadow);
     }
 }
 
@@ -151,6 +88,7 @@ mod tests {
     use crate::integrator::wavefront::{Lanes, ShadeWidth};
     use crate::scene::{Bsdf, Light, Scene};
     use crate::settings::{RouletteKind, Settings, Shading};
+    use glam::Vec3;
 
     /// Each path's shadow rays (in the order they were made) and weights, by owner.
     fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
@@ -305,5 +243,49 @@ mod tests {
         mixed.spheres[1].material = 5;
         assert!(Transport::new(&mixed, &s, &crate::effects::Effects::of(&mixed, &s)).materials.non_diffuse);
         assert!(compare::<N>(&mixed, &s, avx) > 500);
+    }
+
+    /// The shaded kinds' kernel (numbers drawn in lanes) against the one-path kernel: walls of
+    /// metallic-roughness, Phong and specular-glossiness materials, a rough conductor sphere
+    /// and a glass one, under the emissive quad (MIS, a light that reads a third number) and a
+    /// point light, with every sampler, both roulettes, and hemisphere sampling.
+    #[test]
+    fn shaded_kinds_in_lanes_match_the_scalar_kernel() {
+        type N = Kernel<true, false, true, true, true, true>;
+        let Some(avx) = Avx2::new() else { return };
+        let mut scene = emissive_box();
+        scene.materials[0].bsdf =
+            Bsdf::MetallicRoughness { base: Vec3::new(0.8, 0.6, 0.4), metallic: 0.3, roughness: 0.4 };
+        scene.materials[1].bsdf =
+            Bsdf::Phong { diffuse: Vec3::splat(0.5), specular: Vec3::splat(0.3), shininess: 40.0 };
+        scene.materials[2].bsdf =
+            Bsdf::SpecularGlossiness { diffuse: Vec3::splat(0.6), specular: Vec3::splat(0.2), glossiness: 0.7 };
+        scene.materials[4].bsdf =
+            Bsdf::Microfacet { alpha: 0.3, eta: Vec3::new(0.2, 0.9, 1.1), k: Vec3::new(3.9, 2.4, 2.2) };
+        scene.lights.push(Light::Point {
+            position: Vec3::new(0.3, 1.2, 0.2),
+            intensity: Vec3::splat(2.0),
+            attenuation: [1.0, 0.0, 0.0],
+        });
+        let mut glass = scene.materials[4].clone();
+        glass.bsdf = Bsdf::Glass { reflectance: Vec3::ONE, transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
+        scene.materials.push(glass);
+        scene.spheres[1].material = 5;
+        tilted_normals(&mut scene);
+        for (sampler, rr_throughput) in [
+            (crate::sampling::SamplerKind::Independent, false),
+            (crate::sampling::SamplerKind::Sobol, true),
+            (crate::sampling::SamplerKind::Stratified, false),
+        ] {
+            let mut s = settings(2, rr_throughput);
+            s.sampling.sampler = sampler;
+            let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
+            assert!(t.rules.mis && t.materials.non_diffuse);
+            assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
+            assert!(compare::<N>(&scene, &s, avx) > 500, "{sampler:?}");
+            let mut hemisphere = s.clone();
+            hemisphere.paths.hemisphere = true;
+            assert!(compare::<N>(&scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+        }
     }
 }

@@ -1,0 +1,141 @@
+//! Shade for the hits on every material but the Lambertian one (glossy, metallic-roughness,
+//! conductors, mirror, glass, the layered glTF model), eight or sixteen paths at a time: each
+//! lane arrives one at a time ([`one_path::arrive`]: the vertex, its emission and the light
+//! its ray found), the group's random numbers are drawn in lanes, as many dimensions as the
+//! group's materials read ([`Transport::shaded_numbers`]), and each lane then leaves its
+//! vertex with the numbers drawn for it ([`one_path::leave`]). The numbers are the vertex
+//! streams' own ([`Drawn`]), so the rays are those of the one-path kernel, bit for bit.
+//!
+//! Drawing the numbers was the largest part of shading these kinds one path at a time
+//! (Sobol's Owen scrambling and index shuffling, per dimension and per vertex); the per-lane
+//! remainder (the material's model, the light samples, the BSDF's value and density) is the
+//! one-path code.
+
+#![allow(clippy::needless_range_loop)]
+
+use super::Features;
+use super::ShadeWidth;
+use super::one_path;
+use super::queues::{PathQueue, ShadowQueue};
+use crate::bsdf::Kind;
+use crate::cpu::{Avx2, Avx512};
+use crate::integrator::{DIM_DIRECT, Transport, Vertex};
+use crate::sampling::numbers::Drawn;
+use crate::sampling::{Sampler, SamplerKind, rng8};
+
+/// Shades the paths `idx` (hits on non-Lambertian materials), `L` at a time; `table` is
+/// scratch for the numbers drawn ahead.
+pub fn shade_shaded<F: Features>(
+    width: ShadeWidth,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+    table: &mut Vec<[f32; 2]>,
+) {
+    match width {
+        // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
+        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512::<F>(avx512, t, q, idx, shadow, table) },
+        // SAFETY: as above.
+        ShadeWidth::Eight(avx2) => unsafe { shade_avx2::<F>(avx2, t, q, idx, shadow, table) },
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn shade_avx2<F: Features>(
+    avx: Avx2,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+    table: &mut Vec<[f32; 2]>,
+) {
+    shade_groups::<F, 8>(avx, t, q, idx, shadow, table)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+fn shade_avx512<F: Features>(
+    avx: Avx512,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+    table: &mut Vec<[f32; 2]>,
+) {
+    shade_groups::<F, 16>(avx.avx2, t, q, idx, shadow, table)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn shade_groups<F: Features, const L: usize>(
+    avx: Avx2,
+    t: &Transport,
+    q: &mut PathQueue,
+    idx: &[u32],
+    shadow: &mut ShadowQueue,
+    table: &mut Vec<[f32; 2]>,
+) {
+    let layout = &t.shaded_numbers;
+    let dims = layout.len();
+    table.resize(L * dims, [0.0; 2]);
+    let hashed = t.streams.pattern.kind == SamplerKind::Independent;
+    for chunk in idx.chunks(L) {
+        let mut vertex: [Option<Vertex>; L] = [None; L];
+        let mut vertex_input = [0u64; L];
+        let mut patterned = [Sampler::default(); L];
+        let mut first = None;
+        // Whether a lane reads light samples (a glossy vertex whose direct light counts):
+        // else only the continuation, lobe and roulette numbers are drawn.
+        let mut lights = false;
+        for (j, &pi) in chunk.iter().enumerate() {
+            let i = pi as usize;
+            let Some(v) = one_path::arrive::<F>(t, q, i) else { continue };
+            let depth = q.depth[i];
+            vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
+            if !hashed {
+                patterned[j] = t.streams.vertex_sampler(q.key[i], depth);
+            }
+            lights |= F::DIRECT
+                && t.rules.counts_direct(depth)
+                && t.materials.models[v.material as usize].kind() == Kind::Glossy;
+            first.get_or_insert(j);
+            vertex[j] = Some(v);
+        }
+        let Some(first) = first else { continue };
+        let rng = if hashed {
+            rng8::for_vertex_lanes(avx, &vertex_input)
+        } else {
+            // Lanes without a vertex take an active lane's stream, so that the numbers are
+            // drawn for streams of one pattern (Sobol's eight at a time).
+            for j in 0..L {
+                if vertex[j].is_none() {
+                    patterned[j] = patterned[first];
+                }
+            }
+            patterned
+        };
+        let drawn = if lights { dims } else { dims.min(DIM_DIRECT as usize) };
+        for d in 0..drawn {
+            if layout.one_d[d] {
+                let a = rng8::next_f32_lanes(avx, &rng, d as u32);
+                for j in 0..L {
+                    table[j * dims + d][0] = a[j];
+                }
+            } else {
+                let (a, b) = rng8::next_2d_lanes(avx, &rng, d as u32);
+                for j in 0..L {
+                    table[j * dims + d] = [a[j], b[j]];
+                }
+            }
+        }
+        for (j, &pi) in chunk.iter().enumerate() {
+            if let Some(v) = &vertex[j] {
+                let numbers =
+                    Drawn { stream: rng[j], table: &table[j * dims..j * dims + drawn], one_d: &layout.one_d, dim: 0 };
+                one_path::leave::<F>(t, q, pi as usize, v, numbers, shadow);
+            }
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! One path's shading, in two halves: what the path finds where it arrives ([`arrive`]:
+//! emission, light its ray found, the vertex) and what it sends on from there ([`leave`]:
+//! direct-light rays and the continuation, from the vertex's random numbers). The one-path
+//! kernel runs both with the vertex's stream; the lane kernel for the non-Lambertian kinds
+//! runs [`arrive`] per lane, draws the group's numbers in lanes and then runs [`leave`] per
+//! lane with them, so both make the same rays, bit for bit.
+
+use super::Features;
+use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
+use crate::integrator::{Transport, Vertex};
+use crate::sampling::Numbers;
+use glam::Vec3;
+
+/// Path `i` arrives: `alive` cleared, emission and the light its ray found added; the vertex
+/// to leave from, `None` when the path ends here (escaped, or nothing is sent on).
+#[inline(always)]
+pub fn arrive<F: Features>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Vertex> {
+    let sees_emission = t.rules.counts_emission();
+    let depth = q.depth[i];
+    q.alive[i] = false;
+    let Some(hit) = q.hit[i] else {
+        if F::ENVIRONMENT && depth == 0 && sees_emission {
+            q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
+        }
+        if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
+            q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
+        }
+        return None;
+    };
+    let v = t.vertex(&q.ray[i], &hit);
+    if F::NON_DIFFUSE && t.materials.layers.volumes {
+        q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
+    }
+    if F::EMISSION && depth == 0 && sees_emission {
+        q.radiance[i] += v.emission;
+    }
+    if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
+        q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
+    }
+    (F::DIRECT || F::INDIRECT).then_some(v)
+}
+
+/// Path `i` leaves vertex `v` (of its current depth) with the numbers `rng`: its shadow rays
+/// (throughput applied) and its continuation after Russian roulette.
+#[inline(always)]
+pub fn leave<F: Features>(
+    t: &Transport,
+    q: &mut PathQueue,
+    i: usize,
+    v: &Vertex,
+    rng: impl Numbers,
+    shadow: &mut ShadowQueue,
+) {
+    let depth = q.depth[i];
+    let tp = q.throughput[i];
+    let push = |shadow: &mut ShadowQueue, d: crate::integrator::DirectRay| {
+        shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+    };
+    let next = if F::NON_DIFFUSE {
+        let sh = t.shading(v, q.ray[i].dir);
+        if F::DIRECT && t.rules.counts_direct(depth) {
+            t.direct_rays_shaded(v, &sh, depth, rng, |d| push(shadow, d));
+        }
+        if F::INDIRECT { t.scatter_shaded(v, &sh, depth, rng) } else { None }
+    } else {
+        if F::DIRECT && t.rules.counts_direct(depth) {
+            t.direct_rays(v, depth, rng, |d| push(shadow, d));
+        }
+        if F::INDIRECT { t.scatter(v, depth, rng) } else { None }
+    };
+    if let Some((ray, w, bounce)) = next {
+        q.ray[i] = ray;
+        q.throughput[i] *= w;
+        q.depth[i] = depth + 1;
+        q.alive[i] = true;
+        q.bounce[i] = bounce;
+        roulette::<F>(t, q, i, depth, rng);
+    }
+}
+
+/// Russian roulette for path `i`'s new continuation, here where the vertex's numbers are at
+/// hand (the bounce stage would have to derive them again), applied after the BSDF weight as
+/// [`Transport::continuation`] does; the shadow rays already took the throughput before it.
+#[inline(always)]
+pub fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: impl Numbers) {
+    if F::ROULETTE {
+        match t.rules.roulette(depth, rng, q.throughput[i]) {
+            Some(f) => q.throughput[i] *= f,
+            None => q.alive[i] = false,
+        }
+    }
+}
