@@ -211,6 +211,28 @@ impl Microfacet {
         (oh > 0.0 && wi.z > 0.0).then_some(wi)
     }
 
+    /// The specular term D(h) G(wo, wi) / (4 cos_o cos_i) (0 where not finite) and the
+    /// density of [`sample_visible`](Self::sample_visible) for the half vector `h` of `wo`
+    /// and `wi` (both above the surface): what [`visible_pdf`](Self::visible_pdf) and a
+    /// model's `eval` compute apart, with D(h) and Lambda(wo) computed once — the same
+    /// operations, so the same bits.
+    #[inline]
+    pub fn spec_and_visible_pdf(&self, wo: Vec3, wi: Vec3, h: Vec3) -> (f32, f32) {
+        let d = self.d(h);
+        let lo = self.lambda(wo);
+        let g = 1.0 / (1.0 + lo + self.lambda(wi));
+        let g = if g.is_finite() { g } else { 0.0 };
+        let spec = d * g / (4.0 * wo.z * wi.z);
+        let spec = if spec.is_finite() { spec } else { 0.0 };
+        if wo.dot(h) <= 0.0 {
+            return (spec, 0.0);
+        }
+        let g1 = 1.0 / (1.0 + lo);
+        let g1 = if g1.is_finite() { g1 } else { 0.0 };
+        let p = g1 * d / (4.0 * wo.z);
+        (spec, if p.is_finite() { p } else { 0.0 })
+    }
+
     /// Density of [`sample_visible`](Self::sample_visible): G1(wo) D(h) / (4 cos_o).
     #[inline]
     pub fn visible_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {

@@ -164,6 +164,17 @@ impl Model {
         }
     }
 
+    /// [`eval`](Self::eval) and [`pdf`](Self::pdf) of one direction (fused where a model
+    /// shares work between them; the same values either way).
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        match self {
+            Model::Pbr(m) => m.eval_pdf(wo, wi),
+            Model::Glossy(m) => m.eval_pdf(wo, wi),
+            m => (m.eval(wo, wi), m.pdf(wo, wi)),
+        }
+    }
+
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self {

@@ -91,7 +91,25 @@ impl Pbr {
             return None;
         }
         let wi = self.lobe().sample_with_diffuse(wo, u, self.specular_probability(wo))?;
-        BsdfSample::continuous(wi, self.pdf(wo, wi), || self.eval(wo, wi))
+        let (f, pdf) = self.eval_pdf(wo, wi);
+        BsdfSample::continuous(wi, pdf, || f)
+    }
+
+    /// [`eval`](Self::eval) and [`pdf`](Self::pdf) at once (the half vector, D and Smith's
+    /// Lambda(wo) shared), bit for bit the two calls' values.
+    #[inline]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        if wo.z <= 0.0 || wi.z <= 0.0 {
+            return (Vec3::ZERO, 0.0);
+        }
+        let p = self.specular_probability(wo);
+        let diffuse_pdf = (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z);
+        let Some(h) = (wo + wi).try_normalize() else { return (Vec3::ZERO, p * 0.0 + diffuse_pdf) };
+        let oh = wo.dot(h);
+        let (spec, visible) = self.lobe().spec_and_visible_pdf(wo, wi, h);
+        let f = self.diffuse * (Vec3::ONE - Self::schlick(self.diffuse_f0, oh)) * FRAC_1_PI
+            + Self::schlick(self.f0, oh) * spec;
+        (f, p * visible + diffuse_pdf)
     }
 
     #[inline]

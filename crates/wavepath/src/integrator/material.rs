@@ -133,11 +133,11 @@ impl Transport<'_> {
                 let u = super::light_numbers(&mut rng, light);
                 let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
                 let wi = to_local(&sh.frame, ls.wi);
-                let f = sh.model.eval(sh.wo, wi);
+                let (f, pdf_b) = sh.model.eval_pdf(sh.wo, wi);
                 if f == Vec3::ZERO {
                     continue;
                 }
-                let w = power_heuristic(ns as f32 * pdf_l, sh.model.pdf(sh.wo, wi));
+                let w = power_heuristic(ns as f32 * pdf_l, pdf_b);
                 let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
                 if w <= 0.0 || !v.consistent(ls.wi) {
                     continue;

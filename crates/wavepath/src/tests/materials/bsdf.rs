@@ -150,6 +150,28 @@ fn sample_weights_are_f_cos_over_pdf() {
     }
 }
 
+/// The fused value-and-density is the two calls' values, bit for bit, over the hemisphere
+/// and at grazing, coincident and opposite directions (the light-sampling code uses it where
+/// the one-path code once called both).
+#[test]
+fn eval_pdf_is_eval_and_pdf_bit_for_bit() {
+    let mut r = Sampler::for_sample(5, 0, 0);
+    for (name, m) in glossy_models() {
+        let mut dirs: Vec<Vec3> = (0..400).map(|_| wo_at(r.next_f32() * 2.0 - 1.0, r.next_f32() * 6.3)).collect();
+        dirs.extend([Vec3::Z, -Vec3::Z, Vec3::X, wo_at(1e-7, 0.3), wo_at(0.5, 0.0), wo_at(0.5, std::f32::consts::PI)]);
+        for (k, &wo) in dirs.iter().enumerate() {
+            for &wi in dirs.iter().skip(k % 7).step_by(7) {
+                let (f, pdf) = m.eval_pdf(wo, wi);
+                let (ef, ep) = (m.eval(wo, wi), m.pdf(wo, wi));
+                assert!(
+                    f.to_array().map(f32::to_bits) == ef.to_array().map(f32::to_bits) && pdf.to_bits() == ep.to_bits(),
+                    "{name}: wo {wo} wi {wi}: fused ({f}, {pdf}) against ({ef}, {ep})"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn non_delta_lobes_are_reciprocal() {
     let mut r = Sampler::for_sample(4, 0, 0);
