@@ -64,7 +64,10 @@ PEERS = ["embree:robust", "embree:single", "embree:packet16", "tinybvh:bvh8", "o
 LARGE_RENDER = ("cs184/reconstructed/sky/CBlucy.dae", "-s 16 -l 4 -m 5 -r 800 600")
 STAGES = ["generate", "traverse", "shade", "shadow", "compact"]
 LARGE_SOURCE = "meshes/lucy_100k.obj"
-E2E_QUICK = "--scenes cornell-flush -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
+E2E_QUICK = "--scenes box -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
+# The harness's older scenes were made when wavepath's emitters were two-sided (their Mitsuba
+# versions carry a back copy of each emitter): they compare like with like only so.
+E2E_OLDER = "--scenes cornell-flush,cornell-dragon --wavepath-args=--two-sided-emission"
 # Effects every global-illumination render of a lit scene has; the table lists the others.
 COMMON_EFFECTS = {"emission", "area-lights", "direct-light", "indirect", "russian-roulette"}
 
@@ -585,20 +588,23 @@ def part_e2e(args, scenes_dir, peers_dir):
         os.symlink(scenes_dir, link)
     elif os.path.realpath(link) != scenes_dir:
         raise SystemExit(f"{link} exists and is not a link to {scenes_dir}; e2e needs it (or another --peers-work)")
-    run_name = "benchmarks-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    extra = shlex.split(args.e2e_args)
-    cmd = [os.path.join(work, "e2e", "run.sh"), "--threads", str(args.threads), "--run-name", run_name,
-           "--wait-quiet", str(int(args.wait_quiet))] + extra
+    part = {"load_before": loadavg(), "date": now_utc(), "cmds": [], "rows": []}
     env = dict(os.environ, WAVEPATH=os.path.abspath(args.bin), E2E_BUILD=os.path.join(work, "e2e", "build"))
-    part = {"load_before": loadavg(), "date": now_utc(), "cmd": cmd[1:], "extra": extra}
     logf = os.path.join(args.work, "e2e.log")
-    log(f"e2e comparison with Mitsuba 3 (log: {logf})")
+    # One harness run per --e2e-args (the older scenes need their own wavepath options).
     with open(logf, "w") as lf:
-        r = subprocess.run(cmd, env=env, stdout=lf, stderr=lf, cwd=REPO)
-    if r.returncode != 0:
-        raise SystemExit(f"e2e harness failed (exit {r.returncode}); see {logf}")
-    with open(os.path.join(work, "e2e", "build", "results", run_name + ".jsonl")) as f:
-        part["rows"] = [json.loads(l) for l in f if l.strip()]
+        for k, e2e_args in enumerate(args.e2e_args):
+            run_name = "benchmarks-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S") + f"-{k}"
+            cmd = [os.path.join(work, "e2e", "run.sh"), "--threads", str(args.threads), "--run-name", run_name,
+                   "--wait-quiet", str(int(args.wait_quiet))] + shlex.split(e2e_args)
+            log(f"e2e comparison with Mitsuba 3, run {k + 1} of {len(args.e2e_args)} (log: {logf})")
+            lf.flush()
+            r = subprocess.run(cmd, env=env, stdout=lf, stderr=lf, cwd=REPO)
+            if r.returncode != 0:
+                raise SystemExit(f"e2e harness failed (exit {r.returncode}); see {logf}")
+            with open(os.path.join(work, "e2e", "build", "results", run_name + ".jsonl")) as f:
+                part["rows"] += [json.loads(l) for l in f if l.strip()]
+            part["cmds"].append(cmd[1:])
     part["load_after"] = loadavg()
     busy = [r.get("other_busy", 0.0) for r in part["rows"] if r.get("kind") == "ladder"] or [0.0]
     part["busy_mean"], part["busy_max"] = statistics.mean(busy), max(busy)
@@ -628,9 +634,10 @@ def md_e2e(args, part):
                        f"{fmt(d.get('speedup_render'))} | {fmt(d.get('speedup_wall'))} | "
                        f"{100 * agree.get('mean_rel_diff_lum_masked', float('nan')):+.1f}% |")
     out.append("")
-    shown = [c for i, c in enumerate(part["cmd"]) if c != "--run-name" and part["cmd"][i - 1] != "--run-name"]
-    out.append(f"Command: `WAVEPATH={args.bin_shown} ../shared/peers/e2e/run.sh {shlex.join(shown)}` "
-               f"(in a scratch copy).  ")
+    for cmd in part["cmds"]:
+        shown = [c for i, c in enumerate(cmd) if c != "--run-name" and cmd[i - 1] != "--run-name"]
+        out.append(f"Command: `WAVEPATH={args.bin_shown} ../shared/peers/e2e/run.sh {shlex.join(shown)}` "
+                   f"(in a scratch copy).  ")
     out.append(stamp(part) + "\n")
     return out
 
@@ -844,9 +851,10 @@ def main(argv):
     ap.add_argument("--reps", type=int, default=None, help="timed passes per peer run (default 10; quick 3)")
     ap.add_argument("--wait-quiet", type=float, default=None,
                     help="before each run wait up to S s for a quiet second (default 2; quick 0)")
-    ap.add_argument("--e2e-args", default=None,
-                    help="extra options for e2e/run.sh (default none: its full comparison, 15-25 min; "
-                         "quick: " + repr(E2E_QUICK) + ", under a minute)")
+    ap.add_argument("--e2e-args", action="append", default=None,
+                    help="extra options for one e2e/run.sh run; repeat for several runs in one table "
+                         "(default: the front views, then the older cornell scenes with "
+                         + repr(E2E_OLDER) + "; quick: " + repr(E2E_QUICK) + ", under a minute)")
     ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
     ap.add_argument("--python", default="python3",
                     help="python: the interpreter with numpy, the wavepath package, embreex, open3d and mitsuba "
@@ -859,7 +867,7 @@ def main(argv):
     args.peer_passes = args.peer_passes or (1 if q else 3)
     args.reps = args.reps or (3 if q else 10)
     args.large_levels = [int(x) for x in args.large_levels.split(",") if x]
-    args.e2e_args = args.e2e_args if args.e2e_args is not None else (E2E_QUICK if q else "")
+    args.e2e_args = args.e2e_args if args.e2e_args is not None else ([E2E_QUICK] if q else ["", E2E_OLDER])
     args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:

@@ -83,9 +83,7 @@ impl Glossy {
         if wo.z <= 0.0 || self.diffuse.max(self.specular).max_element() <= 0.0 {
             return None;
         }
-        let wi = self.lobe().sample_with_diffuse(wo, u, self.specular_probability())?;
-        let (f, pdf) = self.eval_pdf(wo, wi);
-        BsdfSample::continuous(wi, pdf, || f)
+        self.lobe().sample_mixture(wo, u, self.specular_probability(), |wi| self.eval_pdf(wo, wi))
     }
 
     /// [`eval`](Self::eval) and [`pdf`](Self::pdf) at once (the half vector, D and Smith's

@@ -189,6 +189,22 @@ impl Microfacet {
         }
     }
 
+    /// A diffuse-plus-specular model's sample: the direction of
+    /// [`sample_with_diffuse`](Self::sample_with_diffuse) with the model's value and density
+    /// there (`eval_pdf`, computed together).
+    #[inline]
+    pub fn sample_mixture(
+        &self,
+        wo: Vec3,
+        u: [f32; 3],
+        specular: f32,
+        eval_pdf: impl FnOnce(Vec3) -> (Vec3, f32),
+    ) -> Option<BsdfSample> {
+        let wi = self.sample_with_diffuse(wo, u, specular)?;
+        let (f, pdf) = eval_pdf(wi);
+        BsdfSample::continuous(wi, pdf, || f)
+    }
+
     /// GGX only: `wo` reflected about a normal drawn from those visible from `wo` (Heitz
     /// 2018, the stretched hemisphere construction). Its sample weight F G / G1(wo) stays
     /// below F at grazing angles, where drawing from D alone gives weights of order 1 / alpha.

@@ -90,9 +90,7 @@ impl Pbr {
         if wo.z <= 0.0 {
             return None;
         }
-        let wi = self.lobe().sample_with_diffuse(wo, u, self.specular_probability(wo))?;
-        let (f, pdf) = self.eval_pdf(wo, wi);
-        BsdfSample::continuous(wi, pdf, || f)
+        self.lobe().sample_mixture(wo, u, self.specular_probability(wo), |wi| self.eval_pdf(wo, wi))
     }
 
     /// [`eval`](Self::eval) and [`pdf`](Self::pdf) at once (the half vector, D and Smith's
