@@ -193,7 +193,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], blk.tri_lanes) | others;
+                        let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], sh.tend[k], blk.tri_lanes) | others;
                         while cand != 0 {
                             let lane = cand.trailing_zeros() as usize;
                             cand &= cand - 1;
