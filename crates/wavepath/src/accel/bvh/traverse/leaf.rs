@@ -56,12 +56,11 @@ pub fn shear<'a>(sr: &'a mut Option<ShearedRay>, ray: &Ray) -> &'a ShearedRay {
 }
 
 impl<K: BoxTest> Tracer<'_, K> {
-    /// Lanes of a leaf's block of `count` primitives that need the scalar test for a range
-    /// from `tmin` to `end` (`range_end` of its far end).
+    /// Lanes of a leaf's block that need the scalar test for a range from `tmin` to `end`
+    /// (`range_end` of its far end).
     #[inline(always)]
-    pub fn block_candidates(self, blk: &Tri4, count: usize, sr: &ShearedRay, tmin: f32, end: f32) -> u32 {
-        let all = (1u32 << count) - 1;
-        self.isa.tri_filter(blk, sr, tmin, end, blk.tri_lanes) | (all & !blk.tri_lanes)
+    pub fn block_candidates(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32) -> u32 {
+        self.isa.tri_filter(blk, sr, tmin, end, blk.tri_lanes) | blk.other_lanes
     }
 
     /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the
@@ -79,11 +78,10 @@ impl<K: BoxTest> Tracer<'_, K> {
         }
     }
 
-    /// Offers `best` the hits closer than it in a leaf's block of `count` primitives, already
-    /// at hand.
+    /// Offers `best` the hits closer than it in a leaf's block, already at hand.
     #[inline(always)]
-    pub fn closest_in_block(self, blk: &Tri4, count: usize, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
-        let cand = self.block_candidates(blk, count, sr, ray.tmin, best.end);
+    pub fn closest_in_block(self, blk: &Tri4, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
+        let cand = self.block_candidates(blk, sr, ray.tmin, best.end);
         self.offer_lanes(blk, cand, sr, ray, best);
     }
 
@@ -120,9 +118,8 @@ impl<K: BoxTest> Tracer<'_, K> {
     /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
     #[inline(always)]
     pub fn leaf_any(self, r: u32, sr: &ShearedRay, ray: &Ray, scratch: &mut Tri4) -> bool {
-        let (first, count) = leaf_range(r);
-        let blk = self.bvh.block(first, scratch);
-        let mut cand = self.block_candidates(blk, count, sr, ray.tmin, range_end(ray.tmax));
+        let blk = self.bvh.block(leaf_range(r).0, scratch);
+        let mut cand = self.block_candidates(blk, sr, ray.tmin, range_end(ray.tmax));
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
@@ -144,10 +141,8 @@ impl<K: PacketTest> Tracer<'_, K> {
     /// same values, `PacketShear::sheared`).
     #[inline(always)]
     pub fn leaf_closest_lane(self, r: u32, p: &PacketShear, k: usize, ray: &Ray, best: &mut Best, scratch: &mut Tri4) {
-        let (first, count) = leaf_range(r);
-        let blk = self.bvh.block(first, scratch);
-        let all = (1u32 << count) - 1;
-        let cand = self.isa.tri_filter_lane(blk, p, k, ray, best.end, blk.tri_lanes) | (all & !blk.tri_lanes);
+        let blk = self.bvh.block(leaf_range(r).0, scratch);
+        let cand = self.isa.tri_filter_lane(blk, p, k, ray, best.end, blk.tri_lanes) | blk.other_lanes;
         if cand != 0 {
             self.offer_lanes(blk, cand, &p.sheared(k, ray), ray, best);
         }

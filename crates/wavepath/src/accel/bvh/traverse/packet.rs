@@ -163,7 +163,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                     let blk = bvh.block(first, &mut stack.leaf);
                     // As `leaf_any`: the filter's triangle lanes and every other lane, then the
                     // exact test in lane order up to the first hit.
-                    let others = ((1u32 << count) - 1) & !blk.tri_lanes;
+                    let others = blk.other_lanes;
                     let mut m = entered & !hit;
                     if m == 0 {
                         continue;

@@ -271,8 +271,6 @@ pub(super) unsafe fn filter4_tail(
         let det = _mm_add_ps(_mm_add_ps(u, v), w);
         let sign = _mm_set1_ps(-0.0);
         let det_abs = _mm_andnot_ps(sign, det);
-        // det != 0 and finite (NaN fails the ordered compare).
-        let det_ok = _mm_and_ps(_mm_cmpneq_ps(det, zero), _mm_cmplt_ps(det_abs, _mm_set1_ps(f32::INFINITY)));
         let tt = _mm_add_ps(
             _mm_add_ps(_mm_mul_ps(u, _mm_mul_ps(sz, az)), _mm_mul_ps(v, _mm_mul_ps(sz, bz))),
             _mm_mul_ps(w, _mm_mul_ps(sz, cz)),
@@ -283,9 +281,10 @@ pub(super) unsafe fn filter4_tail(
             _mm_cmplt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmin), det_abs)),
             _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tend), det_abs)),
         );
-        let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
-        let keep = _mm_or_ps(on_edge, accept);
-        _mm_movemask_ps(keep) as u32
+        // Not rejected for a zero or non-finite det (the scalar test rejects those lanes, and
+        // they are rare: testing it here cost every leaf four operations).
+        let reject = _mm_or_ps(_mm_and_ps(neg, pos), out_of_range);
+        _mm_movemask_ps(_mm_andnot_ps(on_edge, reject)) as u32 ^ 0xf
     }
 }
 
