@@ -88,6 +88,8 @@ pub fn store_leaves(nodes: &mut [Node8], ids: &[u32], scene: &Scene, packed: boo
                                 block.c[corner][axis][lane] = v[axis];
                             }
                         }
+                    } else {
+                        block.other_lanes |= 1 << lane;
                     }
                 }
                 block
@@ -235,6 +237,8 @@ fn for_each_leaf(nodes: &mut [Node8], mut store: impl FnMut(u32, u32) -> u32) {
 struct Packed {
     ids: [u32; LANES],
     tri_lanes: u32,
+    /// Sphere lanes (padding lanes hold `u32::MAX`).
+    other_lanes: u32,
     verts: [u32; 3 * LANES],
     nverts: usize,
     local: [u8; 3 * LANES],
@@ -242,9 +246,11 @@ struct Packed {
 
 impl Packed {
     fn of(ids: &[u32; LANES], corners: &[[u32; 3]; LANES], tri_count: u32) -> Packed {
-        let mut p = Packed { ids: *ids, tri_lanes: 0, verts: [0; 3 * LANES], nverts: 0, local: [0; 3 * LANES] };
+        let mut p =
+            Packed { ids: *ids, tri_lanes: 0, other_lanes: 0, verts: [0; 3 * LANES], nverts: 0, local: [0; 3 * LANES] };
         for lane in 0..LANES {
             if ids[lane] >= tri_count {
+                p.other_lanes |= ((ids[lane] != u32::MAX) as u32) << lane;
                 continue;
             }
             p.tri_lanes |= 1 << lane;
@@ -270,7 +276,7 @@ impl Packed {
         out[..LANES].copy_from_slice(&self.ids);
         let idx: [u32; 3] = bytemuck::cast(self.local);
         out[4..7].copy_from_slice(&idx);
-        out[7] = self.tri_lanes;
+        out[7] = self.tri_lanes | self.other_lanes << 4;
         for (i, &v) in self.verts[..self.nverts].iter().enumerate() {
             let p = if self.tri_lanes == 0 { Vec3::ZERO } else { positions[v as usize] };
             out[PACKED_HEAD + 3 * i..PACKED_HEAD + 3 * i + 3].copy_from_slice(&p.to_array().map(f32::to_bits));

@@ -75,8 +75,8 @@ impl<K: BoxTest> BoxTest for Cut<'_, K> {
     }
 
     #[inline(always)]
-    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
-        self.k.tri_filter(blk, sr, tmin, tmax, lanes)
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32, lanes: u32) -> u32 {
+        self.k.tri_filter(blk, sr, tmin, end, lanes)
     }
 }
 
@@ -97,8 +97,8 @@ impl<K: PacketTest> PacketTest for Cut<'_, K> {
     }
 
     #[inline(always)]
-    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
-        self.k.tri_filter_lane(blk, p, k, ray, lanes)
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32, lanes: u32) -> u32 {
+        self.k.tri_filter_lane(blk, p, k, ray, end, lanes)
     }
 
     #[inline(always)]

@@ -213,10 +213,12 @@ pub trait BoxTest: Copy {
     }
 
     /// The lanes of `lanes` whose triangle in `blk` the scalar watertight test might hit in
-    /// `[tmin, tmax]`: a cleared bit is a certain miss. The reference keeps every lane.
+    /// `[tmin, tmax]`, given `end` = `range_end(tmax)` (the caller keeps it beside its `tmax`
+    /// instead of deriving it at every leaf): a cleared bit is a certain miss. The reference
+    /// keeps every lane.
     #[inline(always)]
-    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
-        let _ = (blk, sr, tmin, tmax);
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32, lanes: u32) -> u32 {
+        let _ = (blk, sr, tmin, end);
         lanes
     }
 }
@@ -245,11 +247,12 @@ pub trait PacketTest: BoxTest {
         PacketShear::each(rays)
     }
 
-    /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`); the SIMD paths start from the
-    /// set-up's values instead of deriving them again at every leaf.
+    /// [`BoxTest::tri_filter`] for lane `k` of `p` (ray `ray`) and the range end `end` (its
+    /// `tend[k]`, or `range_end` of a closer hit); the SIMD paths start from the set-up's
+    /// values instead of deriving them again at every leaf.
     #[inline(always)]
-    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
-        self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, ray.tmax, lanes)
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32, lanes: u32) -> u32 {
+        self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, end, lanes)
     }
 
     /// The rays of `p` (bit `k`: lane `k`, live, direction octant `oct`, closest hit so far

@@ -260,7 +260,7 @@ fn leaf_rays<K: PacketTest>(
     while rest != 0 {
         let k = rest.trailing_zeros() as usize;
         rest &= rest - 1;
-        t.closest_in_block(blk, count, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
+        t.closest_in_block(blk, &p.sheared(k, &rays[k]), &rays[k], &mut best[k]);
         closest[k] = best[k].t;
     }
 }

@@ -5,19 +5,27 @@
 use super::closest::Flight;
 use super::{Stack, Walker};
 use crate::accel::TraceCounters;
-use crate::accel::bvh::simd::{BoxRay, BoxTest};
+use crate::accel::bvh::simd::{BoxRay, PACKET, PacketShear, PacketTest};
 use crate::geometry::{Hit, Ray};
 
-impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, [&mut Stack<N, X>; 3]> {
-    /// Closest hits of the rays `rays[i]` (box-test values `prep[i]`) for each `i` of
-    /// `which`, into `hits[i]`, one stack per ray in flight.
+impl<K: PacketTest, const N: usize, X: Copy + Default> Walker<'_, K, [&mut Stack<N, X>; 3]> {
+    /// Closest hits of the rays `rays[i]` (box-test values `prep[i]`, leaf-test set-up lane
+    /// `i % 8` of `shears[i / 8]`) for each `i` of `which`, into `hits[i]`, one stack per ray
+    /// in flight.
     #[inline(always)]
-    pub fn interleaved(&mut self, rays: &[Ray], prep: &[BoxRay], which: &[u8], hits: &mut [Option<Hit>]) {
+    pub fn interleaved(
+        &mut self,
+        rays: &[Ray],
+        prep: &[BoxRay],
+        shears: &[PacketShear],
+        which: &[u8],
+        hits: &mut [Option<Hit>],
+    ) {
         let t = self.t;
         debug_assert!(Stack::<N, X>::holds(t.bvh.stack_need));
         let [sa, sb, sc] = &mut self.stack;
         let counters = &mut *self.counters;
-        let mut pending = Pending { rays, prep, which: which.iter() };
+        let mut pending = Pending { rays, prep, shears, which: which.iter() };
         let mut a = pending.take(hits, counters);
         let mut b = pending.take(hits, counters);
         let mut c = pending.take(hits, counters);
@@ -33,6 +41,7 @@ impl<K: BoxTest, const N: usize, X: Copy + Default> Walker<'_, K, [&mut Stack<N,
 struct Pending<'r, 'w> {
     rays: &'r [Ray],
     prep: &'r [BoxRay],
+    shears: &'r [PacketShear],
     which: std::slice::Iter<'w, u8>,
 }
 
@@ -44,7 +53,7 @@ impl<'r> Pending<'r, '_> {
             let i = i as usize;
             counters.rays += 1;
             if self.prep[i].live {
-                return Some(Flight::new(&self.rays[i], &self.prep[i], i));
+                return Some(Flight::new(&self.rays[i], &self.prep[i], &self.shears[i / PACKET], i % PACKET, i));
             }
             hits[i] = None;
         }
@@ -55,7 +64,7 @@ impl<'r> Pending<'r, '_> {
 /// One step of a ray in flight (on its own stack, in `w`); a ray done gives its place to the
 /// next.
 #[inline(always)]
-fn advance<'r, K: BoxTest, const N: usize, X: Copy + Default>(
+fn advance<'r, K: PacketTest, const N: usize, X: Copy + Default>(
     flight: &mut Option<Flight<'r>>,
     w: &mut Walker<'_, K, &mut Stack<N, X>>,
     pending: &mut Pending<'r, '_>,

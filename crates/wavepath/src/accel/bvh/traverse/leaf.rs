@@ -3,16 +3,19 @@
 //! ([`BoxTest::keeps`]: always true without cutouts) whether its hit counts; and the closest
 //! hit so far.
 use super::Tracer;
-use crate::accel::bvh::simd::{BoxTest, TriRays};
+use crate::accel::bvh::simd::{BoxTest, PacketShear, PacketTest, TriRays};
 use crate::accel::bvh::tree::{Tri4, leaf_range};
 use crate::accel::sphere;
-use crate::accel::triangle::{ShearedRay, intersect_sheared};
+use crate::accel::triangle::{ShearedRay, intersect_sheared, range_end};
 use crate::geometry::{Hit, Ray};
 use glam::Vec3;
 
 /// The closest hit so far.
 pub struct Best {
     pub t: f32,
+    /// `range_end(t)`, the end the leaf filter checks against: kept beside `t` (which changes
+    /// at a hit, a few times a ray) rather than derived at every leaf.
+    pub end: f32,
     prim: u32,
     u: f32,
     v: f32,
@@ -23,7 +26,7 @@ impl Best {
     /// Nothing found yet within `[tmin, tmax]`.
     #[inline(always)]
     pub fn new(tmax: f32) -> Best {
-        Best { t: tmax, prim: u32::MAX, u: 0.0, v: 0.0, found: false }
+        Best { t: tmax, end: range_end(tmax), prim: u32::MAX, u: 0.0, v: 0.0, found: false }
     }
 
     /// Takes a hit at `t` (barycentrics `u`, `v`) on primitive `id` if it is closer, or as
@@ -31,7 +34,7 @@ impl Best {
     #[inline(always)]
     pub fn offer(&mut self, (t, u, v): (f32, f32, f32), id: u32) {
         if !self.found || t < self.t || (t == self.t && id < self.prim) {
-            *self = Best { t, prim: id, u, v, found: true };
+            *self = Best { t, end: range_end(t), prim: id, u, v, found: true };
         }
     }
 
@@ -53,11 +56,11 @@ pub fn shear<'a>(sr: &'a mut Option<ShearedRay>, ray: &Ray) -> &'a ShearedRay {
 }
 
 impl<K: BoxTest> Tracer<'_, K> {
-    /// Lanes of a leaf's block of `count` primitives that need the scalar test.
+    /// Lanes of a leaf's block that need the scalar test for a range from `tmin` to `end`
+    /// (`range_end` of its far end).
     #[inline(always)]
-    pub fn block_candidates(self, blk: &Tri4, count: usize, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 {
-        let all = (1u32 << count) - 1;
-        self.isa.tri_filter(blk, sr, tmin, tmax, blk.tri_lanes) | (all & !blk.tri_lanes)
+    pub fn block_candidates(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32) -> u32 {
+        self.isa.tri_filter(blk, sr, tmin, end, blk.tri_lanes) | blk.other_lanes
     }
 
     /// The exact test of lane `lane` of a leaf. Triangle corners come from the block the
@@ -75,18 +78,16 @@ impl<K: BoxTest> Tracer<'_, K> {
         }
     }
 
-    /// Offers `best` the hits of leaf `r` closer than it (`scratch` holds the leaf's block
-    /// when the leaves index their corners).
+    /// Offers `best` the hits closer than it in a leaf's block, already at hand.
     #[inline(always)]
-    pub fn leaf_closest(self, r: u32, sr: &ShearedRay, ray: &Ray, best: &mut Best, scratch: &mut Tri4) {
-        let (first, count) = leaf_range(r);
-        self.closest_in_block(self.bvh.block(first, scratch), count, sr, ray, best);
+    pub fn closest_in_block(self, blk: &Tri4, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
+        let cand = self.block_candidates(blk, sr, ray.tmin, best.end);
+        self.offer_lanes(blk, cand, sr, ray, best);
     }
 
-    /// [`Tracer::leaf_closest`] in a leaf's block of `count` primitives, already at hand.
+    /// Offers `best` the exact hits of the lanes `cand` of `blk` that count.
     #[inline(always)]
-    pub fn closest_in_block(self, blk: &Tri4, count: usize, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
-        let mut cand = self.block_candidates(blk, count, sr, ray.tmin, best.t);
+    fn offer_lanes(self, blk: &Tri4, mut cand: u32, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
@@ -117,9 +118,8 @@ impl<K: BoxTest> Tracer<'_, K> {
     /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
     #[inline(always)]
     pub fn leaf_any(self, r: u32, sr: &ShearedRay, ray: &Ray, scratch: &mut Tri4) -> bool {
-        let (first, count) = leaf_range(r);
-        let blk = self.bvh.block(first, scratch);
-        let mut cand = self.block_candidates(blk, count, sr, ray.tmin, ray.tmax);
+        let blk = self.bvh.block(leaf_range(r).0, scratch);
+        let mut cand = self.block_candidates(blk, sr, ray.tmin, range_end(ray.tmax));
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
@@ -130,5 +130,21 @@ impl<K: BoxTest> Tracer<'_, K> {
             }
         }
         false
+    }
+}
+
+impl<K: PacketTest> Tracer<'_, K> {
+    /// Offers `best` the hits of leaf `r` closer than it (`scratch` holds the leaf's block
+    /// when the leaves index their corners), with the ray's leaf set-up in lane `k` of `p` (its group's,
+    /// made for eight rays at once ahead of their traversals): the filter reads it there, and
+    /// only a leaf with a lane left builds the ray's [`ShearedRay`] for the exact test (the
+    /// same values, `PacketShear::sheared`).
+    #[inline(always)]
+    pub fn leaf_closest_lane(self, r: u32, p: &PacketShear, k: usize, ray: &Ray, best: &mut Best, scratch: &mut Tri4) {
+        let blk = self.bvh.block(leaf_range(r).0, scratch);
+        let cand = self.isa.tri_filter_lane(blk, p, k, ray, best.end, blk.tri_lanes) | blk.other_lanes;
+        if cand != 0 {
+            self.offer_lanes(blk, cand, &p.sheared(k, ray), ray, best);
+        }
     }
 }

@@ -163,7 +163,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                     let blk = bvh.block(first, &mut stack.leaf);
                     // As `leaf_any`: the filter's triangle lanes and every other lane, then the
                     // exact test in lane order up to the first hit.
-                    let others = ((1u32 << count) - 1) & !blk.tri_lanes;
+                    let others = blk.other_lanes;
                     let mut m = entered & !hit;
                     if m == 0 {
                         continue;
@@ -193,7 +193,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], blk.tri_lanes) | others;
+                        let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], sh.tend[k], blk.tri_lanes) | others;
                         while cand != 0 {
                             let lane = cand.trailing_zeros() as usize;
                             cand &= cand - 1;

@@ -19,6 +19,9 @@ pub const LANES: usize = 4;
 pub struct Tri4 {
     pub c: [[[f32; LANES]; 3]; 3],
     pub tri_lanes: u32,
+    /// The lanes that hold a sphere: the filter does not see them, the exact test decides
+    /// each (kept here, from padding, instead of derived from the leaf's count at every leaf).
+    pub other_lanes: u32,
     /// Scene primitive id of each lane (triangles first, then spheres; padding `u32::MAX`).
     pub ids: [u32; LANES],
 }
@@ -30,13 +33,13 @@ const _: () = assert!(std::mem::size_of::<Tri4>() == 192);
 pub struct Line(pub [u32; 16]);
 
 /// Words of a packed record before its vertices: four ids, twelve byte-sized corner
-/// indices, and the triangle lanes.
+/// indices, and the triangle lanes (bits 0-3) with the sphere lanes (bits 4-7).
 pub const PACKED_HEAD: usize = 8;
 
 /// Writes the block the SIMD filter reads from the packed record at the start of `rec`:
 /// ids (words 0-3), corner `k` of lane `l` as local vertex `byte 3 l + k` of words 4-6,
-/// triangle lanes (word 7), then each local vertex's x, y, z. Padding and sphere lanes use
-/// vertex 0 and are masked out. `rec` is four lines (the store ends with spare ones) and
+/// triangle and sphere lanes (word 7, bits 0-3 and 4-7), then each local vertex's x, y, z.
+/// Padding and sphere lanes use vertex 0 and are masked out. `rec` is four lines (the store ends with spare ones) and
 /// every index is taken modulo its length, so no access needs a bounds check.
 #[inline(always)]
 fn gather_packed(rec: &[u32; 64], out: &mut Tri4) {
@@ -47,7 +50,8 @@ fn gather_packed(rec: &[u32; 64], out: &mut Tri4) {
     for corner in 0..3 {
         out.c[corner] = std::array::from_fn(|axis| std::array::from_fn(|lane| coord(lane, corner, axis)));
     }
-    out.tri_lanes = rec[7];
+    out.tri_lanes = rec[7] & 0xf;
+    out.other_lanes = rec[7] >> 4 & 0xf;
     out.ids = [rec[0], rec[1], rec[2], rec[3]];
 }
 

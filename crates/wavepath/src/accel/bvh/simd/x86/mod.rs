@@ -55,18 +55,18 @@ impl BoxTest for Sse {
     }
 
     #[inline(always)]
-    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32, lanes: u32) -> u32 {
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
-        unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
+        unsafe { tri_filter4(blk, sr, tmin, end) & lanes }
     }
 }
 
 impl PacketTest for Sse {
     #[inline(always)]
-    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32, lanes: u32) -> u32 {
         let _ = ray;
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
-        unsafe { tri_filter4_lane(blk, p, k % PACKET) & lanes }
+        unsafe { tri_filter4_lane(blk, p, k % PACKET, end) & lanes }
     }
 }
 
@@ -119,7 +119,8 @@ impl BoxTest for Avx2 {
             let mask = _mm256_movemask_ps(hit) as u32;
             let n = mask.count_ones();
             if n == 1 {
-                return (1, node.child[mask.trailing_zeros() as usize]);
+                // `& 7`: the slot of a one-bit mask of eight lanes, without a bounds check.
+                return (1, node.child[mask.trailing_zeros() as usize & 7]);
             }
             if n > 1 {
                 return (n, push_ordered(node, oct, enter, hit, n, nodes, dists).0);
@@ -167,18 +168,18 @@ impl BoxTest for Avx2 {
     }
 
     #[inline(always)]
-    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, lanes: u32) -> u32 {
+    fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32, lanes: u32) -> u32 {
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
-        unsafe { tri_filter4(blk, sr, tmin, tmax) & lanes }
+        unsafe { tri_filter4(blk, sr, tmin, end) & lanes }
     }
 }
 
 impl PacketTest for Avx2 {
     #[inline(always)]
-    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, lanes: u32) -> u32 {
+    fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32, lanes: u32) -> u32 {
         let _ = ray;
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
-        unsafe { tri_filter4_lane(blk, p, k % PACKET) & lanes }
+        unsafe { tri_filter4_lane(blk, p, k % PACKET, end) & lanes }
     }
 
     #[inline(always)]

@@ -3,20 +3,21 @@
 use super::setup::transpose_rays8;
 use crate::accel::bvh::simd::{PACKET, PacketShear, TriRays};
 use crate::accel::bvh::tree::Tri4;
-use crate::accel::triangle::{ShearedRay, range_end};
+use crate::accel::triangle::ShearedRay;
 use crate::geometry::Ray;
 use crate::geometry::error_bound::gamma;
 use std::arch::x86_64::*;
 
-/// The watertight test of `crate::accel::triangle::intersect_sheared` up to its range check,
-/// on four triangles at once with the same operations in the same order (separate multiply
-/// and add, never fused), so a lane it rejects is one the scalar test rejects too. Lanes with
-/// an edge function of exactly zero are kept: only the scalar f64 recomputation settles them.
+/// The watertight test of `crate::accel::triangle::intersect_sheared` up to its range check
+/// (`end` is `range_end(tmax)`), on four triangles at once with the same operations in the
+/// same order (separate multiply and add, never fused), so a lane it rejects is one the
+/// scalar test rejects too. Lanes with an edge function of exactly zero are kept: only the
+/// scalar f64 recomputation settles them.
 ///
 /// # Safety
 /// The CPU must have SSE4.1.
 #[inline(always)]
-pub(super) unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32) -> u32 {
+pub(super) unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32) -> u32 {
     // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
     // each lane array is 16 bytes at a multiple of 16).
     unsafe {
@@ -32,16 +33,17 @@ pub(super) unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f
             let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[ky].as_ptr()), oy), _mm_mul_ps(sy, z));
             [x, y, z]
         };
-        filter4_tail(corner(0), corner(1), corner(2), sz, tmin, range_end(tmax))
+        filter4_tail(corner(0), corner(1), corner(2), sz, tmin, end)
     }
 }
 
-/// [`tri_filter4`] for lane `k` of a packet's leaf set-up: the same values, read from it.
+/// [`tri_filter4`] for lane `k` of a packet's leaf set-up: the same values, read from it, and
+/// the range end `end`.
 ///
 /// # Safety
 /// The CPU must have SSE4.1; `k` < 8.
 #[inline(always)]
-pub(super) unsafe fn tri_filter4_lane(blk: &Tri4, p: &PacketShear, k: usize) -> u32 {
+pub(super) unsafe fn tri_filter4_lane(blk: &Tri4, p: &PacketShear, k: usize, end: f32) -> u32 {
     // SAFETY: the caller guarantees SSE4.1; loads are aligned ones of 16 bytes at offsets
     // `p.rows[k][i]`, which are 16 * axis with axis < 3 (`PacketShear`), inside a corner's
     // three rows of 16 bytes (`Tri4` is 64-byte aligned).
@@ -59,7 +61,7 @@ pub(super) unsafe fn tri_filter4_lane(blk: &Tri4, p: &PacketShear, k: usize) -> 
             [x, y, z]
         };
         let (a, b, c) = (corner(0), corner(1), corner(2));
-        filter4_tail(a, b, c, sz, p.tmin[k], p.tend[k])
+        filter4_tail(a, b, c, sz, p.tmin[k], end)
     }
 }
 
@@ -109,20 +111,19 @@ pub(super) unsafe fn shear8(rays: &[Ray; 8]) -> PacketShear {
         _mm256_store_ps(out.tend.as_mut_ptr(), tend);
         let (b0, b1, bn) =
             (_mm256_movemask_ps(m0) as u32, _mm256_movemask_ps(m1) as u32, _mm256_movemask_ps(neg) as u32);
-        for k in 0..8 {
-            let (kx, ky, kz) = if b0 >> k & 1 != 0 {
-                (1u8, 2u8, 0u8)
-            } else if b1 >> k & 1 != 0 {
-                (2, 0, 1)
-            } else {
-                (0, 1, 2)
-            };
-            let (kx, ky) = if bn >> k & 1 != 0 { (ky, kx) } else { (kx, ky) };
-            out.rows[k] = [16 * kx, 16 * ky, 16 * kz, 0];
+        // Rows by table, not by branches: a group of random directions mispredicted them.
+        for (k, rows) in out.rows.iter_mut().enumerate() {
+            let kz = 2 - 2 * (b0 >> k & 1) - (b1 >> k & 1);
+            *rows = ROWS[(2 * kz + (bn >> k & 1)) as usize % 6];
         }
         out
     }
 }
+
+/// The rows `[16 kx, 16 ky, 16 kz, 0]` for dominant axis `kz` (row `2 kz`) and with `kx`, `ky`
+/// swapped for a negative direction along it (row `2 kz + 1`), as `ShearedRay::of` picks them.
+const ROWS: [[u8; 4]; 6] =
+    [[16, 32, 0, 0], [32, 16, 0, 0], [32, 0, 16, 0], [0, 32, 16, 0], [0, 16, 32, 0], [16, 0, 32, 0]];
 
 /// [`PacketTest::tri_rays`]: [`tri_filter4`]'s operations for triangle `lane` of `blk` and
 /// the eight rays of `p`, one ray per lane (the corner broadcast, the ray's values in its
@@ -270,8 +271,6 @@ pub(super) unsafe fn filter4_tail(
         let det = _mm_add_ps(_mm_add_ps(u, v), w);
         let sign = _mm_set1_ps(-0.0);
         let det_abs = _mm_andnot_ps(sign, det);
-        // det != 0 and finite (NaN fails the ordered compare).
-        let det_ok = _mm_and_ps(_mm_cmpneq_ps(det, zero), _mm_cmplt_ps(det_abs, _mm_set1_ps(f32::INFINITY)));
         let tt = _mm_add_ps(
             _mm_add_ps(_mm_mul_ps(u, _mm_mul_ps(sz, az)), _mm_mul_ps(v, _mm_mul_ps(sz, bz))),
             _mm_mul_ps(w, _mm_mul_ps(sz, cz)),
@@ -282,16 +281,17 @@ pub(super) unsafe fn filter4_tail(
             _mm_cmplt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tmin), det_abs)),
             _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(tend), det_abs)),
         );
-        let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
-        let keep = _mm_or_ps(on_edge, accept);
-        _mm_movemask_ps(keep) as u32
+        // Not rejected for a zero or non-finite det (the scalar test rejects those lanes, and
+        // they are rare: testing it here cost every leaf four operations).
+        let reject = _mm_or_ps(_mm_and_ps(neg, pos), out_of_range);
+        _mm_movemask_ps(_mm_andnot_ps(on_edge, reject)) as u32 ^ 0xf
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::triangle::intersect_sheared;
+    use crate::accel::triangle::{intersect_sheared, range_end};
     use crate::cpu::Sse;
     use crate::sampling::Sampler;
     use glam::Vec3;
@@ -340,7 +340,7 @@ mod tests {
             let sr = ShearedRay::of(&ray);
             let tmax = if s.next_f32() < 0.3 { 1.0 } else { f32::INFINITY };
             // SAFETY: SSE4.1 was detected above.
-            let kept = unsafe { tri_filter4(&blk, &sr, 0.0, tmax) };
+            let kept = unsafe { tri_filter4(&blk, &sr, 0.0, range_end(tmax)) };
             for (lane, t) in tris.iter().enumerate() {
                 checked += 1;
                 if intersect_sheared(&sr, 0.0, tmax, t[0], t[1], t[2]).is_some() {
