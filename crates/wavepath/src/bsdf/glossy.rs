@@ -95,9 +95,7 @@ impl Glossy {
         }
         let p = self.specular_probability();
         let diffuse_pdf = (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z);
-        let Some(h) = (wo + wi).try_normalize() else {
-            return (self.diffuse * FRAC_1_PI, if p > 0.0 { p * 0.0 } else { 0.0 } + diffuse_pdf);
-        };
+        let Some(h) = (wo + wi).try_normalize() else { return (self.diffuse * FRAC_1_PI, diffuse_pdf) };
         let (spec, visible) = self.lobe().spec_and_visible_pdf(wo, wi, h);
         let spec_pdf = if p > 0.0 { p * visible } else { 0.0 };
         (self.diffuse * FRAC_1_PI + self.specular * spec, spec_pdf + diffuse_pdf)

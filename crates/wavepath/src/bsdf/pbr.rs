@@ -102,7 +102,7 @@ impl Pbr {
         }
         let p = self.specular_probability(wo);
         let diffuse_pdf = (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z);
-        let Some(h) = (wo + wi).try_normalize() else { return (Vec3::ZERO, p * 0.0 + diffuse_pdf) };
+        let Some(h) = (wo + wi).try_normalize() else { return (Vec3::ZERO, diffuse_pdf) };
         let oh = wo.dot(h);
         let (spec, visible) = self.lobe().spec_and_visible_pdf(wo, wi, h);
         let f = self.diffuse * (Vec3::ONE - Self::schlick(self.diffuse_f0, oh)) * FRAC_1_PI

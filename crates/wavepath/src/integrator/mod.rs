@@ -90,9 +90,6 @@ fn shaded_layout(lights: &LightSampler, rules: &Rules) -> Layout {
                 if light.uses_third_number() {
                     one_d.push(true);
                 }
-                if one_d.len() >= MAX_DRAWN {
-                    break;
-                }
             }
         }
     }
