@@ -85,11 +85,10 @@ fn shaded_layout(lights: &LightSampler, rules: &Rules) -> Layout {
         one_d.extend(std::iter::repeat_n(false, rules.direct_per_vertex as usize));
     } else {
         for (i, light) in lights.set.lights.iter().enumerate() {
+            // A pair per sample, and the third number after it for a light that reads one.
+            let sample: &[bool] = if light.uses_third_number() { &[false, true] } else { &[false] };
             for _ in 0..lights.set.samples_for(i, rules.light_samples) {
-                one_d.push(false);
-                if light.uses_third_number() {
-                    one_d.push(true);
-                }
+                one_d.extend_from_slice(sample);
             }
         }
     }
