@@ -1,3 +1,4 @@
+use super::microfacet::normalized;
 use super::{BsdfSample, Distribution, Microfacet};
 use crate::sampling::warp;
 use crate::scene::phong_alpha;
@@ -53,13 +54,13 @@ impl Glossy {
         Glossy { diffuse: diffuse * scale, specular, alpha: phong_alpha(exponent) }
     }
 
-    #[inline]
+    #[inline(always)]
     fn lobe(&self) -> Microfacet {
         Microfacet { alpha: self.alpha, eta: Vec3::ZERO, k: Vec3::ZERO, distribution: Distribution::Ggx }
     }
 
     /// Probability of sampling the specular lobe.
-    #[inline]
+    #[inline(always)]
     fn specular_probability(&self) -> f32 {
         let (s, d) = (self.specular.element_sum(), self.diffuse.element_sum());
         if s + d > 0.0 { s / (s + d) } else { 0.0 }
@@ -80,25 +81,40 @@ impl Glossy {
     /// `u[2]` chooses the lobe, `u[0]` and `u[1]` the direction within it.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BsdfSample> {
-        if wo.z <= 0.0 || self.diffuse.max(self.specular).max_element() <= 0.0 {
-            return None;
-        }
-        self.lobe().sample_mixture(wo, u, self.specular_probability(), |wi| self.eval_pdf(wo, wi))
+        let (s, ok) = self.sample_at(wo, u, (std::f32::consts::TAU * u[1]).sin_cos());
+        ok.then_some(s)
+    }
+
+    /// [`sample`](Self::sample) with the sine and cosine of `2 pi u[1]` given, without
+    /// branches: the sample and whether there is one (as `Pbr::sample_at`).
+    #[inline(always)]
+    pub fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
+        let specular = u[2] < self.specular_probability();
+        let (visible, visible_ok) = self.lobe().sample_visible_at(wo, u[0], sin_cos);
+        let wi = if specular { visible } else { warp::cosine_hemisphere(u[0], u[1]) };
+        let (f, pdf) = self.eval_pdf(wo, wi);
+        let weight = f * (wi.z / pdf);
+        let reflects = self.diffuse.max(self.specular).max_element() > 0.0;
+        let ok =
+            wo.z > 0.0 && reflects && (visible_ok || !specular) && pdf > 0.0 && pdf.is_finite() && weight.is_finite();
+        (BsdfSample { wi, weight, pdf, delta: false }, ok)
     }
 
     /// [`eval`](Self::eval) and [`pdf`](Self::pdf) at once (the half vector, D and Smith's
-    /// Lambda(wo) shared), bit for bit the two calls' values.
-    #[inline]
+    /// Lambda(wo) shared), bit for bit the two calls' values; without branches, as
+    /// `Pbr::eval_pdf`.
+    #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return (Vec3::ZERO, 0.0);
-        }
+        let above = wo.z > 0.0 && wi.z > 0.0;
         let p = self.specular_probability();
         let diffuse_pdf = (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z);
-        let Some(h) = (wo + wi).try_normalize() else { return (self.diffuse * FRAC_1_PI, diffuse_pdf) };
+        let (h, has_h) = normalized(wo + wi);
         let (spec, visible) = self.lobe().spec_and_visible_pdf(wo, wi, h);
         let spec_pdf = if p > 0.0 { p * visible } else { 0.0 };
-        (self.diffuse * FRAC_1_PI + self.specular * spec, spec_pdf + diffuse_pdf)
+        let diffuse = self.diffuse * FRAC_1_PI;
+        let (f, pdf) =
+            if has_h { (diffuse + self.specular * spec, spec_pdf + diffuse_pdf) } else { (diffuse, diffuse_pdf) };
+        if above { (f, pdf) } else { (Vec3::ZERO, 0.0) }
     }
 
     #[inline]

@@ -44,19 +44,26 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
     (0.5 * (rp + rs)).clamp(0.0, 1.0)
 }
 
+/// `v` normalised as `Vec3::try_normalize` does it (the same operations), without a branch:
+/// the unit vector and whether there is one.
+#[inline(always)]
+pub fn normalized(v: Vec3) -> (Vec3, bool) {
+    let rcp = v.length_recip();
+    (v * rcp, rcp.is_finite() && rcp > 0.0)
+}
+
 impl Microfacet {
-    #[inline]
+    #[inline(always)]
     fn a(&self) -> f32 {
         self.alpha.max(MIN_ALPHA)
     }
 
     /// Normal distribution D(h) (per unit projected area: its integral of D cos is 1).
-    #[inline]
+    /// Branch-free (every case computed, the valid one kept), so that the lane kernels'
+    /// loops over it vectorise; the same values as the early-return form.
+    #[inline(always)]
     pub fn d(&self, h: Vec3) -> f32 {
         let c2 = h.z * h.z;
-        if h.z <= 0.0 || c2 <= 0.0 {
-            return 0.0;
-        }
         let a2 = self.a() * self.a();
         let tan2 = (1.0 - c2).max(0.0) / c2;
         let v = match self.distribution {
@@ -66,21 +73,16 @@ impl Microfacet {
                 a2 / (PI * c2 * c2 * t * t)
             }
         };
-        if v.is_finite() { v } else { 0.0 }
+        if h.z > 0.0 && c2 > 0.0 && v.is_finite() { v } else { 0.0 }
     }
 
-    /// Smith's Lambda for direction `w` (Beckmann: Walter's rational approximation).
-    #[inline]
+    /// Smith's Lambda for direction `w` (Beckmann: Walter's rational approximation);
+    /// branch-free as [`d`](Self::d) is.
+    #[inline(always)]
     fn lambda(&self, w: Vec3) -> f32 {
         let c = w.z.abs();
-        if c >= 1.0 {
-            return 0.0;
-        }
         let tan = (1.0 - c * c).max(0.0).sqrt() / c;
-        if !tan.is_finite() {
-            return f32::INFINITY;
-        }
-        match self.distribution {
+        let v = match self.distribution {
             Distribution::Beckmann => {
                 let x = 1.0 / (self.a() * tan);
                 if x >= 1.6 { 0.0 } else { (1.0 - 1.259 * x + 0.396 * x * x) / (3.535 * x + 2.181 * x * x) }
@@ -89,6 +91,13 @@ impl Microfacet {
                 let at = self.a() * tan;
                 0.5 * (-1.0 + (1.0 + at * at).sqrt())
             }
+        };
+        if c >= 1.0 {
+            0.0
+        } else if !tan.is_finite() {
+            f32::INFINITY
+        } else {
+            v
         }
     }
 
@@ -177,54 +186,34 @@ impl Microfacet {
         if p.is_finite() { p } else { 0.0 }
     }
 
-    /// The direction of a diffuse-plus-specular model's sample: this lobe's visible normals
-    /// with probability `specular`, a cosine-weighted diffuse direction otherwise (the third
-    /// number chooses).
-    #[inline]
-    pub fn sample_with_diffuse(&self, wo: Vec3, u: [f32; 3], specular: f32) -> Option<Vec3> {
-        if u[2] < specular {
-            self.sample_visible(wo, [u[0], u[1]])
-        } else {
-            Some(crate::sampling::warp::cosine_hemisphere(u[0], u[1]))
-        }
-    }
-
-    /// A diffuse-plus-specular model's sample: the direction of
-    /// [`sample_with_diffuse`](Self::sample_with_diffuse) with the model's value and density
-    /// there (`eval_pdf`, computed together).
-    #[inline]
-    pub fn sample_mixture(
-        &self,
-        wo: Vec3,
-        u: [f32; 3],
-        specular: f32,
-        eval_pdf: impl FnOnce(Vec3) -> (Vec3, f32),
-    ) -> Option<BsdfSample> {
-        let wi = self.sample_with_diffuse(wo, u, specular)?;
-        let (f, pdf) = eval_pdf(wi);
-        BsdfSample::continuous(wi, pdf, || f)
-    }
-
     /// GGX only: `wo` reflected about a normal drawn from those visible from `wo` (Heitz
     /// 2018, the stretched hemisphere construction). Its sample weight F G / G1(wo) stays
     /// below F at grazing angles, where drawing from D alone gives weights of order 1 / alpha.
     #[inline]
     pub fn sample_visible(&self, wo: Vec3, u: [f32; 2]) -> Option<Vec3> {
+        let (wi, ok) = self.sample_visible_at(wo, u[0], (std::f32::consts::TAU * u[1]).sin_cos());
+        ok.then_some(wi)
+    }
+
+    /// [`sample_visible`](Self::sample_visible) from `u[0]` and the sine and cosine of the
+    /// disk angle `2 pi u[1]` (computed apart: a lane kernel takes them one lane at a time),
+    /// without branches: the direction and whether it is one.
+    #[inline(always)]
+    pub fn sample_visible_at(&self, wo: Vec3, u0: f32, (sin, cos): (f32, f32)) -> (Vec3, bool) {
         let a = self.a();
-        let vh = Vec3::new(a * wo.x, a * wo.y, wo.z).try_normalize()?;
+        let (vh, vh_ok) = normalized(Vec3::new(a * wo.x, a * wo.y, wo.z));
         let len2 = vh.x * vh.x + vh.y * vh.y;
         let t1 = if len2 > 0.0 { Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt() } else { Vec3::X };
         let t2 = vh.cross(t1);
-        let r = u[0].sqrt();
-        let (sin, cos) = (std::f32::consts::TAU * u[1]).sin_cos();
+        let r = u0.sqrt();
         let (p1, p2) = (r * cos, r * sin);
         let s = 0.5 * (1.0 + vh.z);
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * p2;
         let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-        let h = Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)).try_normalize()?;
+        let (h, h_ok) = normalized(Vec3::new(a * nh.x, a * nh.y, nh.z.max(1e-6)));
         let oh = wo.dot(h);
         let wi = 2.0 * oh * h - wo;
-        (oh > 0.0 && wi.z > 0.0).then_some(wi)
+        (wi, vh_ok && h_ok && oh > 0.0 && wi.z > 0.0)
     }
 
     /// The specular term D(h) G(wo, wi) / (4 cos_o cos_i) (0 where not finite) and the
@@ -232,7 +221,7 @@ impl Microfacet {
     /// and `wi` (both above the surface): what [`visible_pdf`](Self::visible_pdf) and a
     /// model's `eval` compute apart, with D(h) and Lambda(wo) computed once — the same
     /// operations, so the same bits.
-    #[inline]
+    #[inline(always)]
     pub fn spec_and_visible_pdf(&self, wo: Vec3, wi: Vec3, h: Vec3) -> (f32, f32) {
         let d = self.d(h);
         let lo = self.lambda(wo);
@@ -240,13 +229,10 @@ impl Microfacet {
         let g = if g.is_finite() { g } else { 0.0 };
         let spec = d * g / (4.0 * wo.z * wi.z);
         let spec = if spec.is_finite() { spec } else { 0.0 };
-        if wo.dot(h) <= 0.0 {
-            return (spec, 0.0);
-        }
         let g1 = 1.0 / (1.0 + lo);
         let g1 = if g1.is_finite() { g1 } else { 0.0 };
         let p = g1 * d / (4.0 * wo.z);
-        (spec, if p.is_finite() { p } else { 0.0 })
+        (spec, if wo.dot(h) > 0.0 && p.is_finite() { p } else { 0.0 })
     }
 
     /// Density of [`sample_visible`](Self::sample_visible): G1(wo) D(h) / (4 cos_o).

@@ -212,12 +212,14 @@ pub fn to_local(f: &Frame, v: Vec3) -> Vec3 {
 }
 
 /// Power heuristic (beta = 2) weight of a strategy with density `a` against one with `b`
-/// (each already multiplied by its sample count); 0 when both are 0.
-#[inline]
+/// (each already multiplied by its sample count); 0 when both are 0. Without branches (the
+/// lane kernels' loops call it).
+#[inline(always)]
 pub fn power_heuristic(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
+    let w = a2 / (a2 + b2);
     if a2 + b2 > 0.0 && (a2 + b2).is_finite() {
-        a2 / (a2 + b2)
+        w
     } else if a.is_infinite() {
         1.0
     } else {

@@ -1,3 +1,4 @@
+use super::microfacet::normalized;
 use super::{BsdfSample, Distribution, Microfacet};
 use crate::sampling::warp;
 use glam::Vec3;
@@ -47,13 +48,13 @@ impl Pbr {
     }
 
     /// The GGX lobe (D, G and the conductor's numerical guards; its Fresnel is not used).
-    #[inline]
+    #[inline(always)]
     fn lobe(&self) -> Microfacet {
         Microfacet { alpha: self.alpha, eta: Vec3::ZERO, k: Vec3::ZERO, distribution: Distribution::Ggx }
     }
 
     /// Schlick's Fresnel for reflectance `f0` at normal incidence.
-    #[inline]
+    #[inline(always)]
     fn schlick(f0: Vec3, cos: f32) -> Vec3 {
         let m = 1.0 - cos.clamp(0.0, 1.0);
         let m2 = m * m;
@@ -64,7 +65,7 @@ impl Pbr {
     /// the diffuse colour. The diffuse share is not reduced by the Fresnel term at `wo`: the
     /// diffuse term weighs (1 - F) at the half vector, which stays large for most directions
     /// even when `wo` grazes, and a diffuse lobe chosen rarely there would give fireflies.
-    #[inline]
+    #[inline(always)]
     fn specular_probability(&self, wo: Vec3) -> f32 {
         let s = Self::schlick(self.f0, wo.z).element_sum();
         let d = self.diffuse.element_sum();
@@ -87,27 +88,40 @@ impl Pbr {
     /// `u[2]` chooses the lobe, `u[0]` and `u[1]` the direction within it.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        self.lobe().sample_mixture(wo, u, self.specular_probability(wo), |wi| self.eval_pdf(wo, wi))
+        let (s, ok) = self.sample_at(wo, u, (std::f32::consts::TAU * u[1]).sin_cos());
+        ok.then_some(s)
+    }
+
+    /// [`sample`](Self::sample) with the sine and cosine of `2 pi u[1]` given (a lane kernel
+    /// takes them one lane at a time), without branches: the sample and whether there is one
+    /// (what `sample` returns as `None`: the specular lobe found no direction, or the density
+    /// or the weight is not a finite positive number).
+    #[inline(always)]
+    pub fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
+        let specular = u[2] < self.specular_probability(wo);
+        let (visible, visible_ok) = self.lobe().sample_visible_at(wo, u[0], sin_cos);
+        let wi = if specular { visible } else { warp::cosine_hemisphere(u[0], u[1]) };
+        let (f, pdf) = self.eval_pdf(wo, wi);
+        let weight = f * (wi.z / pdf);
+        let ok = wo.z > 0.0 && (visible_ok || !specular) && pdf > 0.0 && pdf.is_finite() && weight.is_finite();
+        (BsdfSample { wi, weight, pdf, delta: false }, ok)
     }
 
     /// [`eval`](Self::eval) and [`pdf`](Self::pdf) at once (the half vector, D and Smith's
-    /// Lambda(wo) shared), bit for bit the two calls' values.
-    #[inline]
+    /// Lambda(wo) shared), bit for bit the two calls' values; without branches (every case
+    /// computed, the valid one kept), so that a lane kernel's loop over it vectorises.
+    #[inline(always)]
     pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return (Vec3::ZERO, 0.0);
-        }
+        let above = wo.z > 0.0 && wi.z > 0.0;
         let p = self.specular_probability(wo);
         let diffuse_pdf = (1.0 - p) * warp::cosine_hemisphere_pdf(wi.z);
-        let Some(h) = (wo + wi).try_normalize() else { return (Vec3::ZERO, diffuse_pdf) };
+        let (h, has_h) = normalized(wo + wi);
         let oh = wo.dot(h);
         let (spec, visible) = self.lobe().spec_and_visible_pdf(wo, wi, h);
         let f = self.diffuse * (Vec3::ONE - Self::schlick(self.diffuse_f0, oh)) * FRAC_1_PI
             + Self::schlick(self.f0, oh) * spec;
-        (f, p * visible + diffuse_pdf)
+        let pdf = if has_h { p * visible + diffuse_pdf } else { diffuse_pdf };
+        (if above && has_h { f } else { Vec3::ZERO }, if above { pdf } else { 0.0 })
     }
 
     #[inline]

@@ -61,10 +61,25 @@ impl Transport<'_> {
     /// arriving along `dir`.
     #[inline]
     pub fn shading(&self, v: &Vertex, dir: Vec3) -> ShadingFrame {
-        let model = match self.materials.models[v.material as usize].oriented(v.front) {
+        let frame = Frame::new(v.ns);
+        let wo = to_local(&frame, -dir);
+        let model = match self.model_at(v) {
+            Model::Layered(_) => Model::Layered(self.materials.layers.at(self, v, wo.z)),
+            m => m,
+        };
+        ShadingFrame { frame, wo, kind: model.kind(), model }
+    }
+
+    /// The model of `v`'s material at the vertex, but for the layered glTF model, which also
+    /// depends on the direction the ray arrives from ([`shading`](Self::shading) finishes it).
+    #[inline]
+    pub fn model_at(&self, v: &Vertex) -> Model {
+        // By reference: the models that vary over the surface are rebuilt from a few numbers,
+        // and only a dielectric's or a layered model's side changes the model (`oriented`).
+        match &self.materials.models[v.material as usize] {
             Model::Lambert(_) => Model::Lambert(Lambert { albedo: v.albedo }),
             // The base colour (textures, vertex colours) and metalness vary over the surface.
-            Model::Pbr(p) => Model::Pbr(match self.scene.materials[v.material as usize].bsdf {
+            &Model::Pbr(p) => Model::Pbr(match self.scene.materials[v.material as usize].bsdf {
                 Bsdf::MetallicRoughness { .. } => Pbr::metallic_roughness(v.albedo, v.metal_rough.x, v.metal_rough.y),
                 Bsdf::SpecularGlossiness { specular, glossiness, .. } => {
                     match self.materials.textures.specular_glossiness(v.material as usize, v.uv) {
@@ -76,19 +91,12 @@ impl Transport<'_> {
             }),
             // The diffuse colour varies (map_Kd, vertex colours); the scaling that keeps
             // Kd + Ks <= 1 applies to it where it is looked up.
-            Model::Glossy(g) => match self.scene.materials[v.material as usize].bsdf {
+            &Model::Glossy(g) => match self.scene.materials[v.material as usize].bsdf {
                 Bsdf::Phong { specular, shininess, .. } => Model::Glossy(Glossy::phong(v.albedo, specular, shininess)),
                 _ => Model::Glossy(g),
             },
-            m => m,
-        };
-        let frame = Frame::new(v.ns);
-        let wo = to_local(&frame, -dir);
-        let model = match model {
-            Model::Layered(_) => Model::Layered(self.materials.layers.at(self, v, wo.z)),
-            m => m,
-        };
-        ShadingFrame { frame, wo, kind: model.kind(), model }
+            m => m.oriented(v.front),
+        }
     }
 
     /// [`direct_rays`](Self::direct_rays) for any material: none for delta materials,
@@ -127,24 +135,40 @@ impl Transport<'_> {
             }
             return;
         }
-        for (i, light) in self.lights.set.lights.iter().enumerate() {
-            let ns = self.lights.set.samples_for(i, self.rules.light_samples);
-            for _ in 0..ns {
-                let u = super::light_numbers(&mut rng, light);
-                let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
-                let wi = to_local(&sh.frame, ls.wi);
-                let (f, pdf_b) = sh.model.eval_pdf(sh.wo, wi);
-                if f == Vec3::ZERO {
-                    continue;
-                }
-                let w = power_heuristic(ns as f32 * pdf_l, pdf_b);
-                let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
-                if w <= 0.0 || !v.consistent(ls.wi) {
-                    continue;
-                }
-                let Some(ray) = self.lights.shadow_ray(i, origin, ls.wi, ls.target) else { continue };
-                out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
+        for i in 0..self.lights.set.lights.len() {
+            self.direct_light_shaded(v, sh, i, &mut rng, &mut out);
+        }
+    }
+
+    /// The light samples of the glossy vertex `v` toward light `i`, drawn from `rng` at its
+    /// current dimension: one light's part of [`direct_rays_shaded`](Self::direct_rays_shaded),
+    /// which a lane kernel also calls for a lane whose light has no lane-parallel sampler.
+    #[inline]
+    pub fn direct_light_shaded(
+        &self,
+        v: &Vertex,
+        sh: &ShadingFrame,
+        i: usize,
+        rng: &mut impl Numbers,
+        out: &mut impl FnMut(DirectRay),
+    ) {
+        let light = &self.lights.set.lights[i];
+        let ns = self.lights.set.samples_for(i, self.rules.light_samples);
+        for _ in 0..ns {
+            let u = super::light_numbers(rng, light);
+            let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
+            let wi = to_local(&sh.frame, ls.wi);
+            let (f, pdf_b) = sh.model.eval_pdf(sh.wo, wi);
+            if f == Vec3::ZERO {
+                continue;
             }
+            let w = power_heuristic(ns as f32 * pdf_l, pdf_b);
+            let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
+            if w <= 0.0 || !v.consistent(ls.wi) {
+                continue;
+            }
+            let Some(ray) = self.lights.shadow_ray(i, origin, ls.wi, ls.target) else { continue };
+            out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
         }
     }
 

@@ -22,7 +22,7 @@ pub mod streams;
 pub mod recursive;
 pub mod wavefront;
 
-pub use material::Bounce;
+pub use material::{Bounce, ShadingFrame};
 
 use crate::geometry::offset::offset_origin;
 
@@ -49,7 +49,7 @@ pub(crate) const DIM_ROULETTE: u32 = 2;
 pub(crate) const DIM_DIRECT: u32 = 3;
 /// Dimension that chooses between a material's lobes (unused by every other strategy: the
 /// continuation's direction takes dimension 0 and light samples start at [`DIM_DIRECT`]).
-const DIM_LOBE: u32 = 1;
+pub(crate) const DIM_LOBE: u32 = 1;
 
 /// Everything shading needs, precomputed once per render: the parts a stage reads, each its
 /// own type, and the methods that need several of them.
@@ -92,8 +92,9 @@ fn shaded_layout(lights: &LightSampler, rules: &Rules) -> Layout {
             }
         }
     }
+    let complete = one_d.len() <= MAX_DRAWN;
     one_d.truncate(MAX_DRAWN);
-    Layout { one_d }
+    Layout { one_d, complete }
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.

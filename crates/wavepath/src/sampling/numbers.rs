@@ -40,6 +40,9 @@ impl Numbers for Sampler {
 pub struct Layout {
     /// `one_d[d]`: dimension `d` is read by `next_f32` (else by `next_2d`).
     pub one_d: Vec<bool>,
+    /// Every dimension the shading code reads is in `one_d` (none was cut off): a kernel may
+    /// read the table alone.
+    pub complete: bool,
 }
 
 impl Layout {

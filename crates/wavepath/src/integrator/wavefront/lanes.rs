@@ -90,16 +90,16 @@ fn shade_width<F: Features, const L: usize>(
 }
 
 /// The shading points of a group, one array per component.
-struct Points<const L: usize> {
-    p: [[f32; L]; 3],
-    e: [[f32; L]; 3],
-    ng: [[f32; L]; 3],
-    ns: [[f32; L]; 3],
+pub(super) struct Points<const L: usize> {
+    pub p: [[f32; L]; 3],
+    pub e: [[f32; L]; 3],
+    pub ng: [[f32; L]; 3],
+    pub ns: [[f32; L]; 3],
 }
 
 impl<const L: usize> Points<L> {
     #[inline(always)]
-    fn set(&mut self, j: usize, s: &ShadingPoint) {
+    pub fn set(&mut self, j: usize, s: &ShadingPoint) {
         for (a, v) in [(&mut self.p, s.p), (&mut self.e, s.p_error), (&mut self.ng, s.ng), (&mut self.ns, s.ns)] {
             a[0][j] = v.x;
             a[1][j] = v.y;
@@ -108,7 +108,7 @@ impl<const L: usize> Points<L> {
     }
 
     #[inline(always)]
-    fn get(&self, j: usize) -> ShadingPoint {
+    pub fn get(&self, j: usize) -> ShadingPoint {
         ShadingPoint { p: get(&self.p, j), p_error: get(&self.e, j), ng: get(&self.ng, j), ns: get(&self.ns, j) }
     }
 }
@@ -152,14 +152,14 @@ impl<const L: usize> Default for Surfaces<L> {
 }
 
 #[inline(always)]
-fn put<const L: usize>(a: &mut [[f32; L]; 3], j: usize, v: Vec3) {
+pub(super) fn put<const L: usize>(a: &mut [[f32; L]; 3], j: usize, v: Vec3) {
     a[0][j] = v.x;
     a[1][j] = v.y;
     a[2][j] = v.z;
 }
 
 #[inline(always)]
-fn get<const L: usize>(a: &[[f32; L]; 3], j: usize) -> Vec3 {
+pub(super) fn get<const L: usize>(a: &[[f32; L]; 3], j: usize) -> Vec3 {
     Vec3::new(a[0][j], a[1][j], a[2][j])
 }
 
@@ -236,14 +236,14 @@ fn points_of<const NORMALS: bool, const SPHERES: bool, const L: usize>(s: &Surfa
 }
 
 /// A group's rays, one array per component.
-struct Rays<const L: usize> {
+pub(super) struct Rays<const L: usize> {
     o: [[f32; L]; 3],
     d: [[f32; L]; 3],
     tmax: [f32; L],
     g: [f32; L],
     /// A light sample's whole weight, throughput not applied.
-    w: [Vec3; L],
-    valid: [bool; L],
+    pub w: [Vec3; L],
+    pub valid: [bool; L],
 }
 
 impl<const L: usize> Default for Rays<L> {
@@ -255,7 +255,7 @@ impl<const L: usize> Default for Rays<L> {
 
 impl<const L: usize> Rays<L> {
     #[inline(always)]
-    fn set(&mut self, j: usize, r: &Ray) {
+    pub fn set(&mut self, j: usize, r: &Ray) {
         for (a, v) in [(&mut self.o, r.origin), (&mut self.d, r.dir)] {
             a[0][j] = v.x;
             a[1][j] = v.y;
@@ -265,7 +265,7 @@ impl<const L: usize> Rays<L> {
     }
 
     #[inline(always)]
-    fn ray(&self, j: usize) -> Ray {
+    pub fn ray(&self, j: usize) -> Ray {
         Ray { origin: get(&self.o, j), dir: get(&self.d, j), tmin: 0.0, tmax: self.tmax[j] }
     }
 }
@@ -381,7 +381,7 @@ fn push_samples<const L: usize>(q: &PathQueue, g: &Group<L>, samples: &[Rays<L>]
 }
 
 /// A vertex with nothing in it, for lanes a group leaves empty.
-const NO_VERTEX: Vertex = Vertex {
+pub(super) const NO_VERTEX: Vertex = Vertex {
     p: Vec3::ZERO,
     p_error: Vec3::ZERO,
     ng: Vec3::Z,

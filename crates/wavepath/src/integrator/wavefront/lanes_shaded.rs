@@ -7,17 +7,22 @@
 //! streams' own ([`Drawn`]), so the rays are those of the one-path kernel, bit for bit.
 //!
 //! Drawing the numbers was the largest part of shading these kinds one path at a time
-//! (Sobol's Owen scrambling and index shuffling, per dimension and per vertex); the per-lane
-//! remainder (the material's model, the light samples, the BSDF's value and density) is the
-//! one-path code.
+//! (Sobol's Owen scrambling and index shuffling, per dimension and per vertex). The glossy
+//! models that mix a diffuse lobe with a GGX one (metallic-roughness, specular-glossiness,
+//! Phong) then leave their vertices in lanes too ([`super::lanes_glossy`]: light samples,
+//! BSDF values and densities, MIS weights, continuations), sorted out of the group by model;
+//! the others (conductors, mirror, glass, the layered glTF model) and hemisphere sampling
+//! leave one lane at a time with the one-path code.
 
 #![allow(clippy::needless_range_loop)]
 
 use super::Features;
 use super::ShadeWidth;
+use super::lanes::Rays;
+use super::lanes_glossy::{self, GlossyGroup};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
-use crate::bsdf::Kind;
+use crate::bsdf::{Glossy, Kind, Model, Pbr};
 use crate::cpu::{Avx2, Avx512};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::sampling::numbers::Drawn;
@@ -81,6 +86,10 @@ fn shade_groups<F: Features, const L: usize>(
     let dims = layout.len();
     table.resize(L * dims, [0.0; 2]);
     let hashed = t.streams.pattern.kind == SamplerKind::Independent;
+    let glossy_lanes = lanes_glossy::takes(t);
+    let mut pbr = GlossyGroup::<Pbr, L>::new();
+    let mut phong = GlossyGroup::<Glossy, L>::new();
+    let mut pending: Vec<Rays<L>> = Vec::new();
     for chunk in idx.chunks(L) {
         let mut vertex: [Option<Vertex>; L] = [None; L];
         let mut vertex_input = [0u64; L];
@@ -130,12 +139,31 @@ fn shade_groups<F: Features, const L: usize>(
                 }
             }
         }
+        (pbr.n, phong.n) = (0, 0);
         for (j, &pi) in chunk.iter().enumerate() {
-            if let Some(v) = &vertex[j] {
-                let numbers =
-                    Drawn { stream: rng[j], table: &table[j * dims..j * dims + drawn], one_d: &layout.one_d, dim: 0 };
-                one_path::leave::<F>(t, q, pi as usize, v, numbers, shadow);
+            let Some(v) = &vertex[j] else { continue };
+            if glossy_lanes && matches!(t.materials.models[v.material as usize], Model::Pbr(_) | Model::Glossy(_)) {
+                match t.model_at(v) {
+                    Model::Pbr(m) => {
+                        pbr.push(pi as usize, j, v, m);
+                        continue;
+                    }
+                    Model::Glossy(m) => {
+                        phong.push(pi as usize, j, v, m);
+                        continue;
+                    }
+                    _ => {}
+                }
             }
+            let numbers =
+                Drawn { stream: rng[j], table: &table[j * dims..j * dims + drawn], one_d: &layout.one_d, dim: 0 };
+            one_path::leave::<F>(t, q, pi as usize, v, numbers, shadow);
+        }
+        if pbr.n > 0 {
+            lanes_glossy::leave::<F, Pbr, L>(t, q, &pbr, table, dims, &rng, &mut pending, shadow);
+        }
+        if phong.n > 0 {
+            lanes_glossy::leave::<F, Glossy, L>(t, q, &phong, table, dims, &rng, &mut pending, shadow);
         }
     }
 }

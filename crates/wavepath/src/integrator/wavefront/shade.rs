@@ -282,6 +282,7 @@ mod tests {
             let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
             assert!(t.rules.mis && t.materials.non_diffuse);
             assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
+            assert!(t.shaded_numbers.complete, "the glossy lanes read the table alone");
             assert!(compare::<N>(&scene, &s, avx) > 500, "{sampler:?}");
             let mut hemisphere = s.clone();
             hemisphere.paths.hemisphere = true;

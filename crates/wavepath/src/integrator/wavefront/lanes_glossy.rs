@@ -1,0 +1,434 @@
+//! The glossy kinds that mix a diffuse lobe with a GGX one (glTF metallic-roughness and
+//! specular-glossiness, MTL PBR, MTL Phong) leaving their vertices eight or sixteen at a time:
+//! the shading frames, the light samples of emissive triangles (the light glTF and OBJ files
+//! carry), the BSDF's value and density at each, the MIS weights, the shadow rays, and the
+//! continuation's visible-normal sample with its value, density and ray, all in fixed loops
+//! over the lanes that the compiler vectorises. What is per lane and irregular stays one lane
+//! at a time: the material's parameters at the vertex ([`Transport::model_at`]), which
+//! emissive triangle a sample picks and what it emits, the sine and cosine of the disk angle
+//! (the C library's), any other light ([`Transport::direct_light_shaded`]), Russian roulette.
+//!
+//! The per-sample functions are the ones the one-path code calls (`eval_pdf`, `sample_at`,
+//! the light sample's geometry, `offset_origin`), written without branches, so the rays and
+//! weights are those of [`super::one_path::leave`], bit for bit.
+
+#![allow(clippy::needless_range_loop)]
+
+use super::Features;
+use super::lanes::{Points, Rays, get, put};
+use super::one_path;
+use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
+use crate::bsdf::{BsdfSample, Glossy, Kind, Model, Pbr, power_heuristic, to_local};
+use crate::geometry::Ray;
+use crate::geometry::offset::{offset_origin, shadow_tmax_at};
+use crate::integrator::{Bounce, ShadingFrame};
+use crate::integrator::{DIM_DIRECT, Transport, Vertex};
+use crate::lights::{EmissiveTriangles, SampledLight, area_to_solid_angle_lanes};
+use crate::sampling::numbers::Drawn;
+use crate::sampling::{Frame, Sampler};
+use glam::Vec3;
+
+/// Most numbers a model's parameters take.
+const PARAMS: usize = 10;
+
+/// A model this kernel shades: its value and density and its sample without branches, and
+/// its parameters as numbers (the kernel keeps them one array per parameter).
+pub(super) trait LaneModel: Copy {
+    const NONE: Self;
+    fn params(&self) -> [f32; PARAMS];
+    fn from_params(p: &[f32; PARAMS]) -> Self;
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32);
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool);
+    fn model(self) -> Model;
+}
+
+impl LaneModel for Pbr {
+    const NONE: Self = Pbr { diffuse: Vec3::ZERO, f0: Vec3::ZERO, diffuse_f0: Vec3::ZERO, alpha: 0.0 };
+
+    #[inline(always)]
+    fn params(&self) -> [f32; PARAMS] {
+        let (d, f, g) = (self.diffuse, self.f0, self.diffuse_f0);
+        [d.x, d.y, d.z, f.x, f.y, f.z, g.x, g.y, g.z, self.alpha]
+    }
+
+    #[inline(always)]
+    fn from_params(p: &[f32; PARAMS]) -> Self {
+        Pbr {
+            diffuse: Vec3::new(p[0], p[1], p[2]),
+            f0: Vec3::new(p[3], p[4], p[5]),
+            diffuse_f0: Vec3::new(p[6], p[7], p[8]),
+            alpha: p[9],
+        }
+    }
+
+    #[inline(always)]
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        Pbr::eval_pdf(self, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
+        Pbr::sample_at(self, wo, u, sin_cos)
+    }
+
+    #[inline(always)]
+    fn model(self) -> Model {
+        Model::Pbr(self)
+    }
+}
+
+impl LaneModel for Glossy {
+    const NONE: Self = Glossy { diffuse: Vec3::ZERO, specular: Vec3::ZERO, alpha: 0.0 };
+
+    #[inline(always)]
+    fn params(&self) -> [f32; PARAMS] {
+        let (d, s) = (self.diffuse, self.specular);
+        [d.x, d.y, d.z, s.x, s.y, s.z, self.alpha, 0.0, 0.0, 0.0]
+    }
+
+    #[inline(always)]
+    fn from_params(p: &[f32; PARAMS]) -> Self {
+        Glossy { diffuse: Vec3::new(p[0], p[1], p[2]), specular: Vec3::new(p[3], p[4], p[5]), alpha: p[6] }
+    }
+
+    #[inline(always)]
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        Glossy::eval_pdf(self, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
+        Glossy::sample_at(self, wo, u, sin_cos)
+    }
+
+    #[inline(always)]
+    fn model(self) -> Model {
+        Model::Glossy(self)
+    }
+}
+
+/// A group's vertices of one model (lanes `0..n`), gathered by the shaded kinds' kernel.
+pub(super) struct GlossyGroup<M, const L: usize> {
+    pub n: usize,
+    /// Path index of each lane.
+    pub path: [usize; L],
+    /// The lane's place in the shaded group (its row of the numbers drawn ahead).
+    pub row: [usize; L],
+    pub vertex: [Vertex; L],
+    pub model: [M; L],
+}
+
+impl<M: LaneModel, const L: usize> GlossyGroup<M, L> {
+    pub fn new() -> Self {
+        GlossyGroup { n: 0, path: [0; L], row: [0; L], vertex: [super::lanes::NO_VERTEX; L], model: [M::NONE; L] }
+    }
+
+    /// Adds path `path` (row `row` of the group's numbers) at vertex `v` with model `m`.
+    #[inline(always)]
+    pub fn push(&mut self, path: usize, row: usize, v: &Vertex, m: M) {
+        let k = self.n;
+        (self.path[k], self.row[k], self.vertex[k], self.model[k]) = (path, row, *v, m);
+        self.n += 1;
+    }
+}
+
+/// What the lane-parallel loops read of a group: the shading points, the direction each ray
+/// arrived along, and the model's parameters, one array per component.
+struct Soa<const L: usize> {
+    pts: Points<L>,
+    dir: [[f32; L]; 3],
+    params: [[f32; L]; PARAMS],
+    bumped: [bool; L],
+}
+
+/// One lane's state, rebuilt from the arrays inside each loop (the shape that vectorises).
+struct Lane<M> {
+    p: Vec3,
+    p_error: Vec3,
+    ng: Vec3,
+    ns: Vec3,
+    frame: Frame,
+    wo: Vec3,
+    model: M,
+    bumped: bool,
+}
+
+impl<M> Lane<M> {
+    /// [`Vertex::consistent`] for this lane.
+    #[inline(always)]
+    fn consistent(&self, wi: Vec3) -> bool {
+        !self.bumped || (wi.dot(self.ng) > 0.0) == (wi.dot(self.ns) > 0.0)
+    }
+}
+
+impl<const L: usize> Soa<L> {
+    fn new() -> Self {
+        Soa { pts: Points::default(), dir: [[0.0; L]; 3], params: [[0.0; L]; PARAMS], bumped: [false; L] }
+    }
+
+    #[inline(always)]
+    fn set<M: LaneModel>(&mut self, j: usize, v: &Vertex, dir: Vec3, m: &M) {
+        self.pts.set(j, &v.shading_point());
+        put(&mut self.dir, j, dir);
+        for (a, x) in self.params.iter_mut().zip(m.params()) {
+            a[j] = x;
+        }
+        self.bumped[j] = v.bumped;
+    }
+
+    /// Lane `j` with its frame and outgoing direction ([`Transport::shading`]'s operations).
+    #[inline(always)]
+    fn lane<M: LaneModel>(&self, j: usize) -> Lane<M> {
+        let sp = self.pts.get(j);
+        let frame = Frame::new(sp.ns);
+        let wo = to_local(&frame, -get(&self.dir, j));
+        let mut p = [0.0; PARAMS];
+        for (x, a) in p.iter_mut().zip(&self.params) {
+            *x = a[j];
+        }
+        let model = M::from_params(&p);
+        Lane { p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, frame, wo, model, bumped: self.bumped[j] }
+    }
+}
+
+/// Whether the shaded kinds' kernel may leave glossy vertices here: light
+/// sampling (hemisphere sampling is left to the one-path code) and every number the vertex
+/// reads drawn ahead.
+#[inline(always)]
+pub(super) fn takes(t: &Transport) -> bool {
+    !t.rules.hemisphere && t.shaded_numbers.complete
+}
+
+/// Leaves the vertices of `g` as [`one_path::leave`] does: shadow rays (throughput applied)
+/// and continuations after Russian roulette. `table` holds the numbers drawn for the shaded
+/// group (`dims` per lane, rows by [`GlossyGroup::row`]), `rng` its streams; `pending` is
+/// scratch for a light's samples.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
+    t: &Transport,
+    q: &mut PathQueue,
+    g: &GlossyGroup<M, L>,
+    table: &[[f32; 2]],
+    dims: usize,
+    rng: &[Sampler],
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
+    let mut soa = Soa::<L>::new();
+    let mut depth = [0u32; L];
+    for j in 0..g.n {
+        let i = g.path[j];
+        soa.set(j, &g.vertex[j], q.ray[i].dir, &g.model[j]);
+        depth[j] = q.depth[i];
+    }
+    let numbers = |j: usize, dim: u32| {
+        let r = g.row[j];
+        Drawn { stream: rng[r], table: &table[r * dims..(r + 1) * dims], one_d: &t.shaded_numbers.one_d, dim }
+    };
+    if F::DIRECT {
+        let mut direct = [false; L];
+        for j in 0..g.n {
+            direct[j] = t.rules.counts_direct(depth[j]);
+        }
+        if direct.iter().any(|&d| d) {
+            direct_light(t, q, g, &soa, &direct, table, dims, &numbers, pending, shadow);
+        }
+    }
+    if F::INDIRECT {
+        continuation::<F, M, L>(t, q, g, &soa, &depth, table, dims, &numbers);
+    }
+}
+
+/// The shadow rays of the lanes in `direct`, light by light, each path's in the order the
+/// one-path code makes them ([`Transport::direct_rays_shaded`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn direct_light<'a, M: LaneModel, const L: usize>(
+    t: &Transport,
+    q: &PathQueue,
+    g: &GlossyGroup<M, L>,
+    soa: &Soa<L>,
+    direct: &[bool; L],
+    table: &[[f32; 2]],
+    dims: usize,
+    numbers: &impl Fn(usize, u32) -> Drawn<'a>,
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
+    let mut dim = DIM_DIRECT as usize;
+    for (li, light) in t.lights.set.lights.iter().enumerate() {
+        let ns = t.lights.set.samples_for(li, t.rules.light_samples);
+        let per_sample = 1 + light.uses_third_number() as usize;
+        if let SampledLight::Emissive(e) = light {
+            if pending.len() < ns as usize {
+                pending.resize_with(ns as usize, Rays::default);
+            }
+            for p in pending.iter_mut().take(ns as usize) {
+                emissive_samples(t, g, soa, direct, e, li, ns, table, dims, dim, p);
+                dim += per_sample;
+            }
+            push_samples(q, g, direct, &pending[..ns as usize], shadow);
+            continue;
+        }
+        // No lane sampler for this light: each lane draws its samples itself.
+        for j in 0..g.n {
+            if direct[j] {
+                let l = soa.lane::<M>(j);
+                let sh = ShadingFrame { frame: l.frame, wo: l.wo, model: l.model.model(), kind: Kind::Glossy };
+                let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
+                let mut r = numbers(j, dim as u32);
+                t.direct_light_shaded(&g.vertex[j], &sh, li, &mut r, &mut |d| {
+                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+                });
+            }
+        }
+        dim += ns as usize * per_sample;
+    }
+}
+
+/// One sample of emissive-triangle light `li` (`e`, `ns` samples a vertex) for every lane,
+/// from dimension `dim` (the pair) and `dim + 1` (the triangle's pick): the triangle and its
+/// point one lane at a time, the rest lane-parallel, as `EmissiveTriangles::sample_pdf` and
+/// [`Transport::direct_light_shaded`] compute it.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn emissive_samples<M: LaneModel, const L: usize>(
+    t: &Transport,
+    g: &GlossyGroup<M, L>,
+    soa: &Soa<L>,
+    direct: &[bool; L],
+    e: &EmissiveTriangles,
+    li: usize,
+    ns: u32,
+    table: &[[f32; 2]],
+    dims: usize,
+    dim: usize,
+    out: &mut Rays<L>,
+) {
+    let first = *e.triangle(0);
+    let mut tri = [first; L];
+    let mut point = [first.a; L];
+    let mut le = [Vec3::ZERO; L];
+    let mut picked = [false; L];
+    for j in 0..g.n {
+        let row = g.row[j] * dims;
+        let [ua, ub] = table[row + dim];
+        let uc = table[row + dim + 1][0];
+        if let (true, Some(i)) = (direct[j], e.pick(uc)) {
+            tri[j] = *e.triangle(i);
+            let (qp, bu, bv) = tri[j].point(ua, ub);
+            point[j] = qp;
+            le[j] = e.emitted(i, bu, bv);
+            picked[j] = true;
+        }
+    }
+    let margin = t.lights.shadow_margins[li];
+    for j in 0..L {
+        let l = soa.lane::<M>(j);
+        let (wi, inv_pdf, ok) =
+            area_to_solid_angle_lanes(l.p, point[j], tri[j].n, tri[j].inv_density, tri[j].one_sided);
+        let pdf_l = 1.0 / inv_pdf;
+        let local = to_local(&l.frame, wi);
+        let (f, pdf_b) = l.model.eval_pdf(l.wo, local);
+        let w = power_heuristic(ns as f32 * pdf_l, pdf_b);
+        let origin = offset_origin(l.p, l.p_error, l.ng, wi);
+        // `LightSampler::shadow_ray` toward the sampled point.
+        let to = point[j] - origin;
+        let len = to.length();
+        let rcp = 1.0 / len;
+        let tmax = shadow_tmax_at(len, margin);
+        out.set(j, &Ray { origin, dir: to * rcp, tmin: 0.0, tmax });
+        out.w[j] = f * (le[j] * inv_pdf) * (local.z * w / ns as f32);
+        out.valid[j] = picked[j]
+            & tri[j].valid
+            & ok
+            & (f != Vec3::ZERO)
+            & (w > 0.0)
+            & l.consistent(wi)
+            & rcp.is_finite()
+            & (rcp > 0.0)
+            & (tmax > 0.0);
+    }
+}
+
+/// A light's samples of the group (sample-major) into the shadow queue path-major, throughput
+/// applied, so the rays of one point sit together (the shadow stage traces them as a packet).
+#[inline(always)]
+fn push_samples<M, const L: usize>(
+    q: &PathQueue,
+    g: &GlossyGroup<M, L>,
+    direct: &[bool; L],
+    samples: &[Rays<L>],
+    shadow: &mut ShadowQueue,
+) {
+    let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(g.n * samples.len());
+    let mut w = 0;
+    for j in 0..g.n {
+        if !direct[j] {
+            continue;
+        }
+        let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
+        for p in samples {
+            rs[w] = p.ray(j);
+            ws[w] = p.w[j] * tp;
+            os[w] = i as u32;
+            w += p.valid[j] as usize;
+        }
+    }
+    shadow.commit(w);
+}
+
+/// The continuations ([`Transport::scatter_shaded`] for a glossy vertex under MIS), then
+/// Russian roulette one lane at a time.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
+    t: &Transport,
+    q: &mut PathQueue,
+    g: &GlossyGroup<M, L>,
+    soa: &Soa<L>,
+    depth: &[u32; L],
+    table: &[[f32; 2]],
+    dims: usize,
+    numbers: &impl Fn(usize, u32) -> Drawn<'a>,
+) {
+    let mut cont = [false; L];
+    let mut u = [[0.5f32; 3]; L];
+    let mut sin_cos = [(0.0f32, 1.0f32); L];
+    for j in 0..g.n {
+        let d = depth[j];
+        cont[j] = t.rules.continues(d) || t.rules.counts_direct(d);
+        let row = g.row[j] * dims;
+        let [a, b] = table[row];
+        u[j] = [a, b, table[row + crate::integrator::DIM_LOBE as usize][0]];
+        sin_cos[j] = (std::f32::consts::TAU * b).sin_cos();
+    }
+    if !cont.iter().any(|&c| c) {
+        return;
+    }
+    let mut rays = Rays::<L>::default();
+    let mut pdf = [0.0f32; L];
+    for j in 0..L {
+        let l = soa.lane::<M>(j);
+        let (s, ok) = l.model.sample_at(l.wo, u[j], sin_cos[j]);
+        let wi = l.frame.to_world(s.wi);
+        let origin = offset_origin(l.p, l.p_error, l.ng, wi);
+        rays.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
+        rays.w[j] = s.weight;
+        pdf[j] = s.pdf;
+        rays.valid[j] = cont[j] & ok & (s.weight != Vec3::ZERO) & l.consistent(wi);
+    }
+    for j in 0..g.n {
+        if !rays.valid[j] {
+            continue;
+        }
+        let i = g.path[j];
+        q.ray[i] = rays.ray(j);
+        q.throughput[i] *= rays.w[j];
+        q.depth[i] = depth[j] + 1;
+        q.alive[i] = true;
+        q.bounce[i] = Bounce { n: g.vertex[j].ns, pdf: pdf[j] };
+        one_path::roulette::<F>(t, q, i, depth[j], numbers(j, 0));
+    }
+}
