@@ -28,7 +28,7 @@ use crate::cpu::{Avx2, Avx512};
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
-use crate::lights::{EmissiveTriangles, SampledLight};
+use crate::lights::{EmissiveTriangles, Emitter, SampledLight};
 use crate::sampling::{Sampler, SamplerKind, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
@@ -241,15 +241,17 @@ pub(super) struct Rays<const L: usize> {
     d: [[f32; L]; 3],
     tmax: [f32; L],
     g: [f32; L],
-    /// A light sample's whole weight, throughput not applied.
-    pub w: [Vec3; L],
+    /// A light sample's whole weight, throughput not applied (one array per component, as
+    /// everything a lane loop reads or writes: the compiler leaves a loop over arrays of
+    /// structures scalar).
+    w: [[f32; L]; 3],
     pub valid: [bool; L],
 }
 
 impl<const L: usize> Default for Rays<L> {
     fn default() -> Self {
         let z = [[0.0; L]; 3];
-        Rays { o: z, d: z, tmax: [0.0; L], g: [0.0; L], w: [Vec3::ZERO; L], valid: [false; L] }
+        Rays { o: z, d: z, tmax: [0.0; L], g: [0.0; L], w: z, valid: [false; L] }
     }
 }
 
@@ -262,6 +264,16 @@ impl<const L: usize> Rays<L> {
             a[2][j] = v.z;
         }
         self.tmax[j] = r.tmax;
+    }
+
+    #[inline(always)]
+    pub fn set_weight(&mut self, j: usize, w: Vec3) {
+        put(&mut self.w, j, w);
+    }
+
+    #[inline(always)]
+    pub fn weight(&self, j: usize) -> Vec3 {
+        get(&self.w, j)
     }
 
     #[inline(always)]
@@ -323,37 +335,77 @@ fn emissive_rays<const L: usize>(
 ) {
     let ns = t.lights.set.samples_for(li, t.rules.light_samples);
     let margin = t.lights.shadow_margins[li];
-    let mut inv = [Vec3::ZERO; L];
+    let mut inv = [[0.0; L]; 3];
     for j in 0..L {
-        inv[j] = g.vertex[j].albedo * FRAC_1_PI / ns as f32;
+        put(&mut inv, j, g.vertex[j].albedo * FRAC_1_PI / ns as f32);
     }
     if pending.len() < ns as usize {
         pending.resize_with(ns as usize, Rays::default);
     }
-    let first = *e.triangle(0);
     for p in pending.iter_mut().take(ns as usize) {
         let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
         let uc = rng8::next_f32_lanes(avx, rng, dim + 1);
         dim += 2;
-        let mut tri = [first; L];
-        let mut point = [first.a; L];
-        let mut le = [Vec3::ZERO; L];
+        let mut tri = Emitters::<L>::default();
+        let mut point = [[0.0; L]; 3];
+        let mut le = [[0.0; L]; 3];
         for j in 0..g.n {
             if let (true, Some(i)) = (g.direct[j], e.pick(uc[j])) {
-                tri[j] = *e.triangle(i);
-                let (qp, bu, bv) = tri[j].point(ua[j], ub[j]);
-                point[j] = qp;
-                le[j] = e.emitted(i, bu, bv);
+                let t = e.triangle(i);
+                tri.set(j, t);
+                let (qp, bu, bv) = t.point(ua[j], ub[j]);
+                put(&mut point, j, qp);
+                put(&mut le, j, e.emitted(i, bu, bv));
             }
         }
         for j in 0..L {
-            let r = triangle_ray(&pts.get(j), &tri[j], point[j], le[j], inv[j], margin, ns, g.mis[j]);
+            let r =
+                triangle_ray(&pts.get(j), &tri.get(j), get(&point, j), get(&le, j), get(&inv, j), margin, ns, g.mis[j]);
             p.set(j, &r.ray);
-            p.w[j] = r.weight;
+            p.set_weight(j, r.weight);
             p.valid[j] = r.valid;
         }
     }
     push_samples(q, g, &pending[..ns as usize], shadow);
+}
+
+/// What [`triangle_ray`] reads of the emissive triangles a group's samples picked, one array
+/// per component (a lane that picked none keeps an invalid one).
+pub(super) struct Emitters<const L: usize> {
+    n: [[f32; L]; 3],
+    inv_density: [f32; L],
+    one_sided: [bool; L],
+    valid: [bool; L],
+}
+
+impl<const L: usize> Default for Emitters<L> {
+    fn default() -> Self {
+        Emitters { n: [[0.0; L]; 3], inv_density: [0.0; L], one_sided: [false; L], valid: [false; L] }
+    }
+}
+
+impl<const L: usize> Emitters<L> {
+    #[inline(always)]
+    pub fn set(&mut self, j: usize, e: &Emitter) {
+        put(&mut self.n, j, e.n);
+        self.inv_density[j] = e.inv_density;
+        self.one_sided[j] = e.one_sided;
+        self.valid[j] = e.valid;
+    }
+
+    /// Lane `j`'s triangle as far as a sample's direction and density go (no corners).
+    #[inline(always)]
+    pub fn get(&self, j: usize) -> Emitter {
+        Emitter {
+            a: Vec3::ZERO,
+            e1: Vec3::ZERO,
+            e2: Vec3::ZERO,
+            n: get(&self.n, j),
+            valid: self.valid[j],
+            inv_density: self.inv_density[j],
+            one_sided: self.one_sided[j],
+        }
+    }
 }
 
 /// A light's samples of a group (`samples`, sample-major, each with its whole weight) into the
@@ -372,7 +424,7 @@ fn push_samples<const L: usize>(q: &PathQueue, g: &Group<L>, samples: &[Rays<L>]
         for p in samples {
             let r = p.ray(j);
             rs[w] = r;
-            ws[w] = p.w[j] * tp;
+            ws[w] = p.weight(j) * tp;
             os[w] = i as u32;
             w += (p.valid[j] && v.consistent(r.dir)) as usize;
         }
@@ -613,9 +665,9 @@ fn direct_light<const L: usize>(
             dim += t.light_dims(li);
             continue;
         };
-        let mut c = [Vec3::ZERO; L];
+        let mut c = [[0.0; L]; 3];
         for j in 0..L {
-            c[j] = g.vertex[j].albedo * FRAC_1_PI / ns as f32 * *radiance;
+            put(&mut c, j, g.vertex[j].albedo * FRAC_1_PI / ns as f32 * *radiance);
         }
         if pending.len() < ns as usize {
             pending.resize_with(ns as usize, Rays::default);
@@ -626,7 +678,7 @@ fn direct_light<const L: usize>(
             dim += 1;
             area_rays(pts, al, &ua, &ub, p);
             for j in 0..L {
-                p.w[j] = c[j] * mis_weighted(p.g[j], ns, g.mis[j]);
+                p.set_weight(j, get(&c, j) * mis_weighted(p.g[j], ns, g.mis[j]));
             }
         }
         push_samples(q, g, &pending[..ns as usize], shadow);

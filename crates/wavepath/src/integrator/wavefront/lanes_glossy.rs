@@ -15,7 +15,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::Features;
-use super::lanes::{Points, Rays, get, put};
+use super::lanes::{Emitters, Points, Rays, get, put};
 use super::one_path;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
 use crate::bsdf::{BsdfSample, Glossy, Kind, Model, Pbr, power_heuristic, to_local};
@@ -182,10 +182,8 @@ impl<const L: usize> Soa<L> {
         let sp = self.pts.get(j);
         let frame = Frame::new(sp.ns);
         let wo = to_local(&frame, -get(&self.dir, j));
-        let mut p = [0.0; PARAMS];
-        for (x, a) in p.iter_mut().zip(&self.params) {
-            *x = a[j];
-        }
+        let a = &self.params;
+        let p = [a[0][j], a[1][j], a[2][j], a[3][j], a[4][j], a[5][j], a[6][j], a[7][j], a[8][j], a[9][j]];
         let model = M::from_params(&p);
         Lane { p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, frame, wo, model, bumped: self.bumped[j] }
     }
@@ -306,42 +304,40 @@ fn emissive_samples<M: LaneModel, const L: usize>(
     dim: usize,
     out: &mut Rays<L>,
 ) {
-    let first = *e.triangle(0);
-    let mut tri = [first; L];
-    let mut point = [first.a; L];
-    let mut le = [Vec3::ZERO; L];
-    let mut picked = [false; L];
+    let mut tri = Emitters::<L>::default();
+    let mut point = [[0.0; L]; 3];
+    let mut le = [[0.0; L]; 3];
     for j in 0..g.n {
         let row = g.row[j] * dims;
         let [ua, ub] = table[row + dim];
         let uc = table[row + dim + 1][0];
         if let (true, Some(i)) = (direct[j], e.pick(uc)) {
-            tri[j] = *e.triangle(i);
-            let (qp, bu, bv) = tri[j].point(ua, ub);
-            point[j] = qp;
-            le[j] = e.emitted(i, bu, bv);
-            picked[j] = true;
+            let t = e.triangle(i);
+            tri.set(j, t);
+            let (qp, bu, bv) = t.point(ua, ub);
+            put(&mut point, j, qp);
+            put(&mut le, j, e.emitted(i, bu, bv));
         }
     }
     let margin = t.lights.shadow_margins[li];
     for j in 0..L {
         let l = soa.lane::<M>(j);
-        let (wi, inv_pdf, ok) =
-            area_to_solid_angle_lanes(l.p, point[j], tri[j].n, tri[j].inv_density, tri[j].one_sided);
+        let (tri, point, le) = (tri.get(j), get(&point, j), get(&le, j));
+        let (wi, inv_pdf, ok) = area_to_solid_angle_lanes(l.p, point, tri.n, tri.inv_density, tri.one_sided);
         let pdf_l = 1.0 / inv_pdf;
         let local = to_local(&l.frame, wi);
         let (f, pdf_b) = l.model.eval_pdf(l.wo, local);
         let w = power_heuristic(ns as f32 * pdf_l, pdf_b);
         let origin = offset_origin(l.p, l.p_error, l.ng, wi);
         // `LightSampler::shadow_ray` toward the sampled point.
-        let to = point[j] - origin;
+        let to = point - origin;
         let len = to.length();
         let rcp = 1.0 / len;
         let tmax = shadow_tmax_at(len, margin);
         out.set(j, &Ray { origin, dir: to * rcp, tmin: 0.0, tmax });
-        out.w[j] = f * (le[j] * inv_pdf) * (local.z * w / ns as f32);
-        out.valid[j] = picked[j]
-            & tri[j].valid
+        out.set_weight(j, f * (le * inv_pdf) * (local.z * w / ns as f32));
+        // An unpicked lane keeps an invalid triangle.
+        out.valid[j] = tri.valid
             & ok
             & (f != Vec3::ZERO)
             & (w > 0.0)
@@ -371,7 +367,7 @@ fn push_samples<M, const L: usize>(
         let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
         for p in samples {
             rs[w] = p.ray(j);
-            ws[w] = p.w[j] * tp;
+            ws[w] = p.weight(j) * tp;
             os[w] = i as u32;
             w += p.valid[j] as usize;
         }
@@ -394,28 +390,29 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
     numbers: &impl Fn(usize, u32) -> Drawn<'a>,
 ) {
     let mut cont = [false; L];
-    let mut u = [[0.5f32; 3]; L];
-    let mut sin_cos = [(0.0f32, 1.0f32); L];
+    let mut u = [[0.5f32; L]; 3];
+    let (mut sin, mut cos) = ([0.0f32; L], [1.0f32; L]);
     for j in 0..g.n {
         let d = depth[j];
         cont[j] = t.rules.continues(d) || t.rules.counts_direct(d);
         let row = g.row[j] * dims;
         let [a, b] = table[row];
-        u[j] = [a, b, table[row + crate::integrator::DIM_LOBE as usize][0]];
-        sin_cos[j] = (std::f32::consts::TAU * b).sin_cos();
+        put(&mut u, j, Vec3::new(a, b, table[row + crate::integrator::DIM_LOBE as usize][0]));
+        (sin[j], cos[j]) = (std::f32::consts::TAU * b).sin_cos();
     }
     if !cont.iter().any(|&c| c) {
         return;
     }
     let mut rays = Rays::<L>::default();
     let mut pdf = [0.0f32; L];
+    let mut weight = [[0.0f32; L]; 3];
     for j in 0..L {
         let l = soa.lane::<M>(j);
-        let (s, ok) = l.model.sample_at(l.wo, u[j], sin_cos[j]);
+        let (s, ok) = l.model.sample_at(l.wo, get(&u, j).to_array(), (sin[j], cos[j]));
         let wi = l.frame.to_world(s.wi);
         let origin = offset_origin(l.p, l.p_error, l.ng, wi);
         rays.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
-        rays.w[j] = s.weight;
+        put(&mut weight, j, s.weight);
         pdf[j] = s.pdf;
         rays.valid[j] = cont[j] & ok & (s.weight != Vec3::ZERO) & l.consistent(wi);
     }
@@ -425,7 +422,7 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
         }
         let i = g.path[j];
         q.ray[i] = rays.ray(j);
-        q.throughput[i] *= rays.w[j];
+        q.throughput[i] *= get(&weight, j);
         q.depth[i] = depth[j] + 1;
         q.alive[i] = true;
         q.bounce[i] = Bounce { n: g.vertex[j].ns, pdf: pdf[j] };
