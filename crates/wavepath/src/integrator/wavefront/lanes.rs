@@ -358,13 +358,17 @@ fn emissive_rays<const L: usize>(
                 put(&mut le, j, e.emitted(i, bu, bv));
             }
         }
+        // Into a local first: a loop writing through the queue's buffer is left scalar (its
+        // stores might alias what it reads, for all the compiler knows).
+        let mut out = Rays::<L>::default();
         for j in 0..L {
             let r =
                 triangle_ray(&pts.get(j), &tri.get(j), get(&point, j), get(&le, j), get(&inv, j), margin, ns, g.mis[j]);
-            p.set(j, &r.ray);
-            p.set_weight(j, r.weight);
-            p.valid[j] = r.valid;
+            out.set(j, &r.ray);
+            out.set_weight(j, r.weight);
+            out.valid[j] = r.valid;
         }
+        *p = out;
     }
     push_samples(q, g, &pending[..ns as usize], shadow);
 }
@@ -676,10 +680,13 @@ fn direct_light<const L: usize>(
             let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
             let (ua, ub) = (unused_half(ua, &g.direct), unused_half(ub, &g.direct));
             dim += 1;
-            area_rays(pts, al, &ua, &ub, p);
+            // Into a local first (see `emissive_rays`).
+            let mut out = Rays::<L>::default();
+            area_rays(pts, al, &ua, &ub, &mut out);
             for j in 0..L {
-                p.set_weight(j, get(&c, j) * mis_weighted(p.g[j], ns, g.mis[j]));
+                out.set_weight(j, get(&c, j) * mis_weighted(out.g[j], ns, g.mis[j]));
             }
+            *p = out;
         }
         push_samples(q, g, &pending[..ns as usize], shadow);
     }

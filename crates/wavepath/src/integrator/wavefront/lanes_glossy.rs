@@ -263,7 +263,11 @@ fn direct_light<'a, M: LaneModel, const L: usize>(
                 pending.resize_with(ns as usize, Rays::default);
             }
             for p in pending.iter_mut().take(ns as usize) {
-                emissive_samples(t, g, soa, direct, e, li, ns, table, dims, dim, p);
+                // Into a local first: a loop writing through the queue's buffer is left
+                // scalar (its stores might alias what it reads, for all the compiler knows).
+                let mut out = Rays::<L>::default();
+                emissive_samples(t, g, soa, direct, e, li, ns, table, dims, dim, &mut out);
+                *p = out;
                 dim += per_sample;
             }
             push_samples(q, g, direct, &pending[..ns as usize], shadow);
