@@ -152,6 +152,26 @@ fn hard_coherent_runs_match_single_rays() {
     check(&scene, &hard_rays(&scene), "hard", 2);
 }
 
+/// Batches mixing lone rays (other origins, as extension rays) with coherent runs: a group
+/// whose first two rays start no packet sends the rest of its rays alone, packets or not.
+/// Every ray's hit is still its single-ray hit, and the runs that lead a group are still
+/// traced as packets.
+#[test]
+fn mixed_batches_match_single_rays() {
+    let scene = scene();
+    let mut s = Sampler::for_sample(4, 1, 0);
+    let cam = camera(Vec3::new(0.4, 1.2, 5.0), Vec3::new(0.0, -0.3, 0.0), (32, 24), 12.0, 2, &mut s);
+    let mut rays = Vec::new();
+    for (i, run) in cam.chunks(30).enumerate() {
+        for _ in 0..i % 3 {
+            let o = Vec3::new(s.next_f32() * 8.0 - 4.0, 2.0, s.next_f32() * 8.0 - 4.0);
+            rays.push(Ray::new(o, Vec3::new(s.next_f32() - 0.5, -1.0, s.next_f32() - 0.5)));
+        }
+        rays.extend_from_slice(run);
+    }
+    check(&scene, &rays, "mixed", 1);
+}
+
 /// Triangles far smaller than the spacing of the rays (a scanned mesh of tens of millions
 /// seen at a screen's resolution): a packet's frustum then spans many subtrees between its
 /// rays that none of them enters, and the packet must not visit them. Its rays' own tests
