@@ -22,48 +22,54 @@ pub struct Dielectric {
 /// Unpolarised Fresnel reflectance of a dielectric interface for an incident cosine
 /// `cos_i` in [0, 1] and relative index `eta` (transmitted over incident); 1 under total
 /// internal reflection.
-#[inline]
+#[inline(always)]
 pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
+    // Every case computed and the valid one kept (no branch: the lane kernels' loops over it
+    // vectorise); `cos_t`'s clamp changes nothing where it is used.
     let cos_i = cos_i.clamp(0.0, 1.0);
     let sin2_t = (1.0 - cos_i * cos_i) / (eta * eta);
-    if sin2_t >= 1.0 || eta <= 0.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
+    let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
     let rs = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     let rp = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0)
+    let f = (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0);
+    if sin2_t >= 1.0 || eta <= 0.0 { 1.0 } else { f }
 }
 
 impl Dielectric {
     /// `u` chooses reflection (u < F) or refraction.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: f32) -> Option<BsdfSample> {
-        let cos_i = wo.z;
-        if cos_i <= 0.0 || self.eta.is_nan() || self.eta <= 0.0 {
-            return None;
-        }
-        let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (self.eta * self.eta);
-        let tir = sin2_t >= 1.0;
-        if !self.reflect {
-            if tir {
-                return None;
-            }
-            let wi = self.refracted(wo, sin2_t);
-            let weight = self.transmittance / (self.eta * self.eta);
-            return Some(BsdfSample { wi, weight, pdf: 1.0, delta: true });
-        }
-        let f = fresnel_dielectric(cos_i, self.eta);
-        if tir || u < f {
-            Some(BsdfSample { wi: reflect(wo), weight: self.reflectance, pdf: f, delta: true })
-        } else {
-            let wi = self.refracted(wo, sin2_t);
-            let weight = self.transmittance / (self.eta * self.eta);
-            Some(BsdfSample { wi, weight, pdf: 1.0 - f, delta: true })
-        }
+        let (s, ok) = self.sample_at(wo, u);
+        ok.then_some(s)
     }
 
-    #[inline]
+    /// [`sample`](Self::sample) without a branch (both lobes computed, the chosen one kept),
+    /// for the lane kernels' loops: the sample and whether there is one.
+    #[inline(always)]
+    pub fn sample_at(&self, wo: Vec3, u: f32) -> (BsdfSample, bool) {
+        let cos_i = wo.z;
+        let usable = cos_i > 0.0 && self.eta > 0.0;
+        let sin2_t = (1.0 - cos_i * cos_i).max(0.0) / (self.eta * self.eta);
+        let tir = sin2_t >= 1.0;
+        let f = fresnel_dielectric(cos_i, self.eta);
+        // Without `reflect` the surface only transmits, and total internal reflection ends
+        // the path.
+        let reflects = self.reflect & (tir | (u < f));
+        let refracted = self.refracted(wo, sin2_t);
+        let transmitted = self.transmittance / (self.eta * self.eta);
+        let wi = if reflects { reflect(wo) } else { refracted };
+        let weight = if reflects { self.reflectance } else { transmitted };
+        let pdf = if !self.reflect {
+            1.0
+        } else if reflects {
+            f
+        } else {
+            1.0 - f
+        };
+        (BsdfSample { wi, weight, pdf, delta: true }, usable & (self.reflect | !tir))
+    }
+
+    #[inline(always)]
     fn refracted(&self, wo: Vec3, sin2_t: f32) -> Vec3 {
         let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
         Vec3::new(-wo.x / self.eta, -wo.y / self.eta, -cos_t)

@@ -11,10 +11,15 @@ pub struct Mirror {
 impl Mirror {
     #[inline]
     pub fn sample(&self, wo: Vec3) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
-        Some(BsdfSample { wi: reflect(wo), weight: self.reflectance, pdf: 1.0, delta: true })
+        let (s, ok) = self.sample_at(wo);
+        ok.then_some(s)
+    }
+
+    /// [`sample`](Self::sample) without a branch (for the lane kernels' loops): the sample
+    /// and whether there is one.
+    #[inline(always)]
+    pub fn sample_at(&self, wo: Vec3) -> (BsdfSample, bool) {
+        (BsdfSample { wi: reflect(wo), weight: self.reflectance, pdf: 1.0, delta: true }, wo.z > 0.0)
     }
 }
 

@@ -1,12 +1,14 @@
-//! The glossy kinds that mix a diffuse lobe with a GGX one (glTF metallic-roughness and
-//! specular-glossiness, MTL PBR, MTL Phong) leaving their vertices eight or sixteen at a time:
-//! the shading frames, the light samples of emissive triangles (the light glTF and OBJ files
-//! carry), the BSDF's value and density at each, the MIS weights, the shadow rays, and the
-//! continuation's visible-normal sample with its value, density and ray, all in fixed loops
-//! over the lanes that the compiler vectorises. What is per lane and irregular stays one lane
-//! at a time: the material's parameters at the vertex ([`Transport::model_at`]), which
-//! emissive triangle a sample picks and what it emits, the sine and cosine of the disk angle
-//! (the C library's), any other light ([`Transport::direct_light_shaded`]), Russian roulette.
+//! The models whose sample is written without branches (`LaneModel`: glTF metallic-roughness
+//! and specular-glossiness, MTL PBR and Phong, the rough conductor, mirror, glass) leaving
+//! their vertices eight or sixteen at a time: the shading frames, the light samples of
+//! emissive triangles (the light glTF and OBJ files carry), the BSDF's value and density at
+//! each, the MIS weights, the shadow rays, and the continuation's sample with its value,
+//! density and ray, all in fixed loops over the lanes that the compiler vectorises. What is
+//! per lane and irregular stays one lane at a time: the material's parameters at the vertex
+//! ([`Transport::model_at`]), which emissive triangle a sample picks and what it emits, the
+//! library calls a sample needs (the sine and cosine of an angle, Beckmann's logarithm), any
+//! other light ([`Transport::direct_light_shaded`]), Russian roulette. Mirror and glass take
+//! no light samples: theirs is the continuation alone.
 //!
 //! The per-sample functions are the ones the one-path code calls (`eval_pdf`, `sample_at`,
 //! the light sample's geometry, `offset_origin`), written without branches, so the rays and
@@ -18,7 +20,8 @@ use super::Features;
 use super::lanes::{Emitters, Points, Rays, get, put};
 use super::one_path;
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
-use crate::bsdf::{BsdfSample, Glossy, Kind, Model, Pbr, power_heuristic, to_local};
+use crate::bsdf::{BsdfSample, Dielectric, Distribution, Glossy, Kind, Microfacet, Mirror, Model, Pbr};
+use crate::bsdf::{power_heuristic, to_local};
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax_at};
 use crate::integrator::{Bounce, ShadingFrame};
@@ -35,15 +38,29 @@ const PARAMS: usize = 10;
 /// its parameters as numbers (the kernel keeps them one array per parameter).
 pub(super) trait LaneModel: Copy {
     const NONE: Self;
+    /// Delta lobes only (mirror, smooth glass): no light samples, and the continuation's
+    /// light is not weighed against them ([`Bounce::DELTA`]).
+    const DELTA: bool;
     fn params(&self) -> [f32; PARAMS];
     fn from_params(p: &[f32; PARAMS]) -> Self;
     fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32);
-    fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool);
+    /// The library calls (sine, cosine, logarithm) [`sample_at`](Self::sample_at) needs for
+    /// the numbers `u`: made one lane at a time, as they do not vectorise.
+    fn sample_calls(&self, u: [f32; 3]) -> [f32; 3];
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], calls: [f32; 3]) -> (BsdfSample, bool);
     fn model(self) -> Model;
+}
+
+/// The sine and cosine of the visible-normal sample's disk angle, `2 pi u[1]`.
+#[inline(always)]
+fn disk_angle(u: [f32; 3]) -> [f32; 3] {
+    let (sin, cos) = (std::f32::consts::TAU * u[1]).sin_cos();
+    [sin, cos, 0.0]
 }
 
 impl LaneModel for Pbr {
     const NONE: Self = Pbr { diffuse: Vec3::ZERO, f0: Vec3::ZERO, diffuse_f0: Vec3::ZERO, alpha: 0.0 };
+    const DELTA: bool = false;
 
     #[inline(always)]
     fn params(&self) -> [f32; PARAMS] {
@@ -67,8 +84,13 @@ impl LaneModel for Pbr {
     }
 
     #[inline(always)]
-    fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
-        Pbr::sample_at(self, wo, u, sin_cos)
+    fn sample_calls(&self, u: [f32; 3]) -> [f32; 3] {
+        disk_angle(u)
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], [sin, cos, _]: [f32; 3]) -> (BsdfSample, bool) {
+        Pbr::sample_at(self, wo, u, (sin, cos))
     }
 
     #[inline(always)]
@@ -79,6 +101,7 @@ impl LaneModel for Pbr {
 
 impl LaneModel for Glossy {
     const NONE: Self = Glossy { diffuse: Vec3::ZERO, specular: Vec3::ZERO, alpha: 0.0 };
+    const DELTA: bool = false;
 
     #[inline(always)]
     fn params(&self) -> [f32; PARAMS] {
@@ -97,13 +120,136 @@ impl LaneModel for Glossy {
     }
 
     #[inline(always)]
-    fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
-        Glossy::sample_at(self, wo, u, sin_cos)
+    fn sample_calls(&self, u: [f32; 3]) -> [f32; 3] {
+        disk_angle(u)
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], [sin, cos, _]: [f32; 3]) -> (BsdfSample, bool) {
+        Glossy::sample_at(self, wo, u, (sin, cos))
     }
 
     #[inline(always)]
     fn model(self) -> Model {
         Model::Glossy(self)
+    }
+}
+
+/// The rough conductor (CS184's microfacet BSDF): Beckmann's D through the branch-free
+/// `exp`, the half vector's azimuth and logarithm made one lane at a time.
+impl LaneModel for Microfacet {
+    const NONE: Self = Microfacet { alpha: 0.0, eta: Vec3::ZERO, k: Vec3::ZERO, distribution: Distribution::Beckmann };
+    const DELTA: bool = false;
+
+    #[inline(always)]
+    fn params(&self) -> [f32; PARAMS] {
+        let (e, k) = (self.eta, self.k);
+        let ggx = (self.distribution == Distribution::Ggx) as u32 as f32;
+        [e.x, e.y, e.z, k.x, k.y, k.z, self.alpha, ggx, 0.0, 0.0]
+    }
+
+    #[inline(always)]
+    fn from_params(p: &[f32; PARAMS]) -> Self {
+        let distribution = if p[7] != 0.0 { Distribution::Ggx } else { Distribution::Beckmann };
+        Microfacet { eta: Vec3::new(p[0], p[1], p[2]), k: Vec3::new(p[3], p[4], p[5]), alpha: p[6], distribution }
+    }
+
+    #[inline(always)]
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        Microfacet::eval_pdf(self, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample_calls(&self, u: [f32; 3]) -> [f32; 3] {
+        Microfacet::sample_calls(self, [u[0], u[1]])
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], calls: [f32; 3]) -> (BsdfSample, bool) {
+        Microfacet::sample_at(self, wo, [u[0], u[1]], calls)
+    }
+
+    #[inline(always)]
+    fn model(self) -> Model {
+        Model::Microfacet(self)
+    }
+}
+
+impl LaneModel for Mirror {
+    const NONE: Self = Mirror { reflectance: Vec3::ZERO };
+    const DELTA: bool = true;
+
+    #[inline(always)]
+    fn params(&self) -> [f32; PARAMS] {
+        let r = self.reflectance;
+        [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+    }
+
+    #[inline(always)]
+    fn from_params(p: &[f32; PARAMS]) -> Self {
+        Mirror { reflectance: Vec3::new(p[0], p[1], p[2]) }
+    }
+
+    #[inline(always)]
+    fn eval_pdf(&self, _: Vec3, _: Vec3) -> (Vec3, f32) {
+        (Vec3::ZERO, 0.0)
+    }
+
+    #[inline(always)]
+    fn sample_calls(&self, _: [f32; 3]) -> [f32; 3] {
+        [0.0; 3]
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, _: [f32; 3], _: [f32; 3]) -> (BsdfSample, bool) {
+        Mirror::sample_at(self, wo)
+    }
+
+    #[inline(always)]
+    fn model(self) -> Model {
+        Model::Mirror(self)
+    }
+}
+
+/// Smooth glass, oriented to the side the path arrives on ([`Transport::model_at`]).
+impl LaneModel for Dielectric {
+    const NONE: Self = Dielectric { reflectance: Vec3::ZERO, transmittance: Vec3::ZERO, eta: 0.0, reflect: false };
+    const DELTA: bool = true;
+
+    #[inline(always)]
+    fn params(&self) -> [f32; PARAMS] {
+        let (r, t) = (self.reflectance, self.transmittance);
+        [r.x, r.y, r.z, t.x, t.y, t.z, self.eta, self.reflect as u32 as f32, 0.0, 0.0]
+    }
+
+    #[inline(always)]
+    fn from_params(p: &[f32; PARAMS]) -> Self {
+        Dielectric {
+            reflectance: Vec3::new(p[0], p[1], p[2]),
+            transmittance: Vec3::new(p[3], p[4], p[5]),
+            eta: p[6],
+            reflect: p[7] != 0.0,
+        }
+    }
+
+    #[inline(always)]
+    fn eval_pdf(&self, _: Vec3, _: Vec3) -> (Vec3, f32) {
+        (Vec3::ZERO, 0.0)
+    }
+
+    #[inline(always)]
+    fn sample_calls(&self, _: [f32; 3]) -> [f32; 3] {
+        [0.0; 3]
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], _: [f32; 3]) -> (BsdfSample, bool) {
+        Dielectric::sample_at(self, wo, u[2])
+    }
+
+    #[inline(always)]
+    fn model(self) -> Model {
+        Model::Dielectric(self)
     }
 }
 
@@ -123,12 +269,14 @@ impl<M: LaneModel, const L: usize> GlossyGroup<M, L> {
         GlossyGroup { n: 0, path: [0; L], row: [0; L], vertex: [super::lanes::NO_VERTEX; L], model: [M::NONE; L] }
     }
 
-    /// Adds path `path` (row `row` of the group's numbers) at vertex `v` with model `m`.
+    /// Adds path `path` (row `row` of the group's numbers) at vertex `v` with model `m`;
+    /// true (the path is taken).
     #[inline(always)]
-    pub fn push(&mut self, path: usize, row: usize, v: &Vertex, m: M) {
+    pub fn push(&mut self, path: usize, row: usize, v: &Vertex, m: M) -> bool {
         let k = self.n;
         (self.path[k], self.row[k], self.vertex[k], self.model[k]) = (path, row, *v, m);
         self.n += 1;
+        true
     }
 }
 
@@ -189,7 +337,7 @@ impl<const L: usize> Soa<L> {
     }
 }
 
-/// Whether the shaded kinds' kernel may leave glossy vertices here: light
+/// Whether the shaded kinds' kernel may leave glossy vertices (not delta ones) here: light
 /// sampling (hemisphere sampling is left to the one-path code) and every number the vertex
 /// reads drawn ahead.
 #[inline(always)]
@@ -224,7 +372,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
         let r = g.row[j];
         Drawn { stream: rng[r], table: &table[r * dims..(r + 1) * dims], one_d: &t.shaded_numbers.one_d, dim }
     };
-    if F::DIRECT {
+    if F::DIRECT && !M::DELTA {
         let mut direct = [false; L];
         for j in 0..g.n {
             direct[j] = t.rules.counts_direct(depth[j]);
@@ -379,8 +527,8 @@ fn push_samples<M, const L: usize>(
     shadow.commit(w);
 }
 
-/// The continuations ([`Transport::scatter_shaded`] for a glossy vertex under MIS), then
-/// Russian roulette one lane at a time.
+/// The continuations ([`Transport::scatter_shaded`] for a glossy vertex under MIS or a delta
+/// one), then Russian roulette one lane at a time.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
@@ -395,14 +543,15 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
 ) {
     let mut cont = [false; L];
     let mut u = [[0.5f32; L]; 3];
-    let (mut sin, mut cos) = ([0.0f32; L], [1.0f32; L]);
+    let mut calls = [[0.0f32; L]; 3];
     for j in 0..g.n {
         let d = depth[j];
         cont[j] = t.rules.continues(d) || t.rules.counts_direct(d);
         let row = g.row[j] * dims;
         let [a, b] = table[row];
-        put(&mut u, j, Vec3::new(a, b, table[row + crate::integrator::DIM_LOBE as usize][0]));
-        (sin[j], cos[j]) = (std::f32::consts::TAU * b).sin_cos();
+        let uj = [a, b, table[row + crate::integrator::DIM_LOBE as usize][0]];
+        put(&mut u, j, Vec3::from(uj));
+        put(&mut calls, j, Vec3::from(g.model[j].sample_calls(uj)));
     }
     if !cont.iter().any(|&c| c) {
         return;
@@ -412,7 +561,7 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
     let mut weight = [[0.0f32; L]; 3];
     for j in 0..L {
         let l = soa.lane::<M>(j);
-        let (s, ok) = l.model.sample_at(l.wo, get(&u, j).to_array(), (sin[j], cos[j]));
+        let (s, ok) = l.model.sample_at(l.wo, get(&u, j).to_array(), get(&calls, j).to_array());
         let wi = l.frame.to_world(s.wi);
         let origin = offset_origin(l.p, l.p_error, l.ng, wi);
         rays.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
@@ -429,7 +578,7 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
         q.throughput[i] *= get(&weight, j);
         q.depth[i] = depth[j] + 1;
         q.alive[i] = true;
-        q.bounce[i] = Bounce { n: g.vertex[j].ns, pdf: pdf[j] };
+        q.bounce[i] = if M::DELTA { Bounce::DELTA } else { Bounce { n: g.vertex[j].ns, pdf: pdf[j] } };
         one_path::roulette::<F>(t, q, i, depth[j], numbers(j, 0));
     }
 }

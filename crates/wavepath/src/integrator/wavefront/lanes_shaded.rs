@@ -2,17 +2,18 @@
 //! conductors, mirror, glass, the layered glTF model), eight or sixteen paths at a time: each
 //! lane arrives one at a time ([`one_path::arrive`]: the vertex, its emission and the light
 //! its ray found), the group's random numbers are drawn in lanes, as many dimensions as the
-//! group's materials read ([`Transport::shaded_numbers`]), and each lane then leaves its
-//! vertex with the numbers drawn for it ([`one_path::leave`]). The numbers are the vertex
-//! streams' own ([`Drawn`]), so the rays are those of the one-path kernel, bit for bit.
+//! group's materials read ([`Transport::shaded_numbers`]), and the vertices leave by model.
+//! The numbers are the vertex streams' own ([`Drawn`]), so the rays are those of the
+//! one-path kernel, bit for bit.
 //!
 //! Drawing the numbers was the largest part of shading these kinds one path at a time
-//! (Sobol's Owen scrambling and index shuffling, per dimension and per vertex). The glossy
-//! models that mix a diffuse lobe with a GGX one (metallic-roughness, specular-glossiness,
-//! Phong) then leave their vertices in lanes too ([`super::lanes_glossy`]: light samples,
-//! BSDF values and densities, MIS weights, continuations), sorted out of the group by model;
-//! the others (conductors, mirror, glass, the layered glTF model) and hemisphere sampling
-//! leave one lane at a time with the one-path code.
+//! (Sobol's Owen scrambling and index shuffling, per dimension and per vertex). The models
+//! with a branch-free sample (`LaneModel`) then leave their vertices in lanes
+//! ([`super::lanes_glossy`]), sorted out of the group by model: those that mix a diffuse lobe
+//! with a GGX one (metallic-roughness, specular-glossiness, Phong) and the rough conductor
+//! where the light samples are drawn ahead, mirror and glass always (they take no light
+//! samples). The layered glTF model, and the glossy ones under hemisphere sampling, leave
+//! one lane at a time with the one-path code ([`one_path::leave`]).
 
 #![allow(clippy::needless_range_loop)]
 
@@ -22,7 +23,7 @@ use super::lanes::Rays;
 use super::lanes_glossy::{self, GlossyGroup};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
-use crate::bsdf::{Glossy, Kind, Model, Pbr};
+use crate::bsdf::{Dielectric, Glossy, Kind, Microfacet, Mirror, Model, Pbr};
 use crate::cpu::{Avx2, Avx512};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::sampling::numbers::Drawn;
@@ -89,6 +90,9 @@ fn shade_groups<F: Features, const L: usize>(
     let glossy_lanes = lanes_glossy::takes(t);
     let mut pbr = GlossyGroup::<Pbr, L>::new();
     let mut phong = GlossyGroup::<Glossy, L>::new();
+    let mut conductor = GlossyGroup::<Microfacet, L>::new();
+    let mut mirror = GlossyGroup::<Mirror, L>::new();
+    let mut glass = GlossyGroup::<Dielectric, L>::new();
     let mut pending: Vec<Rays<L>> = Vec::new();
     for chunk in idx.chunks(L) {
         let mut vertex: [Option<Vertex>; L] = [None; L];
@@ -139,20 +143,28 @@ fn shade_groups<F: Features, const L: usize>(
                 }
             }
         }
-        (pbr.n, phong.n) = (0, 0);
+        (pbr.n, phong.n, conductor.n, mirror.n, glass.n) = (0, 0, 0, 0, 0);
         for (j, &pi) in chunk.iter().enumerate() {
             let Some(v) = &vertex[j] else { continue };
-            if glossy_lanes && matches!(t.materials.models[v.material as usize], Model::Pbr(_) | Model::Glossy(_)) {
-                match t.model_at(v) {
-                    Model::Pbr(m) => {
-                        pbr.push(pi as usize, j, v, m);
-                        continue;
-                    }
-                    Model::Glossy(m) => {
-                        phong.push(pi as usize, j, v, m);
-                        continue;
-                    }
-                    _ => {}
+            // Delta kinds take no light samples, so they leave in lanes whatever the rules;
+            // the glossy ones where their light samples are drawn ahead.
+            let in_lanes = match t.materials.models[v.material as usize] {
+                Model::Mirror(_) | Model::Dielectric(_) => true,
+                Model::Pbr(_) | Model::Glossy(_) | Model::Microfacet(_) => glossy_lanes,
+                Model::Lambert(_) | Model::Layered(_) => false,
+            };
+            if in_lanes {
+                let i = pi as usize;
+                let taken = match t.model_at(v) {
+                    Model::Pbr(m) => pbr.push(i, j, v, m),
+                    Model::Glossy(m) => phong.push(i, j, v, m),
+                    Model::Microfacet(m) => conductor.push(i, j, v, m),
+                    Model::Mirror(m) => mirror.push(i, j, v, m),
+                    Model::Dielectric(m) => glass.push(i, j, v, m),
+                    Model::Lambert(_) | Model::Layered(_) => false,
+                };
+                if taken {
+                    continue;
                 }
             }
             let numbers =
@@ -164,6 +176,15 @@ fn shade_groups<F: Features, const L: usize>(
         }
         if phong.n > 0 {
             lanes_glossy::leave::<F, Glossy, L>(t, q, &phong, table, dims, &rng, &mut pending, shadow);
+        }
+        if conductor.n > 0 {
+            lanes_glossy::leave::<F, Microfacet, L>(t, q, &conductor, table, dims, &rng, &mut pending, shadow);
+        }
+        if mirror.n > 0 {
+            lanes_glossy::leave::<F, Mirror, L>(t, q, &mirror, table, dims, &rng, &mut pending, shadow);
+        }
+        if glass.n > 0 {
+            lanes_glossy::leave::<F, Dielectric, L>(t, q, &glass, table, dims, &rng, &mut pending, shadow);
         }
     }
 }

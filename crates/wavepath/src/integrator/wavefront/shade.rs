@@ -86,7 +86,7 @@ mod tests {
     use crate::integrator::wavefront::generate::{Wave, generate};
     use crate::integrator::wavefront::{Kernel, compact, traverse};
     use crate::integrator::wavefront::{Lanes, ShadeWidth};
-    use crate::scene::{Bsdf, Light, Scene};
+    use crate::scene::{Bsdf, Light, Scene, Sphere};
     use crate::settings::{RouletteKind, Settings, Shading};
     use glam::Vec3;
 
@@ -246,8 +246,9 @@ mod tests {
     }
 
     /// The shaded kinds' kernel (numbers drawn in lanes) against the one-path kernel: walls of
-    /// metallic-roughness, Phong and specular-glossiness materials, a rough conductor sphere
-    /// and a glass one, under the emissive quad (MIS, a light that reads a third number) and a
+    /// metallic-roughness, Phong and specular-glossiness materials, spheres of a rough
+    /// conductor, glass (seen from both sides, total internal reflection), a mirror and a
+    /// refraction-only surface, under the emissive quad (MIS, a light that reads a third number) and a
     /// point light, with every sampler, both roulettes, and hemisphere sampling.
     #[test]
     fn shaded_kinds_in_lanes_match_the_scalar_kernel() {
@@ -269,8 +270,14 @@ mod tests {
         });
         let mut glass = scene.materials[4].clone();
         glass.bsdf = Bsdf::Glass { reflectance: Vec3::ONE, transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
-        scene.materials.push(glass);
+        let mut mirror = glass.clone();
+        mirror.bsdf = Bsdf::Mirror { reflectance: Vec3::new(0.9, 0.8, 0.7) };
+        let mut refraction = glass.clone();
+        refraction.bsdf = Bsdf::Refraction { transmittance: Vec3::splat(0.9), roughness: 0.0, ior: 2.0 };
+        scene.materials.extend([glass, mirror, refraction]);
         scene.spheres[1].material = 5;
+        scene.spheres.push(Sphere { center: Vec3::new(-0.5, 1.0, 0.4), radius: 0.2, material: 6 });
+        scene.spheres.push(Sphere { center: Vec3::new(0.5, 1.0, -0.4), radius: 0.2, material: 7 });
         tilted_normals(&mut scene);
         for (sampler, rr_throughput) in [
             (crate::sampling::SamplerKind::Independent, false),
