@@ -19,10 +19,16 @@ pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
 /// Uniform direction about +Z; pdf = 1 / (2 pi).
 #[inline]
 pub fn uniform_hemisphere(u: f32, v: f32) -> Vec3 {
+    uniform_hemisphere_at(u, (TAU * v).sin_cos())
+}
+
+/// [`uniform_hemisphere`] from `u` and the sine and cosine of its azimuth `2 pi v` (made
+/// apart: a lane kernel makes them one lane at a time, the rest in its loops).
+#[inline(always)]
+pub fn uniform_hemisphere_at(u: f32, (sin, cos): (f32, f32)) -> Vec3 {
     let z = u;
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = TAU * v;
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    Vec3::new(r * cos, r * sin, z)
 }
 
 pub const UNIFORM_HEMISPHERE_PDF: f32 = 1.0 / TAU;

@@ -2,7 +2,8 @@
 //! and specular-glossiness, MTL PBR and Phong, the rough conductor, mirror, glass) leaving
 //! their vertices eight or sixteen at a time: the shading frames, the light samples of
 //! emissive triangles (the light glTF and OBJ files carry), the BSDF's value and density at
-//! each, the MIS weights, the shadow rays, and the continuation's sample with its value,
+//! each, the MIS weights (or hemisphere sampling's probes), the shadow rays, and the
+//! continuation's sample with its value,
 //! density and ray, all in fixed loops over the lanes that the compiler vectorises. What is
 //! per lane and irregular stays one lane at a time: the material's parameters at the vertex
 //! ([`Transport::model_at`]), which emissive triangle a sample picks and what it emits, the
@@ -28,7 +29,7 @@ use crate::integrator::{Bounce, ShadingFrame};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::lights::{EmissiveTriangles, SampledLight, area_to_solid_angle_lanes};
 use crate::sampling::numbers::Drawn;
-use crate::sampling::{Frame, Sampler};
+use crate::sampling::{Frame, Sampler, warp};
 use glam::Vec3;
 
 /// Most numbers a model's parameters take.
@@ -43,10 +44,17 @@ pub(super) trait LaneModel: Copy {
     const DELTA: bool;
     fn params(&self) -> [f32; PARAMS];
     fn from_params(p: &[f32; PARAMS]) -> Self;
-    fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32);
+    /// The value and density toward `wi`; by default those of delta lobes (zero).
+    #[inline(always)]
+    fn eval_pdf(&self, _wo: Vec3, _wi: Vec3) -> (Vec3, f32) {
+        (Vec3::ZERO, 0.0)
+    }
     /// The library calls (sine, cosine, logarithm) [`sample_at`](Self::sample_at) needs for
-    /// the numbers `u`: made one lane at a time, as they do not vectorise.
-    fn sample_calls(&self, u: [f32; 3]) -> [f32; 3];
+    /// the numbers `u`: made one lane at a time, as they do not vectorise. By default none.
+    #[inline(always)]
+    fn sample_calls(&self, _u: [f32; 3]) -> [f32; 3] {
+        [0.0; 3]
+    }
     fn sample_at(&self, wo: Vec3, u: [f32; 3], calls: [f32; 3]) -> (BsdfSample, bool);
     fn model(self) -> Model;
 }
@@ -191,16 +199,6 @@ impl LaneModel for Mirror {
     }
 
     #[inline(always)]
-    fn eval_pdf(&self, _: Vec3, _: Vec3) -> (Vec3, f32) {
-        (Vec3::ZERO, 0.0)
-    }
-
-    #[inline(always)]
-    fn sample_calls(&self, _: [f32; 3]) -> [f32; 3] {
-        [0.0; 3]
-    }
-
-    #[inline(always)]
     fn sample_at(&self, wo: Vec3, _: [f32; 3], _: [f32; 3]) -> (BsdfSample, bool) {
         Mirror::sample_at(self, wo)
     }
@@ -230,16 +228,6 @@ impl LaneModel for Dielectric {
             eta: p[6],
             reflect: p[7] != 0.0,
         }
-    }
-
-    #[inline(always)]
-    fn eval_pdf(&self, _: Vec3, _: Vec3) -> (Vec3, f32) {
-        (Vec3::ZERO, 0.0)
-    }
-
-    #[inline(always)]
-    fn sample_calls(&self, _: [f32; 3]) -> [f32; 3] {
-        [0.0; 3]
     }
 
     #[inline(always)]
@@ -337,12 +325,11 @@ impl<const L: usize> Soa<L> {
     }
 }
 
-/// Whether the shaded kinds' kernel may leave glossy vertices (not delta ones) here: light
-/// sampling (hemisphere sampling is left to the one-path code) and every number the vertex
-/// reads drawn ahead.
+/// Whether the shaded kinds' kernel may leave glossy vertices (not delta ones) here: every
+/// number the vertex reads drawn ahead (light samples or hemisphere probes).
 #[inline(always)]
 pub(super) fn takes(t: &Transport) -> bool {
-    !t.rules.hemisphere && t.shaded_numbers.complete
+    t.shaded_numbers.complete
 }
 
 /// Leaves the vertices of `g` as [`one_path::leave`] does: shadow rays (throughput applied)
@@ -378,7 +365,11 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
             direct[j] = t.rules.counts_direct(depth[j]);
         }
         if direct.iter().any(|&d| d) {
-            direct_light(t, q, g, &soa, &direct, table, dims, &numbers, pending, shadow);
+            if t.rules.hemisphere {
+                hemisphere_probes(t, q, g, &soa, &direct, table, dims, pending, shadow);
+            } else {
+                direct_light(t, q, g, &soa, &direct, table, dims, &numbers, pending, shadow);
+            }
         }
     }
     if F::INDIRECT {
@@ -435,6 +426,52 @@ fn direct_light<'a, M: LaneModel, const L: usize>(
         }
         dim += ns as usize * per_sample;
     }
+}
+
+/// Hemisphere sampling's direct light ([`Transport::direct_rays_shaded`] under `-H`): the
+/// uniform probes of the lanes in `direct`, BSDF-weighted, each path's in its order; the
+/// sine and cosine of each probe's azimuth one lane at a time.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn hemisphere_probes<M: LaneModel, const L: usize>(
+    t: &Transport,
+    q: &PathQueue,
+    g: &GlossyGroup<M, L>,
+    soa: &Soa<L>,
+    direct: &[bool; L],
+    table: &[[f32; 2]],
+    dims: usize,
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
+    let n = t.rules.direct_per_vertex as usize;
+    if pending.len() < n {
+        pending.resize_with(n, Rays::default);
+    }
+    let density = warp::UNIFORM_HEMISPHERE_PDF * n as f32;
+    for (k, p) in pending.iter_mut().take(n).enumerate() {
+        let dim = DIM_DIRECT as usize + k;
+        let (mut z, mut sin, mut cos) = ([0.0f32; L], [0.0f32; L], [1.0f32; L]);
+        for j in 0..g.n {
+            let [a, b] = table[g.row[j] * dims + dim];
+            z[j] = a;
+            (sin[j], cos[j]) = (std::f32::consts::TAU * b).sin_cos();
+        }
+        // Into a local first (see `direct_light`).
+        let mut out = Rays::<L>::default();
+        for j in 0..L {
+            let l = soa.lane::<M>(j);
+            let local = warp::uniform_hemisphere_at(z[j], (sin[j], cos[j]));
+            let (f, _) = l.model.eval_pdf(l.wo, local);
+            let wi = l.frame.to_world(local);
+            let origin = offset_origin(l.p, l.p_error, l.ng, wi);
+            out.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
+            out.set_weight(j, f * (local.z / density));
+            out.valid[j] = direct[j] & (f != Vec3::ZERO) & l.consistent(wi);
+        }
+        *p = out;
+    }
+    push_samples(q, g, direct, &pending[..n], shadow);
 }
 
 /// One sample of emissive-triangle light `li` (`e`, `ns` samples a vertex) for every lane,
@@ -527,8 +564,7 @@ fn push_samples<M, const L: usize>(
     shadow.commit(w);
 }
 
-/// The continuations ([`Transport::scatter_shaded`] for a glossy vertex under MIS or a delta
-/// one), then Russian roulette one lane at a time.
+/// The continuations ([`Transport::scatter_shaded`] for a glossy or a delta vertex), then Russian roulette one lane at a time.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
@@ -541,12 +577,15 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
     dims: usize,
     numbers: &impl Fn(usize, u32) -> Drawn<'a>,
 ) {
+    // Under hemisphere sampling a glossy continuation's light is not weighed against the
+    // probes (`Transport::scatter_shaded`); a delta one's always is.
+    let mis = M::DELTA || !t.rules.hemisphere;
     let mut cont = [false; L];
     let mut u = [[0.5f32; L]; 3];
     let mut calls = [[0.0f32; L]; 3];
     for j in 0..g.n {
         let d = depth[j];
-        cont[j] = t.rules.continues(d) || t.rules.counts_direct(d);
+        cont[j] = t.rules.continues(d) || (mis && t.rules.counts_direct(d));
         let row = g.row[j] * dims;
         let [a, b] = table[row];
         let uj = [a, b, table[row + crate::integrator::DIM_LOBE as usize][0]];
@@ -578,7 +617,13 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
         q.throughput[i] *= get(&weight, j);
         q.depth[i] = depth[j] + 1;
         q.alive[i] = true;
-        q.bounce[i] = if M::DELTA { Bounce::DELTA } else { Bounce { n: g.vertex[j].ns, pdf: pdf[j] } };
+        q.bounce[i] = if M::DELTA {
+            Bounce::DELTA
+        } else if mis {
+            Bounce { n: g.vertex[j].ns, pdf: pdf[j] }
+        } else {
+            Bounce::DIFFUSE
+        };
         one_path::roulette::<F>(t, q, i, depth[j], numbers(j, 0));
     }
 }

@@ -11,9 +11,9 @@
 //! with a branch-free sample (`LaneModel`) then leave their vertices in lanes
 //! ([`super::lanes_glossy`]), sorted out of the group by model: those that mix a diffuse lobe
 //! with a GGX one (metallic-roughness, specular-glossiness, Phong) and the rough conductor
-//! where the light samples are drawn ahead, mirror and glass always (they take no light
-//! samples). The layered glTF model, and the glossy ones under hemisphere sampling, leave
-//! one lane at a time with the one-path code ([`one_path::leave`]).
+//! where their light samples or hemisphere probes are drawn ahead, mirror and glass always
+//! (they take no light samples). The layered glTF model leaves one lane at a time with the
+//! one-path code ([`one_path::leave`]).
 
 #![allow(clippy::needless_range_loop)]
 
