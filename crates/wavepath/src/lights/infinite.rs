@@ -1,4 +1,5 @@
 use super::LightSample;
+use crate::bsdf::power_heuristic;
 use crate::sampling::{Frame, warp};
 use crate::scene::EnvMap;
 use glam::Vec3;
@@ -22,15 +23,21 @@ impl Infinite {
     /// Radiance arriving along `-wi` (looking toward `wi`).
     #[inline]
     pub fn radiance(&self, wi: Vec3) -> Vec3 {
+        let mapped = self.map.as_ref().map_or(Vec3::ZERO, |m| m.radiance(wi));
+        self.radiance_with(wi, mapped, self.map.is_some())
+    }
+
+    /// [`radiance`](Self::radiance) with the map's own radiance toward `wi` looked up by the
+    /// caller (`mapped`, read only when `has_map`): branch-free, for the lane kernels, which
+    /// look the map up one lane at a time.
+    #[inline(always)]
+    pub fn radiance_with(&self, wi: Vec3, mapped: Vec3, has_map: bool) -> Vec3 {
         let c = if wi.y > 0.0 { self.upper + self.all } else { self.all };
-        match &self.map {
-            None => c,
-            Some(m) => c + m.radiance(wi),
-        }
+        if has_map { c + mapped } else { c }
     }
 
     /// Probability of drawing from the map rather than the cosine lobe.
-    #[inline]
+    #[inline(always)]
     fn map_fraction(&self) -> f32 {
         if self.upper == Vec3::ZERO && self.all == Vec3::ZERO { 1.0 } else { 0.5 }
     }
@@ -40,17 +47,8 @@ impl Infinite {
     #[inline]
     pub fn sample(&self, n: Vec3, u: [f32; 2]) -> Option<LightSample> {
         let Some(map) = &self.map else {
-            let local = warp::cosine_hemisphere(u[0], u[1]);
-            let wi = Frame::new(n).to_world(local);
-            let pdf = warp::cosine_hemisphere_pdf(local.z);
-            if pdf <= 0.0 {
-                return None;
-            }
-            let l = self.radiance(wi);
-            if l == Vec3::ZERO {
-                return None;
-            }
-            return Some(LightSample { wi, target: None, weight: l / pdf });
+            let (wi, weight, valid) = self.sample_cosine(n, u);
+            return valid.then_some(LightSample { wi, target: None, weight });
         };
         let f = self.map_fraction();
         if f == 1.0 {
@@ -72,17 +70,58 @@ impl Infinite {
         Some(LightSample { wi, target: None, weight: l / pdf })
     }
 
+    /// [`sample`](Self::sample) where there is no map, without branches (the lane kernels
+    /// call it on every lane): the direction, radiance over density, and whether it carries
+    /// light.
+    #[inline(always)]
+    pub fn sample_cosine(&self, n: Vec3, u: [f32; 2]) -> (Vec3, Vec3, bool) {
+        let local = warp::cosine_hemisphere(u[0], u[1]);
+        let wi = Frame::new(n).to_world(local);
+        let pdf = warp::cosine_hemisphere_pdf(local.z);
+        let l = self.radiance_with(wi, Vec3::ZERO, false);
+        (wi, l / pdf, (pdf > 0.0) & (l != Vec3::ZERO))
+    }
+
     /// The solid-angle density with which [`sample`](Self::sample) draws `wi` at a point with
     /// shading normal `n` (for multiple importance sampling).
     #[inline]
     pub fn pdf(&self, n: Vec3, wi: Vec3) -> f32 {
+        let mapped = self.map.as_ref().map_or(0.0, |m| m.pdf(wi));
+        self.pdf_with(n, wi, mapped, self.map.is_some())
+    }
+
+    /// [`pdf`](Self::pdf) with the map's own density of `wi` looked up by the caller
+    /// (`mapped`, read only when `has_map`), as [`radiance_with`](Self::radiance_with).
+    #[inline(always)]
+    pub fn pdf_with(&self, n: Vec3, wi: Vec3, mapped: f32, has_map: bool) -> f32 {
         let cos = warp::cosine_hemisphere_pdf(wi.dot(n).max(0.0));
-        match &self.map {
-            None => cos,
-            Some(m) => {
-                let f = self.map_fraction();
-                f * m.pdf(wi) + (1.0 - f) * cos
-            }
+        if has_map {
+            let f = self.map_fraction();
+            f * mapped + (1.0 - f) * cos
+        } else {
+            cos
         }
+    }
+
+    /// What a BSDF sample from a point with shading normal `n` and density `pdf_b` finds
+    /// along `dir`, weighed by the power heuristic against this light's `ns` samples; the
+    /// map's radiance and density toward `dir` given as in
+    /// [`radiance_with`](Self::radiance_with). Branch-free (the lane kernels call it).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub fn found_by(
+        &self,
+        ns: f32,
+        n: Vec3,
+        pdf_b: f32,
+        dir: Vec3,
+        mapped: Vec3,
+        mapped_pdf: f32,
+        has_map: bool,
+    ) -> Vec3 {
+        let le = self.radiance_with(dir, mapped, has_map);
+        let pdf_l = self.pdf_with(n, dir, mapped_pdf, has_map);
+        // A sum over the lights, of which this is the only one a ray that escaped finds.
+        Vec3::ZERO + le * power_heuristic(pdf_b, ns * pdf_l)
     }
 }

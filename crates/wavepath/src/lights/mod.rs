@@ -328,10 +328,15 @@ impl LightSet {
     /// What a camera ray that misses everything sees looking toward `dir` (unit).
     #[inline]
     pub fn background_toward(&self, dir: Vec3) -> Vec3 {
-        match &self.infinite.map {
-            None => self.background,
-            Some(m) => self.background + m.radiance(dir),
-        }
+        let mapped = self.infinite.map.as_ref().map_or(Vec3::ZERO, |m| m.radiance(dir));
+        self.background_with(mapped, self.infinite.map.is_some())
+    }
+
+    /// [`background_toward`](Self::background_toward) with the map's radiance looked up by
+    /// the caller (`mapped`, read only when `has_map`), as [`Infinite::radiance_with`].
+    #[inline(always)]
+    pub fn background_with(&self, mapped: Vec3, has_map: bool) -> Vec3 {
+        if has_map { self.background + mapped } else { self.background }
     }
 
     /// Samples taken for light `i` at one shading point: one for delta lights, `-l` otherwise.

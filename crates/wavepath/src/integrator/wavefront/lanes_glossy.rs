@@ -15,13 +15,15 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::Features;
-use super::lanes::{Emitters, Points, Rays, get, put};
+use super::lanes::{Emitters, LightPoints, Points, Rays, get, put};
 use super::one_path;
-use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
-use crate::bsdf::{BsdfSample, Glossy, Kind, Model, Pbr, power_heuristic, to_local};
+use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
+use crate::bsdf::{BsdfSample, Glossy, Pbr, power_heuristic, to_local};
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax_at};
-use crate::integrator::{Bounce, ShadingFrame};
+use crate::integrator::Bounce;
+use crate::integrator::area::ShadingPoint;
+use crate::integrator::light_ray::{LightPoint, glossy_light_ray};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::lights::{EmissiveTriangles, SampledLight, area_to_solid_angle_lanes};
 use crate::sampling::numbers::Drawn;
@@ -39,7 +41,6 @@ pub(super) trait LaneModel: Copy {
     fn from_params(p: &[f32; PARAMS]) -> Self;
     fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32);
     fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool);
-    fn model(self) -> Model;
 }
 
 impl LaneModel for Pbr {
@@ -70,11 +71,6 @@ impl LaneModel for Pbr {
     fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
         Pbr::sample_at(self, wo, u, sin_cos)
     }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Pbr(self)
-    }
 }
 
 impl LaneModel for Glossy {
@@ -99,11 +95,6 @@ impl LaneModel for Glossy {
     #[inline(always)]
     fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
         Glossy::sample_at(self, wo, u, sin_cos)
-    }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Glossy(self)
     }
 }
 
@@ -230,7 +221,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
             direct[j] = t.rules.counts_direct(depth[j]);
         }
         if direct.iter().any(|&d| d) {
-            direct_light(t, q, g, &soa, &direct, table, dims, &numbers, pending, shadow);
+            direct_light(t, q, g, &soa, &direct, table, dims, pending, shadow);
         }
     }
     if F::INDIRECT {
@@ -242,7 +233,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
 /// one-path code makes them ([`Transport::direct_rays_shaded`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn direct_light<'a, M: LaneModel, const L: usize>(
+fn direct_light<M: LaneModel, const L: usize>(
     t: &Transport,
     q: &PathQueue,
     g: &GlossyGroup<M, L>,
@@ -250,7 +241,6 @@ fn direct_light<'a, M: LaneModel, const L: usize>(
     direct: &[bool; L],
     table: &[[f32; 2]],
     dims: usize,
-    numbers: &impl Fn(usize, u32) -> Drawn<'a>,
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
@@ -273,19 +263,68 @@ fn direct_light<'a, M: LaneModel, const L: usize>(
             push_samples(q, g, direct, &pending[..ns as usize], shadow);
             continue;
         }
-        // No lane sampler for this light: each lane draws its samples itself.
-        for j in 0..g.n {
-            if direct[j] {
-                let l = soa.lane::<M>(j);
-                let sh = ShadingFrame { frame: l.frame, wo: l.wo, model: l.model.model(), kind: Kind::Glossy };
-                let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
-                let mut r = numbers(j, dim as u32);
-                t.direct_light_shaded(&g.vertex[j], &sh, li, &mut r, &mut |d| {
-                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-                });
-            }
+        if pending.len() < ns as usize {
+            pending.resize_with(ns as usize, Rays::default);
         }
-        dim += ns as usize * per_sample;
+        for p in pending.iter_mut().take(ns as usize) {
+            // Into a local first, as above.
+            let mut out = Rays::<L>::default();
+            light_samples(t, g, soa, direct, light, li, ns, table, dims, dim, &mut out);
+            *p = out;
+            dim += per_sample;
+        }
+        push_samples(q, g, direct, &pending[..ns as usize], shadow);
+    }
+}
+
+/// One sample of light `li` (`light`: the light from infinity, point, spot and directional
+/// lights, an area light; `ns` samples a vertex) for every lane, from the pair at dimension
+/// `dim`: the light from infinity without a map sampled in all lanes at once, any other
+/// light one lane at a time (`SampledLight::sample_pdf`: the map's table, a normalisation);
+/// then the BSDF's value and density, the MIS weight and the shadow ray of all lanes, as
+/// [`Transport::direct_light_shaded`] computes them ([`glossy_light_ray`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn light_samples<M: LaneModel, const L: usize>(
+    t: &Transport,
+    g: &GlossyGroup<M, L>,
+    soa: &Soa<L>,
+    direct: &[bool; L],
+    light: &SampledLight,
+    li: usize,
+    ns: u32,
+    table: &[[f32; 2]],
+    dims: usize,
+    dim: usize,
+    out: &mut Rays<L>,
+) {
+    let (mut ua, mut ub) = ([0.5f32; L], [0.5f32; L]);
+    for j in 0..g.n {
+        [ua[j], ub[j]] = table[g.row[j] * dims + dim];
+    }
+    let ls = match light {
+        SampledLight::Infinite(inf) if inf.map.is_none() => LightPoints::sky(inf, &soa.pts.ns, &ua, &ub, direct),
+        _ => {
+            let mut ls = LightPoints::<L>::default();
+            for j in 0..g.n {
+                if direct[j] {
+                    let v = &g.vertex[j];
+                    ls.set(j, &LightPoint::of(light.sample_pdf(v.p, v.ns, [ua[j], ub[j], 0.0])));
+                }
+            }
+            ls
+        }
+    };
+    let margin = t.lights.shadow_margins[li];
+    for j in 0..L {
+        let (l, lp) = (soa.lane::<M>(j), ls.get(j));
+        let local = to_local(&l.frame, lp.wi);
+        let (f, pdf_b) = l.model.eval_pdf(l.wo, local);
+        let sp = ShadingPoint { p: l.p, p_error: l.p_error, ng: l.ng, ns: l.ns };
+        let r = glossy_light_ray(&sp, &lp, local, f, pdf_b, margin, ns, l.consistent(lp.wi));
+        out.set(j, &r.ray);
+        out.set_weight(j, r.weight);
+        out.valid[j] = r.valid;
     }
 }
 
