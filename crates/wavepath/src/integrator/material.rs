@@ -274,7 +274,7 @@ impl Transport<'_> {
         let Some(i) = self.lights.infinite else { return Vec3::ZERO };
         let SampledLight::Infinite(inf) = &self.lights.set.lights[i] else { return Vec3::ZERO };
         let ns = self.lights.set.samples_for(i, self.rules.light_samples) as f32;
-        inf.found_by(ns, prev.n, prev.pdf, dir, mapped, mapped_pdf, has_map)
+        inf.sky().found_by(ns, prev.n, prev.pdf, dir, mapped, mapped_pdf, has_map)
     }
 
     /// An emissive triangle's emission, geometric normal and index.

@@ -24,22 +24,13 @@ impl Infinite {
     #[inline]
     pub fn radiance(&self, wi: Vec3) -> Vec3 {
         let mapped = self.map.as_ref().map_or(Vec3::ZERO, |m| m.radiance(wi));
-        self.radiance_with(wi, mapped, self.map.is_some())
+        self.sky().radiance_with(wi, mapped, self.map.is_some())
     }
 
-    /// [`radiance`](Self::radiance) with the map's own radiance toward `wi` looked up by the
-    /// caller (`mapped`, read only when `has_map`): branch-free, for the lane kernels, which
-    /// look the map up one lane at a time.
+    /// Its constant terms, which the lane kernels keep in registers.
     #[inline(always)]
-    pub fn radiance_with(&self, wi: Vec3, mapped: Vec3, has_map: bool) -> Vec3 {
-        let c = if wi.y > 0.0 { self.upper + self.all } else { self.all };
-        if has_map { c + mapped } else { c }
-    }
-
-    /// Probability of drawing from the map rather than the cosine lobe.
-    #[inline(always)]
-    fn map_fraction(&self) -> f32 {
-        if self.upper == Vec3::ZERO && self.all == Vec3::ZERO { 1.0 } else { 0.5 }
+    pub fn sky(&self) -> Sky {
+        Sky { upper: self.upper, all: self.all }
     }
 
     /// Draws a direction about the shading normal `n` from two uniform numbers; the sample's
@@ -47,10 +38,10 @@ impl Infinite {
     #[inline]
     pub fn sample(&self, n: Vec3, u: [f32; 2]) -> Option<LightSample> {
         let Some(map) = &self.map else {
-            let (wi, weight, valid) = self.sample_cosine(n, u);
+            let (wi, weight, valid) = self.sky().sample_cosine(n, u);
             return valid.then_some(LightSample { wi, target: None, weight });
         };
-        let f = self.map_fraction();
+        let f = self.sky().map_fraction();
         if f == 1.0 {
             // The map alone: its own density and the texel drawn, no second lookup.
             let (wi, pdf, l) = map.sample_texel(u)?;
@@ -70,7 +61,41 @@ impl Infinite {
         Some(LightSample { wi, target: None, weight: l / pdf })
     }
 
-    /// [`sample`](Self::sample) where there is no map, without branches (the lane kernels
+    /// The solid-angle density with which [`sample`](Self::sample) draws `wi` at a point with
+    /// shading normal `n` (for multiple importance sampling).
+    #[inline]
+    pub fn pdf(&self, n: Vec3, wi: Vec3) -> f32 {
+        let mapped = self.map.as_ref().map_or(0.0, |m| m.pdf(wi));
+        self.sky().pdf_with(n, wi, mapped, self.map.is_some())
+    }
+}
+
+/// The constant terms of the light from infinity (the hemisphere light and the constant
+/// environment), a copy small enough for registers: the branch-free functions here are what
+/// the one-path code and the lane kernels (which look the map up one lane at a time and pass
+/// its values in) both compute with.
+#[derive(Clone, Copy, Debug)]
+pub struct Sky {
+    pub upper: Vec3,
+    pub all: Vec3,
+}
+
+impl Sky {
+    /// [`Infinite::radiance`] with the map's own radiance toward `wi` looked up by the caller
+    /// (`mapped`, read only when `has_map`).
+    #[inline(always)]
+    pub fn radiance_with(&self, wi: Vec3, mapped: Vec3, has_map: bool) -> Vec3 {
+        let c = if wi.y > 0.0 { self.upper + self.all } else { self.all };
+        if has_map { c + mapped } else { c }
+    }
+
+    /// Probability of drawing from the map rather than the cosine lobe.
+    #[inline(always)]
+    fn map_fraction(&self) -> f32 {
+        if self.upper == Vec3::ZERO && self.all == Vec3::ZERO { 1.0 } else { 0.5 }
+    }
+
+    /// [`Infinite::sample`] where there is no map, without branches (the lane kernels
     /// call it on every lane): the direction, radiance over density, and whether it carries
     /// light.
     #[inline(always)]
@@ -82,15 +107,7 @@ impl Infinite {
         (wi, l / pdf, (pdf > 0.0) & (l != Vec3::ZERO))
     }
 
-    /// The solid-angle density with which [`sample`](Self::sample) draws `wi` at a point with
-    /// shading normal `n` (for multiple importance sampling).
-    #[inline]
-    pub fn pdf(&self, n: Vec3, wi: Vec3) -> f32 {
-        let mapped = self.map.as_ref().map_or(0.0, |m| m.pdf(wi));
-        self.pdf_with(n, wi, mapped, self.map.is_some())
-    }
-
-    /// [`pdf`](Self::pdf) with the map's own density of `wi` looked up by the caller
+    /// [`Infinite::pdf`] with the map's own density of `wi` looked up by the caller
     /// (`mapped`, read only when `has_map`), as [`radiance_with`](Self::radiance_with).
     #[inline(always)]
     pub fn pdf_with(&self, n: Vec3, wi: Vec3, mapped: f32, has_map: bool) -> f32 {

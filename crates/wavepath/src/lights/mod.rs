@@ -15,7 +15,7 @@ mod emissive;
 mod infinite;
 
 pub use emissive::{EmissiveTriangles, Emitter};
-pub use infinite::Infinite;
+pub use infinite::{Infinite, Sky};
 
 use crate::geometry::error_bound::gamma;
 use crate::scene::{Environment, Light, Scene};
@@ -329,14 +329,15 @@ impl LightSet {
     #[inline]
     pub fn background_toward(&self, dir: Vec3) -> Vec3 {
         let mapped = self.infinite.map.as_ref().map_or(Vec3::ZERO, |m| m.radiance(dir));
-        self.background_with(mapped, self.infinite.map.is_some())
+        LightSet::background_with(self.background, mapped, self.infinite.map.is_some())
     }
 
-    /// [`background_toward`](Self::background_toward) with the map's radiance looked up by
-    /// the caller (`mapped`, read only when `has_map`), as [`Infinite::radiance_with`].
+    /// [`background_toward`](Self::background_toward) for the set's `background` with the
+    /// map's radiance looked up by the caller (`mapped`, read only when `has_map`), as
+    /// [`Sky::radiance_with`].
     #[inline(always)]
-    pub fn background_with(&self, mapped: Vec3, has_map: bool) -> Vec3 {
-        if has_map { self.background + mapped } else { self.background }
+    pub fn background_with(background: Vec3, mapped: Vec3, has_map: bool) -> Vec3 {
+        if has_map { background + mapped } else { background }
     }
 
     /// Samples taken for light `i` at one shading point: one for delta lights, `-l` otherwise.

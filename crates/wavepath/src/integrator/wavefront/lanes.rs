@@ -29,7 +29,7 @@ use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
 use crate::integrator::light_ray::{LightPoint, diffuse_light_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
-use crate::lights::{EmissiveTriangles, Emitter, Infinite, SampledLight};
+use crate::lights::{EmissiveTriangles, Emitter, SampledLight, Sky};
 use crate::sampling::{Sampler, SamplerKind, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
@@ -455,9 +455,9 @@ impl<const L: usize> LightPoints<L> {
 
     /// The samples of the light from infinity without a map for every lane in `take` about
     /// the normals `n`, from the numbers `(ua, ub)`: all lanes at once
-    /// ([`Infinite::sample_cosine`]); the density is the one MIS reads.
+    /// ([`Sky::sample_cosine`]); the density is the one MIS reads.
     #[inline(always)]
-    pub fn sky(inf: &Infinite, n: &[[f32; L]; 3], ua: &[f32; L], ub: &[f32; L], take: &[bool; L]) -> Self {
+    pub fn sky(inf: Sky, n: &[[f32; L]; 3], ua: &[f32; L], ub: &[f32; L], take: &[bool; L]) -> Self {
         let mut out = LightPoints::default();
         for j in 0..L {
             let n = get(n, j);
@@ -769,7 +769,7 @@ fn light_rays<const L: usize>(
     let ns = t.lights.set.samples_for(li, t.rules.light_samples);
     let margin = t.lights.shadow_margins[li];
     let sky = match light {
-        SampledLight::Infinite(inf) if inf.map.is_none() => Some(inf),
+        SampledLight::Infinite(inf) if inf.map.is_none() => Some(inf.sky()),
         _ => None,
     };
     let mut inv = [[0.0; L]; 3];

@@ -5,7 +5,7 @@
 //! looked up one lane at a time (a texel and a table entry); the selection between the
 //! cases, the constant sky, the map mixture's density and the power heuristic run in a loop
 //! over the lanes that vectorises, through the functions the one-path code calls
-//! ([`Infinite::found_by`](crate::lights::Infinite::found_by),
+//! ([`Sky::found_by`](crate::lights::Sky::found_by),
 //! [`LightSet::background_with`](crate::lights::LightSet::background_with)), so each path
 //! gets the same bits as from [`super::one_path::arrive`].
 //!
@@ -21,7 +21,7 @@ use super::one_path;
 use super::queues::PathQueue;
 use crate::cpu::{Avx2, Avx512};
 use crate::integrator::Transport;
-use crate::lights::SampledLight;
+use crate::lights::{LightSet, SampledLight};
 use glam::Vec3;
 
 /// Shades the escaped paths `idx`: `alive` cleared, the environment or the light from
@@ -60,13 +60,15 @@ fn escaped_groups<F: Features, const L: usize>(t: &Transport, q: &mut PathQueue,
     let set = &t.lights.set;
     let map = set.infinite.map.as_deref();
     let has_map = map.is_some();
-    // The light a BSDF sample finds (the one infinite light, or a black one) and how many
-    // samples it takes at a vertex.
-    let (sky, ns) = match t.lights.infinite.map(|i| (i, &set.lights[i])) {
-        Some((i, SampledLight::Infinite(inf))) => (inf, set.samples_for(i, t.rules.light_samples) as f32),
-        _ => (&set.infinite, 0.0),
+    // The constants the lane loop reads, copied out (registers, not loads through a
+    // reference): the light a BSDF sample finds and how many samples it takes at a vertex
+    // (`mis`: there is one), what camera rays see, and light from infinity after delta bounces.
+    let (found, ns) = match t.lights.infinite.map(|i| (i, &set.lights[i])) {
+        Some((i, SampledLight::Infinite(inf))) => (inf.sky(), set.samples_for(i, t.rules.light_samples) as f32),
+        _ => (set.infinite.sky(), 0.0),
     };
     let mis = t.lights.infinite.is_some();
+    let (background, sky) = (set.background, set.infinite.sky());
     for chunk in idx.chunks(L) {
         let mut dir = [[0.0f32; L]; 3];
         let mut n = [[0.0f32; L]; 3];
@@ -100,20 +102,23 @@ fn escaped_groups<F: Features, const L: usize>(t: &Transport, q: &mut PathQueue,
                 }
             }
         }
+        if !(0..chunk.len()).any(|j| camera[j] || arrives[j]) {
+            continue;
+        }
         let mut l = [[0.0f32; L]; 3];
         for j in 0..L {
             let (d, m) = (get(&dir, j), get(&mapped, j));
             let weighed =
-                if mis { sky.found_by(ns, get(&n, j), pdf[j], d, m, mapped_pdf[j], has_map) } else { Vec3::ZERO };
+                if mis { found.found_by(ns, get(&n, j), pdf[j], d, m, mapped_pdf[j], has_map) } else { Vec3::ZERO };
             // As `Transport::arrival` for a ray that left the scene.
-            let found = if pdf[j] == 0.0 || !counts[j] {
+            let arrived = if pdf[j] == 0.0 || !counts[j] {
                 Vec3::ZERO
             } else if pdf[j] == f32::INFINITY {
-                set.infinite.radiance_with(d, m, has_map)
+                sky.radiance_with(d, m, has_map)
             } else {
                 weighed
             };
-            put(&mut l, j, if camera[j] { set.background_with(m, has_map) } else { found });
+            put(&mut l, j, if camera[j] { LightSet::background_with(background, m, has_map) } else { arrived });
         }
         for (j, &pi) in chunk.iter().enumerate() {
             if camera[j] || arrives[j] {

@@ -303,7 +303,7 @@ fn light_samples<M: LaneModel, const L: usize>(
         [ua[j], ub[j]] = table[g.row[j] * dims + dim];
     }
     let ls = match light {
-        SampledLight::Infinite(inf) if inf.map.is_none() => LightPoints::sky(inf, &soa.pts.ns, &ua, &ub, direct),
+        SampledLight::Infinite(inf) if inf.map.is_none() => LightPoints::sky(inf.sky(), &soa.pts.ns, &ua, &ub, direct),
         _ => {
             let mut ls = LightPoints::<L>::default();
             for j in 0..g.n {
