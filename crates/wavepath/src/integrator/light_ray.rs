@@ -1,6 +1,6 @@
 //! The per-sample math of direct light from every light but the area lights and emissive
 //! triangles (which have [`super::area`]): the light from infinity, point, spot and
-//! directional lights. Written once, without branches, for the one-vertex code and the lane
+//! directional lights, and the light from infinity a BSDF sample finds. Written once, without branches, for the one-vertex code and the lane
 //! kernels: the lane kernels draw each lane's sample (a table lookup, a normalisation) and
 //! then call these functions on every lane in fixed loops that the compiler vectorises, so
 //! both give the same bits.
@@ -9,7 +9,7 @@ use super::area::{LightRay, ShadingPoint};
 use crate::bsdf::power_heuristic;
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax_at};
-use crate::lights::LightSample;
+use crate::lights::{LightSample, Sky};
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -108,4 +108,26 @@ pub fn glossy_light_ray(
     let (ray, reach) = shadow_ray_to(origin, l.wi, l.target, l.finite, margin);
     let valid = l.valid & (f != Vec3::ZERO) & (w > 0.0) & consistent & reach;
     LightRay { ray, weight: f * l.weight * (local.z * w / ns as f32), valid }
+}
+
+/// What a BSDF sample from a point with shading normal `n` and density `pdf_b` finds along
+/// `dir` at infinity (light `sky`), weighed by the power heuristic against that light's `ns`
+/// samples; the map's radiance and density toward `dir` given as in
+/// [`Sky::radiance_with`]. As `Transport::arrival` sums it over the lights, of which this is
+/// the only one a ray that escaped finds when no area light is in its way.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+pub fn found_at_infinity(
+    sky: Sky,
+    ns: f32,
+    n: Vec3,
+    pdf_b: f32,
+    dir: Vec3,
+    mapped: Vec3,
+    mapped_pdf: f32,
+    has_map: bool,
+) -> Vec3 {
+    let le = sky.radiance_with(dir, mapped, has_map);
+    let pdf_l = sky.pdf_with(n, dir, mapped_pdf, has_map);
+    Vec3::ZERO + le * power_heuristic(pdf_b, ns * pdf_l)
 }

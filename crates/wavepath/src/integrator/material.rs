@@ -143,7 +143,8 @@ impl Transport<'_> {
 
     /// The light samples of the glossy vertex `v` toward light `i`, drawn from `rng` at its
     /// current dimension: one light's part of [`direct_rays_shaded`](Self::direct_rays_shaded),
-    /// which a lane kernel also calls for a lane whose light has no lane-parallel sampler.
+    /// through the per-sample function the glossy lane kernel runs on its lanes
+    /// ([`glossy_light_ray`]).
     #[inline]
     pub fn direct_light_shaded(
         &self,
@@ -274,7 +275,7 @@ impl Transport<'_> {
         let Some(i) = self.lights.infinite else { return Vec3::ZERO };
         let SampledLight::Infinite(inf) = &self.lights.set.lights[i] else { return Vec3::ZERO };
         let ns = self.lights.set.samples_for(i, self.rules.light_samples) as f32;
-        inf.sky().found_by(ns, prev.n, prev.pdf, dir, mapped, mapped_pdf, has_map)
+        super::light_ray::found_at_infinity(inf.sky(), ns, prev.n, prev.pdf, dir, mapped, mapped_pdf, has_map)
     }
 
     /// An emissive triangle's emission, geometric normal and index.

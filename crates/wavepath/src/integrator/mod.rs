@@ -256,8 +256,8 @@ impl<'a> Transport<'a> {
 
     /// The light samples of the diffuse vertex `v` (BSDF value `f`) toward light `i`, drawn
     /// from `rng` at its current dimension ([`light_dims`](Self::light_dims) of them): one
-    /// light's part of [`direct_rays`](Self::direct_rays), which the lane kernel also calls
-    /// for a lane whose light has no lane-parallel sampler.
+    /// light's part of [`direct_rays`](Self::direct_rays). Every sample goes through the
+    /// per-sample functions the lane kernel runs on its lanes ([`light_ray`], [`area`]).
     #[inline(always)]
     pub fn direct_light(
         &self,

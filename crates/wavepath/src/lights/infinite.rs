@@ -1,5 +1,4 @@
 use super::LightSample;
-use crate::bsdf::power_heuristic;
 use crate::sampling::{Frame, warp};
 use crate::scene::EnvMap;
 use glam::Vec3;
@@ -118,27 +117,5 @@ impl Sky {
         } else {
             cos
         }
-    }
-
-    /// What a BSDF sample from a point with shading normal `n` and density `pdf_b` finds
-    /// along `dir`, weighed by the power heuristic against this light's `ns` samples; the
-    /// map's radiance and density toward `dir` given as in
-    /// [`radiance_with`](Self::radiance_with). Branch-free (the lane kernels call it).
-    #[allow(clippy::too_many_arguments)]
-    #[inline(always)]
-    pub fn found_by(
-        &self,
-        ns: f32,
-        n: Vec3,
-        pdf_b: f32,
-        dir: Vec3,
-        mapped: Vec3,
-        mapped_pdf: f32,
-        has_map: bool,
-    ) -> Vec3 {
-        let le = self.radiance_with(dir, mapped, has_map);
-        let pdf_l = self.pdf_with(n, dir, mapped_pdf, has_map);
-        // A sum over the lights, of which this is the only one a ray that escaped finds.
-        Vec3::ZERO + le * power_heuristic(pdf_b, ns * pdf_l)
     }
 }

@@ -1,17 +1,18 @@
 //! Shade for the Lambertian hits of a wave, eight paths at a time with AVX2 and sixteen with
 //! AVX-512 (the diffuse kind's
 //! kernel; [`super::shade`] sorts the paths by kind first). What is per path and irregular
-//! (the hit's surface point or whole vertex, the random numbers, a light that has no lane
-//! sampler) is gathered or computed one lane at a time; the area lights' samples, offsets,
-//! shadow-ray setup, MIS weights and the continuation rays then run lane-parallel:
-//! [`crate::integrator::area`]'s branch-free per-sample functions in fixed loops over the
+//! (the hit's surface point or whole vertex, the random numbers, an environment map's or a
+//! point light's sample) is gathered or computed one lane at a time; the light samples,
+//! offsets, shadow-ray setup, MIS weights and the continuation rays then run lane-parallel:
+//! [`crate::integrator::area`]'s and [`crate::integrator::light_ray`]'s branch-free
+//! per-sample functions in fixed loops over the
 //! lanes that the compiler vectorises (8 square roots and divisions per instruction instead
 //! of one). The functions are the ones the one-vertex-at-a-time code calls, so the image is
 //! the same, bit for bit, as [`super::shade::shade_scalar`]'s.
 //!
 //! Any light, MIS, one-sided emitters, textures, vertex colours, relief maps, volumes and
-//! hemisphere sampling run here: a lane whose light has no lane-parallel sampler calls the
-//! one-vertex function for that light ([`Transport::direct_light`]) in its lane's turn.
+//! hemisphere sampling run here (hemisphere sampling one lane at a time, with
+//! [`Transport::direct_rays`]).
 //!
 //! The kernel is compiled with AVX2 and FMA enabled (behind run-time detection; Rust never
 //! contracts `a * b + c` into an FMA, so the bits do not change) and everything it calls is

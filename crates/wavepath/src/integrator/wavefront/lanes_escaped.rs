@@ -5,7 +5,7 @@
 //! looked up one lane at a time (a texel and a table entry); the selection between the
 //! cases, the constant sky, the map mixture's density and the power heuristic run in a loop
 //! over the lanes that vectorises, through the functions the one-path code calls
-//! ([`Sky::found_by`](crate::lights::Sky::found_by),
+//! ([`found_at_infinity`],
 //! [`LightSet::background_with`](crate::lights::LightSet::background_with)), so each path
 //! gets the same bits as from [`super::one_path::arrive`].
 //!
@@ -21,6 +21,7 @@ use super::one_path;
 use super::queues::PathQueue;
 use crate::cpu::{Avx2, Avx512};
 use crate::integrator::Transport;
+use crate::integrator::light_ray::found_at_infinity;
 use crate::lights::{LightSet, SampledLight};
 use glam::Vec3;
 
@@ -108,8 +109,11 @@ fn escaped_groups<F: Features, const L: usize>(t: &Transport, q: &mut PathQueue,
         let mut l = [[0.0f32; L]; 3];
         for j in 0..L {
             let (d, m) = (get(&dir, j), get(&mapped, j));
-            let weighed =
-                if mis { found.found_by(ns, get(&n, j), pdf[j], d, m, mapped_pdf[j], has_map) } else { Vec3::ZERO };
+            let weighed = if mis {
+                found_at_infinity(found, ns, get(&n, j), pdf[j], d, m, mapped_pdf[j], has_map)
+            } else {
+                Vec3::ZERO
+            };
             // As `Transport::arrival` for a ray that left the scene.
             let arrived = if pdf[j] == 0.0 || !counts[j] {
                 Vec3::ZERO

@@ -1,12 +1,12 @@
 //! The glossy kinds that mix a diffuse lobe with a GGX one (glTF metallic-roughness and
 //! specular-glossiness, MTL PBR, MTL Phong) leaving their vertices eight or sixteen at a time:
-//! the shading frames, the light samples of emissive triangles (the light glTF and OBJ files
-//! carry), the BSDF's value and density at each, the MIS weights, the shadow rays, and the
+//! the shading frames, the light samples of every light (emissive triangles, the light from
+//! infinity, point, spot and directional lights), the BSDF's value and density at each, the MIS weights, the shadow rays, and the
 //! continuation's visible-normal sample with its value, density and ray, all in fixed loops
 //! over the lanes that the compiler vectorises. What is per lane and irregular stays one lane
 //! at a time: the material's parameters at the vertex ([`Transport::model_at`]), which
-//! emissive triangle a sample picks and what it emits, the sine and cosine of the disk angle
-//! (the C library's), any other light ([`Transport::direct_light_shaded`]), Russian roulette.
+//! emissive triangle a sample picks and what it emits, an environment map's or a point
+//! light's sample, the sine and cosine of the disk angle (the C library's), Russian roulette.
 //!
 //! The per-sample functions are the ones the one-path code calls (`eval_pdf`, `sample_at`,
 //! the light sample's geometry, `offset_origin`), written without branches, so the rays and
