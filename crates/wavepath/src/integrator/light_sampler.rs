@@ -2,12 +2,10 @@
 //! lights and each light's shadow-ray margin.
 
 use super::area::AreaLight;
-use crate::geometry::Ray;
-use crate::geometry::offset::{self, shadow_margin};
+use crate::geometry::offset::shadow_margin;
 use crate::lights::{LightSet, SampledLight};
 use crate::scene::Scene;
 use crate::settings::Settings;
-use glam::Vec3;
 
 pub struct LightSampler {
     pub set: LightSet,
@@ -17,6 +15,8 @@ pub struct LightSampler {
     pub shadow_margins: Vec<f32>,
     /// Some light is an area light, which a ray can reach before the surface it hits.
     pub area_arrivals: bool,
+    /// The light from infinity's place in the set, if the scene has one.
+    pub infinite: Option<usize>,
 }
 
 impl LightSampler {
@@ -40,24 +40,7 @@ impl LightSampler {
             })
             .collect();
         let area_arrivals = set.lights.iter().any(|l| matches!(l, SampledLight::Area { .. }));
-        LightSampler { set, area_lights, shadow_margins, area_arrivals }
-    }
-
-    /// The shadow ray of light `i` from `origin` along `dir` or, for a light point `target`,
-    /// toward it ([`shadow_margin`] of the light precomputed).
-    #[inline]
-    pub fn shadow_ray(&self, i: usize, origin: Vec3, dir: Vec3, target: Option<Vec3>) -> Option<Ray> {
-        let Some(q) = target else {
-            return Some(Ray { origin, dir, tmin: 0.0, tmax: f32::INFINITY });
-        };
-        let e = q - origin;
-        let len = e.length();
-        let rcp = 1.0 / len;
-        if !(rcp.is_finite() && rcp > 0.0) {
-            return None;
-        }
-        let dir = e * rcp;
-        let tmax = offset::shadow_tmax_at(len, self.shadow_margins[i]);
-        (tmax > 0.0).then_some(Ray { origin, dir, tmin: 0.0, tmax })
+        let infinite = set.lights.iter().position(|l| matches!(l, SampledLight::Infinite(_)));
+        LightSampler { set, area_lights, shadow_margins, area_arrivals, infinite }
     }
 }

@@ -17,10 +17,11 @@
 //! when that vertex's direct light would, and a vertex at the last depth still sends a ray
 //! (which only collects this light).
 
+use super::light_ray::{LightPoint, glossy_light_ray};
 use super::{DIM_DIRECT, DIM_LOBE, DirectRay, Transport, Vertex, offset_origin};
 use crate::bsdf::{Glossy, Kind, Lambert, Model, Pbr, power_heuristic, to_local};
 use crate::geometry::{Hit, Ray};
-use crate::lights::Seen;
+use crate::lights::{SampledLight, Seen};
 use crate::sampling::{Frame, Numbers, warp};
 use crate::scene::Bsdf;
 use glam::Vec3;
@@ -142,7 +143,8 @@ impl Transport<'_> {
 
     /// The light samples of the glossy vertex `v` toward light `i`, drawn from `rng` at its
     /// current dimension: one light's part of [`direct_rays_shaded`](Self::direct_rays_shaded),
-    /// which a lane kernel also calls for a lane whose light has no lane-parallel sampler.
+    /// through the per-sample function the glossy lane kernel runs on its lanes
+    /// ([`glossy_light_ray`]).
     #[inline]
     pub fn direct_light_shaded(
         &self,
@@ -154,21 +156,17 @@ impl Transport<'_> {
     ) {
         let light = &self.lights.set.lights[i];
         let ns = self.lights.set.samples_for(i, self.rules.light_samples);
+        let (sp, margin) = (v.shading_point(), self.lights.shadow_margins[i]);
         for _ in 0..ns {
             let u = super::light_numbers(rng, light);
-            let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
-            let wi = to_local(&sh.frame, ls.wi);
-            let (f, pdf_b) = sh.model.eval_pdf(sh.wo, wi);
-            if f == Vec3::ZERO {
-                continue;
+            let Some(s) = light.sample_pdf(v.p, v.ns, u) else { continue };
+            let l = LightPoint::of(Some(s));
+            let local = to_local(&sh.frame, l.wi);
+            let (f, pdf_b) = sh.model.eval_pdf(sh.wo, local);
+            let r = glossy_light_ray(&sp, &l, local, f, pdf_b, margin, ns, v.consistent(l.wi));
+            if r.valid {
+                out(DirectRay { ray: r.ray, weight: r.weight });
             }
-            let w = power_heuristic(ns as f32 * pdf_l, pdf_b);
-            let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
-            if w <= 0.0 || !v.consistent(ls.wi) {
-                continue;
-            }
-            let Some(ray) = self.lights.shadow_ray(i, origin, ls.wi, ls.target) else { continue };
-            out(DirectRay { ray, weight: f * ls.weight * (wi.z * w / ns as f32) });
         }
     }
 
@@ -241,6 +239,13 @@ impl Transport<'_> {
                 None => self.lights.set.infinite.radiance(ray.dir),
             };
         }
+        if hit.is_none() && !self.lights.area_arrivals {
+            // Only the light from infinity is found there.
+            let inf = &self.lights.set.infinite;
+            let (mapped, mapped_pdf) =
+                inf.map.as_ref().map_or((Vec3::ZERO, 0.0), |m| (m.radiance(ray.dir), m.pdf(ray.dir)));
+            return self.infinity_mis(prev, ray.dir, mapped, mapped_pdf, inf.map.is_some());
+        }
         if hit.is_some() && emission == Vec3::ZERO && !self.lights.area_arrivals {
             // Only an area light (not geometry) is found on the way to a surface that does
             // not emit.
@@ -258,6 +263,19 @@ impl Transport<'_> {
             }
         }
         l
+    }
+
+    /// The light from infinity a BSDF-sampled ray (`prev`, neither diffuse nor delta) finds
+    /// along `dir` when no area light is in the way, weighed by MIS against the light's own
+    /// samples; the map's radiance and density toward `dir` looked up by the caller (read
+    /// only when `has_map`). Branch-free: the lane kernel for escaped paths calls it on every
+    /// lane.
+    #[inline(always)]
+    pub fn infinity_mis(&self, prev: Bounce, dir: Vec3, mapped: Vec3, mapped_pdf: f32, has_map: bool) -> Vec3 {
+        let Some(i) = self.lights.infinite else { return Vec3::ZERO };
+        let SampledLight::Infinite(inf) = &self.lights.set.lights[i] else { return Vec3::ZERO };
+        let ns = self.lights.set.samples_for(i, self.rules.light_samples) as f32;
+        super::light_ray::found_at_infinity(inf.sky(), ns, prev.n, prev.pdf, dir, mapped, mapped_pdf, has_map)
     }
 
     /// An emissive triangle's emission, geometric normal and index.

@@ -9,6 +9,7 @@
 
 pub mod area;
 pub mod layers;
+pub mod light_ray;
 mod material;
 pub mod plan;
 
@@ -22,7 +23,7 @@ pub mod streams;
 pub mod recursive;
 pub mod wavefront;
 
-pub use material::{Bounce, ShadingFrame};
+pub use material::Bounce;
 
 use crate::geometry::offset::offset_origin;
 
@@ -33,7 +34,6 @@ use material_table::MaterialTable;
 use rules::Rules;
 use streams::Streams;
 
-use crate::bsdf::power_heuristic;
 use crate::geometry::{Hit, Ray};
 use crate::lights::SampledLight;
 use crate::sampling::numbers::Layout;
@@ -41,6 +41,7 @@ use crate::sampling::{Frame, Numbers, warp};
 use crate::scene::Scene;
 use crate::settings::Settings;
 use glam::{Vec2, Vec3};
+use light_ray::LightPoint;
 use std::f32::consts::FRAC_1_PI;
 
 /// Dimension of a vertex stream that plays Russian roulette.
@@ -255,8 +256,8 @@ impl<'a> Transport<'a> {
 
     /// The light samples of the diffuse vertex `v` (BSDF value `f`) toward light `i`, drawn
     /// from `rng` at its current dimension ([`light_dims`](Self::light_dims) of them): one
-    /// light's part of [`direct_rays`](Self::direct_rays), which the lane kernel also calls
-    /// for a lane whose light has no lane-parallel sampler.
+    /// light's part of [`direct_rays`](Self::direct_rays). Every sample goes through the
+    /// per-sample functions the lane kernel runs on its lanes ([`light_ray`], [`area`]).
     #[inline(always)]
     pub fn direct_light(
         &self,
@@ -282,23 +283,18 @@ impl<'a> Transport<'a> {
             }
             return;
         }
+        let (sp, margin) = (v.shading_point(), self.lights.shadow_margins[i]);
         for _ in 0..ns {
             let u = light_numbers(rng, light);
-            let (ls, w) = if mis {
-                let Some((ls, pdf_l)) = light.sample_pdf(v.p, v.ns, u) else { continue };
-                let w = power_heuristic(ns as f32 * pdf_l, ls.wi.dot(v.ns).max(0.0) * FRAC_1_PI);
-                (ls, w)
+            let l = LightPoint::of(if mis {
+                light.sample_pdf(v.p, v.ns, u)
             } else {
-                let Some(ls) = light.sample(v.p, v.ns, u) else { continue };
-                (ls, 1.0)
-            };
-            let cos = ls.wi.dot(v.ns);
-            if cos <= 0.0 || w <= 0.0 || !v.consistent(ls.wi) {
-                continue;
+                light.sample(v.p, v.ns, u).map(|ls| (ls, 0.0))
+            });
+            let r = light_ray::diffuse_light_ray(&sp, &l, inv, margin, ns, mis, v.consistent(l.wi));
+            if r.valid {
+                out(DirectRay { ray: r.ray, weight: r.weight });
             }
-            let origin = offset_origin(v.p, v.p_error, v.ng, ls.wi);
-            let Some(ray) = self.lights.shadow_ray(i, origin, ls.wi, ls.target) else { continue };
-            out(DirectRay { ray, weight: inv * ls.weight * (cos * w) });
         }
     }
 

@@ -22,17 +22,14 @@ impl Infinite {
     /// Radiance arriving along `-wi` (looking toward `wi`).
     #[inline]
     pub fn radiance(&self, wi: Vec3) -> Vec3 {
-        let c = if wi.y > 0.0 { self.upper + self.all } else { self.all };
-        match &self.map {
-            None => c,
-            Some(m) => c + m.radiance(wi),
-        }
+        let mapped = self.map.as_ref().map_or(Vec3::ZERO, |m| m.radiance(wi));
+        self.sky().radiance_with(wi, mapped, self.map.is_some())
     }
 
-    /// Probability of drawing from the map rather than the cosine lobe.
-    #[inline]
-    fn map_fraction(&self) -> f32 {
-        if self.upper == Vec3::ZERO && self.all == Vec3::ZERO { 1.0 } else { 0.5 }
+    /// Its constant terms, which the lane kernels keep in registers.
+    #[inline(always)]
+    pub fn sky(&self) -> Sky {
+        Sky { upper: self.upper, all: self.all }
     }
 
     /// Draws a direction about the shading normal `n` from two uniform numbers; the sample's
@@ -40,19 +37,10 @@ impl Infinite {
     #[inline]
     pub fn sample(&self, n: Vec3, u: [f32; 2]) -> Option<LightSample> {
         let Some(map) = &self.map else {
-            let local = warp::cosine_hemisphere(u[0], u[1]);
-            let wi = Frame::new(n).to_world(local);
-            let pdf = warp::cosine_hemisphere_pdf(local.z);
-            if pdf <= 0.0 {
-                return None;
-            }
-            let l = self.radiance(wi);
-            if l == Vec3::ZERO {
-                return None;
-            }
-            return Some(LightSample { wi, target: None, weight: l / pdf });
+            let (wi, weight, valid) = self.sky().sample_cosine(n, u);
+            return valid.then_some(LightSample { wi, target: None, weight });
         };
-        let f = self.map_fraction();
+        let f = self.sky().map_fraction();
         if f == 1.0 {
             // The map alone: its own density and the texel drawn, no second lookup.
             let (wi, pdf, l) = map.sample_texel(u)?;
@@ -76,13 +64,58 @@ impl Infinite {
     /// shading normal `n` (for multiple importance sampling).
     #[inline]
     pub fn pdf(&self, n: Vec3, wi: Vec3) -> f32 {
+        let mapped = self.map.as_ref().map_or(0.0, |m| m.pdf(wi));
+        self.sky().pdf_with(n, wi, mapped, self.map.is_some())
+    }
+}
+
+/// The constant terms of the light from infinity (the hemisphere light and the constant
+/// environment), a copy small enough for registers: the branch-free functions here are what
+/// the one-path code and the lane kernels (which look the map up one lane at a time and pass
+/// its values in) both compute with.
+#[derive(Clone, Copy, Debug)]
+pub struct Sky {
+    pub upper: Vec3,
+    pub all: Vec3,
+}
+
+impl Sky {
+    /// [`Infinite::radiance`] with the map's own radiance toward `wi` looked up by the caller
+    /// (`mapped`, read only when `has_map`).
+    #[inline(always)]
+    pub fn radiance_with(&self, wi: Vec3, mapped: Vec3, has_map: bool) -> Vec3 {
+        let c = if wi.y > 0.0 { self.upper + self.all } else { self.all };
+        if has_map { c + mapped } else { c }
+    }
+
+    /// Probability of drawing from the map rather than the cosine lobe.
+    #[inline(always)]
+    fn map_fraction(&self) -> f32 {
+        if self.upper == Vec3::ZERO && self.all == Vec3::ZERO { 1.0 } else { 0.5 }
+    }
+
+    /// [`Infinite::sample`] where there is no map, without branches (the lane kernels
+    /// call it on every lane): the direction, radiance over density, and whether it carries
+    /// light.
+    #[inline(always)]
+    pub fn sample_cosine(&self, n: Vec3, u: [f32; 2]) -> (Vec3, Vec3, bool) {
+        let local = warp::cosine_hemisphere(u[0], u[1]);
+        let wi = Frame::new(n).to_world(local);
+        let pdf = warp::cosine_hemisphere_pdf(local.z);
+        let l = self.radiance_with(wi, Vec3::ZERO, false);
+        (wi, l / pdf, (pdf > 0.0) & (l != Vec3::ZERO))
+    }
+
+    /// [`Infinite::pdf`] with the map's own density of `wi` looked up by the caller
+    /// (`mapped`, read only when `has_map`), as [`radiance_with`](Self::radiance_with).
+    #[inline(always)]
+    pub fn pdf_with(&self, n: Vec3, wi: Vec3, mapped: f32, has_map: bool) -> f32 {
         let cos = warp::cosine_hemisphere_pdf(wi.dot(n).max(0.0));
-        match &self.map {
-            None => cos,
-            Some(m) => {
-                let f = self.map_fraction();
-                f * m.pdf(wi) + (1.0 - f) * cos
-            }
+        if has_map {
+            let f = self.map_fraction();
+            f * mapped + (1.0 - f) * cos
+        } else {
+            cos
         }
     }
 }

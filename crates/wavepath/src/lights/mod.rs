@@ -15,7 +15,7 @@ mod emissive;
 mod infinite;
 
 pub use emissive::{EmissiveTriangles, Emitter};
-pub use infinite::Infinite;
+pub use infinite::{Infinite, Sky};
 
 use crate::geometry::error_bound::gamma;
 use crate::scene::{Environment, Light, Scene};
@@ -328,10 +328,16 @@ impl LightSet {
     /// What a camera ray that misses everything sees looking toward `dir` (unit).
     #[inline]
     pub fn background_toward(&self, dir: Vec3) -> Vec3 {
-        match &self.infinite.map {
-            None => self.background,
-            Some(m) => self.background + m.radiance(dir),
-        }
+        let mapped = self.infinite.map.as_ref().map_or(Vec3::ZERO, |m| m.radiance(dir));
+        LightSet::background_with(self.background, mapped, self.infinite.map.is_some())
+    }
+
+    /// [`background_toward`](Self::background_toward) for the set's `background` with the
+    /// map's radiance looked up by the caller (`mapped`, read only when `has_map`), as
+    /// [`Sky::radiance_with`].
+    #[inline(always)]
+    pub fn background_with(background: Vec3, mapped: Vec3, has_map: bool) -> Vec3 {
+        if has_map { background + mapped } else { background }
     }
 
     /// Samples taken for light `i` at one shading point: one for delta lights, `-l` otherwise.

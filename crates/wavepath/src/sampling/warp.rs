@@ -11,7 +11,7 @@ pub fn cosine_hemisphere(u: f32, v: f32) -> Vec3 {
     Vec3::new(d.x, d.y, z)
 }
 
-#[inline]
+#[inline(always)]
 pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     cos_theta.max(0.0) * FRAC_1_PI
 }

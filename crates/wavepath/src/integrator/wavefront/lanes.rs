@@ -1,17 +1,18 @@
 //! Shade for the Lambertian hits of a wave, eight paths at a time with AVX2 and sixteen with
 //! AVX-512 (the diffuse kind's
 //! kernel; [`super::shade`] sorts the paths by kind first). What is per path and irregular
-//! (the hit's surface point or whole vertex, the random numbers, a light that has no lane
-//! sampler) is gathered or computed one lane at a time; the area lights' samples, offsets,
-//! shadow-ray setup, MIS weights and the continuation rays then run lane-parallel:
-//! [`crate::integrator::area`]'s branch-free per-sample functions in fixed loops over the
+//! (the hit's surface point or whole vertex, the random numbers, an environment map's or a
+//! point light's sample) is gathered or computed one lane at a time; the light samples,
+//! offsets, shadow-ray setup, MIS weights and the continuation rays then run lane-parallel:
+//! [`crate::integrator::area`]'s and [`crate::integrator::light_ray`]'s branch-free
+//! per-sample functions in fixed loops over the
 //! lanes that the compiler vectorises (8 square roots and divisions per instruction instead
 //! of one). The functions are the ones the one-vertex-at-a-time code calls, so the image is
 //! the same, bit for bit, as [`super::shade::shade_scalar`]'s.
 //!
 //! Any light, MIS, one-sided emitters, textures, vertex colours, relief maps, volumes and
-//! hemisphere sampling run here: a lane whose light has no lane-parallel sampler calls the
-//! one-vertex function for that light ([`Transport::direct_light`]) in its lane's turn.
+//! hemisphere sampling run here (hemisphere sampling one lane at a time, with
+//! [`Transport::direct_rays`]).
 //!
 //! The kernel is compiled with AVX2 and FMA enabled (behind run-time detection; Rust never
 //! contracts `a * b + c` into an FMA, so the bits do not change) and everything it calls is
@@ -27,8 +28,9 @@ use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
 use crate::cpu::{Avx2, Avx512};
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
+use crate::integrator::light_ray::{LightPoint, diffuse_light_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
-use crate::lights::{EmissiveTriangles, Emitter, SampledLight};
+use crate::lights::{EmissiveTriangles, Emitter, SampledLight, Sky};
 use crate::sampling::{Sampler, SamplerKind, rng8};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
@@ -370,7 +372,7 @@ fn emissive_rays<const L: usize>(
         }
         *p = out;
     }
-    push_samples(q, g, &pending[..ns as usize], shadow);
+    push_samples(q, g, &pending[..ns as usize], true, shadow);
 }
 
 /// What [`triangle_ray`] reads of the emissive triangles a group's samples picked, one array
@@ -412,11 +414,73 @@ impl<const L: usize> Emitters<L> {
     }
 }
 
+/// A group's samples of one light ([`LightPoint`]), one array per component.
+pub(super) struct LightPoints<const L: usize> {
+    wi: [[f32; L]; 3],
+    weight: [[f32; L]; 3],
+    pdf: [f32; L],
+    target: [[f32; L]; 3],
+    finite: [bool; L],
+    valid: [bool; L],
+}
+
+impl<const L: usize> Default for LightPoints<L> {
+    fn default() -> Self {
+        let z = [[0.0; L]; 3];
+        LightPoints { wi: z, weight: z, pdf: [0.0; L], target: z, finite: [false; L], valid: [false; L] }
+    }
+}
+
+impl<const L: usize> LightPoints<L> {
+    #[inline(always)]
+    pub fn set(&mut self, j: usize, l: &LightPoint) {
+        put(&mut self.wi, j, l.wi);
+        put(&mut self.weight, j, l.weight);
+        self.pdf[j] = l.pdf;
+        put(&mut self.target, j, l.target);
+        self.finite[j] = l.finite;
+        self.valid[j] = l.valid;
+    }
+
+    #[inline(always)]
+    pub fn get(&self, j: usize) -> LightPoint {
+        LightPoint {
+            wi: get(&self.wi, j),
+            weight: get(&self.weight, j),
+            pdf: self.pdf[j],
+            target: get(&self.target, j),
+            finite: self.finite[j],
+            valid: self.valid[j],
+        }
+    }
+
+    /// The samples of the light from infinity without a map for every lane in `take` about
+    /// the normals `n`, from the numbers `(ua, ub)`: all lanes at once
+    /// ([`Sky::sample_cosine`]); the density is the one MIS reads.
+    #[inline(always)]
+    pub fn sky(inf: Sky, n: &[[f32; L]; 3], ua: &[f32; L], ub: &[f32; L], take: &[bool; L]) -> Self {
+        let mut out = LightPoints::default();
+        for j in 0..L {
+            let n = get(n, j);
+            let (wi, weight, valid) = inf.sample_cosine(n, [ua[j], ub[j]]);
+            let pdf = inf.pdf_with(n, wi, 0.0, false);
+            out.set(j, &LightPoint { wi, weight, pdf, target: Vec3::ZERO, finite: false, valid: valid & take[j] });
+        }
+        out
+    }
+}
+
 /// A light's samples of a group (`samples`, sample-major, each with its whole weight) into the
 /// shadow queue path-major, throughput applied: every candidate is stored and the cursor moves
-/// past the valid ones only.
+/// past the valid ones only (`check`: and whose ray's direction is [`Vertex::consistent`]).
 #[inline(always)]
-fn push_samples<const L: usize>(q: &PathQueue, g: &Group<L>, samples: &[Rays<L>], shadow: &mut ShadowQueue) {
+fn push_samples<const L: usize>(
+    q: &PathQueue,
+    g: &Group<L>,
+    samples: &[Rays<L>],
+    check: bool,
+    shadow: &mut ShadowQueue,
+) {
     let ShadowSlots { ray: rs, weight: ws, owner: os } = shadow.open(g.n * samples.len());
     let mut w = 0;
     for j in 0..g.n {
@@ -430,7 +494,7 @@ fn push_samples<const L: usize>(q: &PathQueue, g: &Group<L>, samples: &[Rays<L>]
             rs[w] = r;
             ws[w] = p.weight(j) * tp;
             os[w] = i as u32;
-            w += (p.valid[j] && v.consistent(r.dir)) as usize;
+            w += (p.valid[j] && (!check || v.consistent(r.dir))) as usize;
         }
     }
     shadow.commit(w);
@@ -655,17 +719,7 @@ fn direct_light<const L: usize>(
             continue;
         }
         let (Some(al), SampledLight::Area { radiance, .. }) = (&t.lights.area_lights[li], light) else {
-            // No lane sampler for this light: each lane draws its samples itself.
-            for j in 0..g.n {
-                if g.direct[j] {
-                    let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
-                    let v = &g.vertex[j];
-                    let mut r = rng[j].at(dim);
-                    t.direct_light(v, v.albedo * FRAC_1_PI, li, g.mis[j], &mut r, &mut |d| {
-                        shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-                    });
-                }
-            }
+            light_rays(avx, t, q, g, pts, rng, light, li, dim, pending, shadow);
             dim += t.light_dims(li);
             continue;
         };
@@ -688,6 +742,81 @@ fn direct_light<const L: usize>(
             }
             *p = out;
         }
-        push_samples(q, g, &pending[..ns as usize], shadow);
+        push_samples(q, g, &pending[..ns as usize], true, shadow);
     }
+}
+
+/// The samples of light `li` (`light`: the light from infinity, point, spot and directional
+/// lights, an area light under the course's pdf) of a group, from dimension `dim` on: the
+/// light from infinity without a map sampled in all lanes at once, any other light one lane
+/// at a time (`SampledLight::sample_pdf`: the map's table, a normalisation); then the MIS
+/// weights and shadow rays of all lanes ([`diffuse_light_ray`]). Pushed path-major.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn light_rays<const L: usize>(
+    avx: Avx2,
+    t: &Transport,
+    q: &PathQueue,
+    g: &Group<L>,
+    pts: &Points<L>,
+    rng: &[Sampler; L],
+    light: &SampledLight,
+    li: usize,
+    mut dim: u32,
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
+    let ns = t.lights.set.samples_for(li, t.rules.light_samples);
+    let margin = t.lights.shadow_margins[li];
+    let sky = match light {
+        SampledLight::Infinite(inf) if inf.map.is_none() => Some(inf.sky()),
+        _ => None,
+    };
+    let mut inv = [[0.0; L]; 3];
+    let mut bumped = [false; L];
+    for j in 0..L {
+        put(&mut inv, j, g.vertex[j].albedo * FRAC_1_PI / ns as f32);
+        bumped[j] = g.vertex[j].bumped;
+    }
+    if pending.len() < ns as usize {
+        pending.resize_with(ns as usize, Rays::default);
+    }
+    for p in pending.iter_mut().take(ns as usize) {
+        let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
+        dim += 1;
+        let ls = match sky {
+            Some(inf) => LightPoints::sky(inf, &pts.ns, &ua, &ub, &g.direct),
+            None => {
+                let mut ls = LightPoints::<L>::default();
+                for j in 0..g.n {
+                    if g.direct[j] {
+                        let (v, u) = (&g.vertex[j], [ua[j], ub[j], 0.0]);
+                        ls.set(
+                            j,
+                            &LightPoint::of(if g.mis[j] {
+                                light.sample_pdf(v.p, v.ns, u)
+                            } else {
+                                light.sample(v.p, v.ns, u).map(|s| (s, 0.0))
+                            }),
+                        );
+                    }
+                }
+                ls
+            }
+        };
+        // Into a local first (see `emissive_rays`).
+        let mut out = Rays::<L>::default();
+        for j in 0..L {
+            let (s, l) = (pts.get(j), ls.get(j));
+            // `Vertex::consistent` of the sample's direction.
+            let consistent = !bumped[j] | ((l.wi.dot(s.ng) > 0.0) == (l.wi.dot(s.ns) > 0.0));
+            let r = diffuse_light_ray(&s, &l, get(&inv, j), margin, ns, g.mis[j], consistent);
+            out.set(j, &r.ray);
+            out.set_weight(j, r.weight);
+            out.valid[j] = r.valid;
+        }
+        *p = out;
+    }
+    push_samples(q, g, &pending[..ns as usize], false, shadow);
 }

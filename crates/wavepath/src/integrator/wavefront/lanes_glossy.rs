@@ -1,15 +1,15 @@
 //! The models whose sample is written without branches (`LaneModel`: glTF metallic-roughness
 //! and specular-glossiness, MTL PBR and Phong, the rough conductor, mirror, glass) leaving
-//! their vertices eight or sixteen at a time: the shading frames, the light samples of
-//! emissive triangles (the light glTF and OBJ files carry), the BSDF's value and density at
-//! each, the MIS weights (or hemisphere sampling's probes), the shadow rays, and the
-//! continuation's sample with its value,
-//! density and ray, all in fixed loops over the lanes that the compiler vectorises. What is
-//! per lane and irregular stays one lane at a time: the material's parameters at the vertex
-//! ([`Transport::model_at`]), which emissive triangle a sample picks and what it emits, the
-//! library calls a sample needs (the sine and cosine of an angle, Beckmann's logarithm), any
-//! other light ([`Transport::direct_light_shaded`]), Russian roulette. Mirror and glass take
-//! no light samples: theirs is the continuation alone.
+//! their vertices eight or sixteen at a time: the shading frames, the light samples of every
+//! light (emissive triangles, the light from infinity, point, spot and directional lights) or
+//! hemisphere sampling's probes, the BSDF's value and density at each, the MIS weights, the
+//! shadow rays, and the continuation's sample with its value, density and ray, all in fixed
+//! loops over the lanes that the compiler vectorises. What is per lane and irregular stays one
+//! lane at a time: the material's parameters at the vertex ([`Transport::model_at`]), which
+//! emissive triangle a sample picks and what it emits, an environment map's or a point light's
+//! sample, the library calls a sample needs (the sine and cosine of an angle, Beckmann's
+//! logarithm), Russian roulette. Mirror and glass take no light samples: theirs is the
+//! continuation alone.
 //!
 //! The per-sample functions are the ones the one-path code calls (`eval_pdf`, `sample_at`,
 //! the light sample's geometry, `offset_origin`), written without branches, so the rays and
@@ -18,14 +18,16 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::Features;
-use super::lanes::{Emitters, Points, Rays, get, put};
+use super::lanes::{Emitters, LightPoints, Points, Rays, get, put};
 use super::one_path;
-use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
-use crate::bsdf::{BsdfSample, Dielectric, Distribution, Glossy, Kind, Microfacet, Mirror, Model, Pbr};
+use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
+use crate::bsdf::{BsdfSample, Dielectric, Distribution, Glossy, Microfacet, Mirror, Pbr};
 use crate::bsdf::{power_heuristic, to_local};
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax_at};
-use crate::integrator::{Bounce, ShadingFrame};
+use crate::integrator::Bounce;
+use crate::integrator::area::ShadingPoint;
+use crate::integrator::light_ray::{LightPoint, glossy_light_ray};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::lights::{EmissiveTriangles, SampledLight, area_to_solid_angle_lanes};
 use crate::sampling::numbers::Drawn;
@@ -56,7 +58,6 @@ pub(super) trait LaneModel: Copy {
         [0.0; 3]
     }
     fn sample_at(&self, wo: Vec3, u: [f32; 3], calls: [f32; 3]) -> (BsdfSample, bool);
-    fn model(self) -> Model;
 }
 
 /// The sine and cosine of the visible-normal sample's disk angle, `2 pi u[1]`.
@@ -100,11 +101,6 @@ impl LaneModel for Pbr {
     fn sample_at(&self, wo: Vec3, u: [f32; 3], [sin, cos, _]: [f32; 3]) -> (BsdfSample, bool) {
         Pbr::sample_at(self, wo, u, (sin, cos))
     }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Pbr(self)
-    }
 }
 
 impl LaneModel for Glossy {
@@ -135,11 +131,6 @@ impl LaneModel for Glossy {
     #[inline(always)]
     fn sample_at(&self, wo: Vec3, u: [f32; 3], [sin, cos, _]: [f32; 3]) -> (BsdfSample, bool) {
         Glossy::sample_at(self, wo, u, (sin, cos))
-    }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Glossy(self)
     }
 }
 
@@ -176,11 +167,6 @@ impl LaneModel for Microfacet {
     fn sample_at(&self, wo: Vec3, u: [f32; 3], calls: [f32; 3]) -> (BsdfSample, bool) {
         Microfacet::sample_at(self, wo, [u[0], u[1]], calls)
     }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Microfacet(self)
-    }
 }
 
 impl LaneModel for Mirror {
@@ -201,11 +187,6 @@ impl LaneModel for Mirror {
     #[inline(always)]
     fn sample_at(&self, wo: Vec3, _: [f32; 3], _: [f32; 3]) -> (BsdfSample, bool) {
         Mirror::sample_at(self, wo)
-    }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Mirror(self)
     }
 }
 
@@ -233,11 +214,6 @@ impl LaneModel for Dielectric {
     #[inline(always)]
     fn sample_at(&self, wo: Vec3, u: [f32; 3], _: [f32; 3]) -> (BsdfSample, bool) {
         Dielectric::sample_at(self, wo, u[2])
-    }
-
-    #[inline(always)]
-    fn model(self) -> Model {
-        Model::Dielectric(self)
     }
 }
 
@@ -368,7 +344,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
             if t.rules.hemisphere {
                 hemisphere_probes(t, q, g, &soa, &direct, table, dims, pending, shadow);
             } else {
-                direct_light(t, q, g, &soa, &direct, table, dims, &numbers, pending, shadow);
+                direct_light(t, q, g, &soa, &direct, table, dims, pending, shadow);
             }
         }
     }
@@ -381,7 +357,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
 /// one-path code makes them ([`Transport::direct_rays_shaded`]).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn direct_light<'a, M: LaneModel, const L: usize>(
+fn direct_light<M: LaneModel, const L: usize>(
     t: &Transport,
     q: &PathQueue,
     g: &GlossyGroup<M, L>,
@@ -389,7 +365,6 @@ fn direct_light<'a, M: LaneModel, const L: usize>(
     direct: &[bool; L],
     table: &[[f32; 2]],
     dims: usize,
-    numbers: &impl Fn(usize, u32) -> Drawn<'a>,
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
@@ -412,19 +387,68 @@ fn direct_light<'a, M: LaneModel, const L: usize>(
             push_samples(q, g, direct, &pending[..ns as usize], shadow);
             continue;
         }
-        // No lane sampler for this light: each lane draws its samples itself.
-        for j in 0..g.n {
-            if direct[j] {
-                let l = soa.lane::<M>(j);
-                let sh = ShadingFrame { frame: l.frame, wo: l.wo, model: l.model.model(), kind: Kind::Glossy };
-                let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
-                let mut r = numbers(j, dim as u32);
-                t.direct_light_shaded(&g.vertex[j], &sh, li, &mut r, &mut |d| {
-                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-                });
-            }
+        if pending.len() < ns as usize {
+            pending.resize_with(ns as usize, Rays::default);
         }
-        dim += ns as usize * per_sample;
+        for p in pending.iter_mut().take(ns as usize) {
+            // Into a local first, as above.
+            let mut out = Rays::<L>::default();
+            light_samples(t, g, soa, direct, light, li, ns, table, dims, dim, &mut out);
+            *p = out;
+            dim += per_sample;
+        }
+        push_samples(q, g, direct, &pending[..ns as usize], shadow);
+    }
+}
+
+/// One sample of light `li` (`light`: the light from infinity, point, spot and directional
+/// lights, an area light; `ns` samples a vertex) for every lane, from the pair at dimension
+/// `dim`: the light from infinity without a map sampled in all lanes at once, any other
+/// light one lane at a time (`SampledLight::sample_pdf`: the map's table, a normalisation);
+/// then the BSDF's value and density, the MIS weight and the shadow ray of all lanes, as
+/// [`Transport::direct_light_shaded`] computes them ([`glossy_light_ray`]).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn light_samples<M: LaneModel, const L: usize>(
+    t: &Transport,
+    g: &GlossyGroup<M, L>,
+    soa: &Soa<L>,
+    direct: &[bool; L],
+    light: &SampledLight,
+    li: usize,
+    ns: u32,
+    table: &[[f32; 2]],
+    dims: usize,
+    dim: usize,
+    out: &mut Rays<L>,
+) {
+    let (mut ua, mut ub) = ([0.5f32; L], [0.5f32; L]);
+    for j in 0..g.n {
+        [ua[j], ub[j]] = table[g.row[j] * dims + dim];
+    }
+    let ls = match light {
+        SampledLight::Infinite(inf) if inf.map.is_none() => LightPoints::sky(inf.sky(), &soa.pts.ns, &ua, &ub, direct),
+        _ => {
+            let mut ls = LightPoints::<L>::default();
+            for j in 0..g.n {
+                if direct[j] {
+                    let v = &g.vertex[j];
+                    ls.set(j, &LightPoint::of(light.sample_pdf(v.p, v.ns, [ua[j], ub[j], 0.0])));
+                }
+            }
+            ls
+        }
+    };
+    let margin = t.lights.shadow_margins[li];
+    for j in 0..L {
+        let (l, lp) = (soa.lane::<M>(j), ls.get(j));
+        let local = to_local(&l.frame, lp.wi);
+        let (f, pdf_b) = l.model.eval_pdf(l.wo, local);
+        let sp = ShadingPoint { p: l.p, p_error: l.p_error, ng: l.ng, ns: l.ns };
+        let r = glossy_light_ray(&sp, &lp, local, f, pdf_b, margin, ns, l.consistent(lp.wi));
+        out.set(j, &r.ray);
+        out.set_weight(j, r.weight);
+        out.valid[j] = r.valid;
     }
 }
 

@@ -21,6 +21,7 @@
 pub mod compact;
 pub mod generate;
 pub mod lanes;
+mod lanes_escaped;
 mod lanes_glossy;
 pub mod lanes_shaded;
 mod one_path;

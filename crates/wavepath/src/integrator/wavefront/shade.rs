@@ -14,17 +14,16 @@ use crate::integrator::Transport;
 /// The paths are first sorted by what shades them ([`Kinds`], pbrt-v4's queues after
 /// intersection): the Lambertian hits are shaded in lanes by [`super::lanes`] where the
 /// render's [`Lanes`] has a lane width, the other materials' hits by [`super::lanes_shaded`]
-/// (their random numbers drawn in lanes), escaped paths one at a time. Each path's shadow rays stay in the order it made them, so its radiance is the same
-/// bits whatever the grouping.
+/// (their random numbers drawn in lanes), the escaped paths by [`super::lanes_escaped`].
+/// Each path's shadow rays stay in the order it made them, so its radiance is the same bits
+/// whatever the grouping.
 pub fn shade<F: Features>(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
     let Some(width) = lanes.shade else {
         return shade_scalar::<F>(t, q, shadow);
     };
     shadow.clear();
     kinds.sort::<F>(t, q);
-    for &i in &kinds.escaped {
-        shade_path::<F>(t, q, i as usize, shadow);
-    }
+    super::lanes_escaped::shade_escaped::<F>(width, t, q, &kinds.escaped);
     super::lanes_shaded::shade_shaded::<F>(width, t, q, &kinds.shaded, shadow, &mut kinds.numbers);
     super::lanes::shade_diffuse::<F>(width, t, q, &kinds.diffuse, shadow);
 }
@@ -36,7 +35,7 @@ pub struct Kinds {
     pub diffuse: Vec<u32>,
     /// Hits on every other material: the lane kernel that draws their numbers in lanes.
     pub shaded: Vec<u32>,
-    /// Escaped paths (the environment, light from infinity): one at a time.
+    /// Escaped paths (the environment, light from infinity): their own lane kernel.
     pub escaped: Vec<u32>,
     /// Scratch for the numbers the shaded kinds' kernel draws ahead.
     numbers: Vec<[f32; 2]>,
@@ -102,16 +101,26 @@ mod tests {
     /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
     /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
     fn compare<F: crate::integrator::wavefront::Features>(scene: &Scene, s: &Settings, avx: Avx2) -> usize {
+        compare_counts::<F>(scene, s, avx).0
+    }
+
+    /// [`compare`], with the paths that escaped after a bounce.
+    fn compare_counts<F: crate::integrator::wavefront::Features>(
+        scene: &Scene,
+        s: &Settings,
+        avx: Avx2,
+    ) -> (usize, usize) {
         let mut widths = vec![ShadeWidth::Eight(avx)];
         widths.extend(Avx512::new().map(ShadeWidth::Sixteen));
-        widths.into_iter().map(|w| compare_width::<F>(scene, s, w)).min().unwrap_or(0)
+        let counts: Vec<_> = widths.into_iter().map(|w| compare_width::<F>(scene, s, w)).collect();
+        (counts.iter().map(|c| c.0).min().unwrap_or(0), counts.iter().map(|c| c.1).min().unwrap_or(0))
     }
 
     fn compare_width<F: crate::integrator::wavefront::Features>(
         scene: &Scene,
         s: &Settings,
         width: ShadeWidth,
-    ) -> usize {
+    ) -> (usize, usize) {
         let t = Transport::new(scene, s, &crate::effects::Effects::of(scene, s));
         let lanes = Lanes { camera: None, shade: Some(width) };
         let mut kinds = Kinds::default();
@@ -122,9 +131,10 @@ mod tests {
         generate(&t, None, &mut q, &wave, 24, 18, 8);
         let (mut sl, mut ss) = (ShadowQueue::default(), ShadowQueue::default());
         let mut slot_radiance = vec![Vec3::ZERO; wave.len()];
-        let mut shadow_rays = 0;
+        let (mut shadow_rays, mut escaped) = (0, 0);
         while !q.is_empty() {
             traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
+            escaped += (0..q.len()).filter(|&i| q.hit[i].is_none() && q.depth[i] > 0).count();
             let mut qs = q.clone();
             shade::<F>(&t, lanes, &mut q, &mut sl, &mut kinds);
             shade_scalar::<F>(&t, &mut qs, &mut ss);
@@ -138,7 +148,7 @@ mod tests {
             shadow_rays += sl.len();
             compact::compact(&mut q, &mut slot_radiance);
         }
-        shadow_rays
+        (shadow_rays, escaped)
     }
 
     fn settings(light_samples: u32, rr_throughput: bool) -> Settings {
@@ -294,6 +304,92 @@ mod tests {
             let mut hemisphere = s.clone();
             hemisphere.paths.hemisphere = true;
             assert!(compare::<N>(&scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+        }
+    }
+
+    /// The default box without its ceiling and area light, lit from infinity through the
+    /// opening (paths escape there after bounces) and by its emissive quad, with glossy walls
+    /// (metallic-roughness, Phong) and a Lambertian floor and spheres.
+    fn open_box() -> Scene {
+        let mut scene = emissive_box();
+        scene.mesh.triangles.drain(2..4);
+        let ids: Vec<u32> =
+            scene.mesh.material_ids.iter().enumerate().filter(|&(k, _)| !(2..4).contains(&k)).map(|(_, m)| m).collect();
+        scene.mesh.material_ids = Default::default();
+        scene.mesh.material_ids.extend(ids);
+        scene.materials[1].bsdf =
+            Bsdf::MetallicRoughness { base: Vec3::new(0.8, 0.6, 0.4), metallic: 0.3, roughness: 0.4 };
+        scene.materials[2].bsdf =
+            Bsdf::Phong { diffuse: Vec3::splat(0.5), specular: Vec3::splat(0.3), shininess: 40.0 };
+        tilted_normals(&mut scene);
+        scene
+    }
+
+    /// A small environment map with one bright texel (importance sampling has work to do).
+    fn small_map() -> crate::scene::Environment {
+        let (w, h) = (16, 8);
+        let texels =
+            (0..w * h).map(|i| Vec3::new(0.2 + (i % 3) as f32, 0.5, if i == 37 { 40.0 } else { 0.3 })).collect();
+        let map = crate::scene::EnvMap::from_texels("map".into(), w, h, texels).unwrap();
+        crate::scene::Environment::Map(std::sync::Arc::new(map))
+    }
+
+    /// The light from infinity (the hemisphere sky, a constant environment, an environment
+    /// map alone and beside the sky) and point, spot and directional lights, sampled in both
+    /// lane kernels, and the escaped paths shaded in lanes, against the one-path kernel: every
+    /// ray, weight and radiance bit for bit at both widths, with MIS at the Lambertian
+    /// vertices and without, with every sampler.
+    #[test]
+    fn infinite_and_punctual_lights_in_lanes_match_the_scalar_kernel() {
+        type N = Kernel<true, true, true, true, true, true>;
+        let Some(avx) = Avx2::new() else { return };
+        let sky = Light::Hemisphere { radiance: Vec3::new(1.0, 0.9, 0.8) };
+        let cases: Vec<(&str, Vec<Light>, crate::scene::Environment)> = vec![
+            ("sky", vec![sky.clone()], crate::scene::Environment::None),
+            ("constant", vec![], crate::scene::Environment::Constant(Vec3::splat(0.7))),
+            ("map", vec![], small_map()),
+            ("sky and map", vec![sky.clone()], small_map()),
+            (
+                "punctual",
+                vec![
+                    sky,
+                    Light::Point {
+                        position: Vec3::new(0.3, 1.2, 0.2),
+                        intensity: Vec3::splat(2.0),
+                        attenuation: [1.0, 0.0, 0.0],
+                    },
+                    Light::Spot {
+                        position: Vec3::new(-0.3, 1.4, 0.1),
+                        direction: Vec3::new(0.1, -1.0, 0.2),
+                        intensity: Vec3::splat(3.0),
+                        cone_angle: 70.0,
+                        falloff_exponent: 2.0,
+                    },
+                    Light::Directional { direction: Vec3::new(0.2, -1.0, -0.3), radiance: Vec3::splat(1.5) },
+                ],
+                crate::scene::Environment::None,
+            ),
+        ];
+        for (name, lights, env) in cases {
+            let mut scene = open_box();
+            scene.lights = lights;
+            scene.env = env;
+            for (sampler, mis) in [
+                (crate::sampling::SamplerKind::Independent, true),
+                (crate::sampling::SamplerKind::Sobol, false),
+                (crate::sampling::SamplerKind::Stratified, true),
+            ] {
+                let mut s = settings(2, sampler == crate::sampling::SamplerKind::Sobol);
+                s.sampling.sampler = sampler;
+                s.paths.mis = mis;
+                let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
+                assert_eq!(t.rules.mis, mis);
+                assert!(t.lights.infinite.is_some());
+                assert!(t.materials.non_diffuse && t.shaded_numbers.complete);
+                let (shadow_rays, escaped) = compare_counts::<N>(&scene, &s, avx);
+                assert!(shadow_rays > 500, "{name} {sampler:?}: {shadow_rays}");
+                assert!(escaped > 100, "{name} {sampler:?}: {escaped} paths escaped after a bounce");
+            }
         }
     }
 }

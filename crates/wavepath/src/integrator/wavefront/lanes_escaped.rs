@@ -1,0 +1,134 @@
+//! Shade for the paths whose rays left the scene, eight at a time with AVX2 and sixteen with
+//! AVX-512: what a camera ray sees of the environment, and the light from infinity a
+//! BSDF-sampled ray finds, weighed by MIS against the infinite light's own samples
+//! ([`Transport::arrival`]). The environment map's radiance and density toward each ray are
+//! looked up one lane at a time (a texel and a table entry); the selection between the
+//! cases, the constant sky, the map mixture's density and the power heuristic run in a loop
+//! over the lanes that vectorises, through the functions the one-path code calls
+//! ([`found_at_infinity`],
+//! [`LightSet::background_with`](crate::lights::LightSet::background_with)), so each path
+//! gets the same bits as from [`super::one_path::arrive`].
+//!
+//! An area light can stand in a ray's way to infinity: with one in the scene every escaped
+//! path is shaded by the one-path code.
+
+#![allow(clippy::needless_range_loop)]
+
+use super::Features;
+use super::ShadeWidth;
+use super::lanes::{get, put};
+use super::one_path;
+use super::queues::PathQueue;
+use crate::cpu::{Avx2, Avx512};
+use crate::integrator::Transport;
+use crate::integrator::light_ray::found_at_infinity;
+use crate::lights::{LightSet, SampledLight};
+use glam::Vec3;
+
+/// Shades the escaped paths `idx`: `alive` cleared, the environment or the light from
+/// infinity added.
+pub fn shade_escaped<F: Features>(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+    if t.lights.area_arrivals {
+        for &i in idx {
+            one_path::arrive::<F>(t, q, i as usize);
+        }
+        return;
+    }
+    match width {
+        // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
+        ShadeWidth::Sixteen(avx512) => unsafe { escaped_avx512::<F>(avx512, t, q, idx) },
+        // SAFETY: as above.
+        ShadeWidth::Eight(avx2) => unsafe { escaped_avx2::<F>(avx2, t, q, idx) },
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn escaped_avx2<F: Features>(_: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+    escaped_groups::<F, 8>(t, q, idx)
+}
+
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
+fn escaped_avx512<F: Features>(_: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+    escaped_groups::<F, 16>(t, q, idx)
+}
+
+#[inline(always)]
+fn escaped_groups<F: Features, const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+    let sees_emission = t.rules.counts_emission();
+    let arrivals = F::NON_DIFFUSE || t.rules.mis;
+    let set = &t.lights.set;
+    let map = set.infinite.map.as_deref();
+    let has_map = map.is_some();
+    // The constants the lane loop reads, copied out (registers, not loads through a
+    // reference): the light a BSDF sample finds and how many samples it takes at a vertex
+    // (`mis`: there is one), what camera rays see, and light from infinity after delta bounces.
+    let (found, ns) = match t.lights.infinite.map(|i| (i, &set.lights[i])) {
+        Some((i, SampledLight::Infinite(inf))) => (inf.sky(), set.samples_for(i, t.rules.light_samples) as f32),
+        _ => (set.infinite.sky(), 0.0),
+    };
+    let mis = t.lights.infinite.is_some();
+    let (background, sky) = (set.background, set.infinite.sky());
+    for chunk in idx.chunks(L) {
+        let mut dir = [[0.0f32; L]; 3];
+        let mut n = [[0.0f32; L]; 3];
+        let mut pdf = [0.0f32; L];
+        let mut mapped = [[0.0f32; L]; 3];
+        let mut mapped_pdf = [0.0f32; L];
+        // The lane sees the environment (a camera ray) / finds light after a bounce / that
+        // light counts at its depth.
+        let mut camera = [false; L];
+        let mut arrives = [false; L];
+        let mut counts = [false; L];
+        for (j, &pi) in chunk.iter().enumerate() {
+            let i = pi as usize;
+            q.alive[i] = false;
+            let depth = q.depth[i];
+            let d = q.ray[i].dir;
+            let b = q.bounce[i];
+            put(&mut dir, j, d);
+            put(&mut n, j, b.n);
+            pdf[j] = b.pdf;
+            camera[j] = F::ENVIRONMENT && depth == 0 && sees_emission;
+            arrives[j] = arrivals && depth > 0;
+            counts[j] = t.rules.accumulate || depth == t.rules.max_depth;
+            if let Some(m) = map {
+                let found = arrives[j] && b.pdf != 0.0 && counts[j];
+                if camera[j] || found {
+                    put(&mut mapped, j, m.radiance(d));
+                }
+                if found && b.pdf != f32::INFINITY && mis {
+                    mapped_pdf[j] = m.pdf(d);
+                }
+            }
+        }
+        if !(0..chunk.len()).any(|j| camera[j] || arrives[j]) {
+            continue;
+        }
+        let mut l = [[0.0f32; L]; 3];
+        for j in 0..L {
+            let (d, m) = (get(&dir, j), get(&mapped, j));
+            let weighed = if mis {
+                found_at_infinity(found, ns, get(&n, j), pdf[j], d, m, mapped_pdf[j], has_map)
+            } else {
+                Vec3::ZERO
+            };
+            // As `Transport::arrival` for a ray that left the scene.
+            let arrived = if pdf[j] == 0.0 || !counts[j] {
+                Vec3::ZERO
+            } else if pdf[j] == f32::INFINITY {
+                sky.radiance_with(d, m, has_map)
+            } else {
+                weighed
+            };
+            put(&mut l, j, if camera[j] { LightSet::background_with(background, m, has_map) } else { arrived });
+        }
+        for (j, &pi) in chunk.iter().enumerate() {
+            if camera[j] || arrives[j] {
+                let i = pi as usize;
+                q.radiance[i] += q.throughput[i] * get(&l, j);
+            }
+        }
+    }
+}
