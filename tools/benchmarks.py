@@ -62,6 +62,8 @@ RENDERS = [
      "-s 4 -l 4 -m 5 -r 480 360"),
     ("BoxTextured", "gltf/BoxTextured.glb", "-s 16 -l 4 -m 5 -r 480 360", "-s 4 -l 4 -m 5 -r 480 360"),
     ("dragon_100k-gltf", "gltf/dragon_100k.glb", "-s 16 -l 4 -m 5 -r 480 360", "-s 4 -l 4 -m 5 -r 480 360"),
+    ("BrainStem", "gltf/BrainStem.glb", "-s 16 -l 4 -m 5 -r 480 360", "-s 4 -l 4 -m 5 -r 480 360"),
+    ("Box-gltf", "gltf/Box/Box.gltf", "-s 16 -l 4 -m 5 -r 480 360", "-s 4 -l 4 -m 5 -r 480 360"),
 ]
 PEER_MESHES = ["meshes/lucy_100k.obj", "meshes/dragon_100k.obj"]
 PEERS = ["embree:robust", "embree:single", "embree:packet16", "tinybvh:bvh8", "obvhs:cwbvh"]

@@ -1,4 +1,6 @@
+use super::branch_free::pow;
 use super::dielectric::fresnel_dielectric;
+use super::microfacet::normalized;
 use super::mirror::reflect;
 use super::{BsdfSample, Distribution, Microfacet};
 use crate::sampling::warp;
@@ -63,13 +65,14 @@ pub struct Layered {
 }
 
 /// Schlick's Fresnel with reflectance `f0` at normal incidence and `f90` at grazing.
-#[inline]
+#[inline(always)]
 fn schlick(f0: Vec3, f90: f32, cos: f32) -> Vec3 {
     let m = 1.0 - cos.clamp(0.0, 1.0);
     let m2 = m * m;
     f0 + (Vec3::splat(f90) - f0) * (m2 * m2 * m)
 }
 
+#[inline(always)]
 fn ggx(alpha: f32) -> Microfacet {
     Microfacet { alpha, eta: Vec3::ZERO, k: Vec3::ZERO, distribution: Distribution::Ggx }
 }
@@ -123,16 +126,17 @@ impl Layered {
         Layered { sheen_scaling: (1.0 - self.sheen.max_element() * e).clamp(0.0, 1.0), ..self }
     }
 
-    /// The Charlie sheen distribution (Estevez and Kulla 2017).
-    #[inline]
+    /// The Charlie sheen distribution (Estevez and Kulla 2017); its power through the
+    /// branch-free [`pow`], so that the lane kernel's loops over it vectorise.
+    #[inline(always)]
     fn charlie(&self, h: Vec3) -> f32 {
         let inv = 1.0 / self.sheen_alpha;
         let sin2 = (1.0 - h.z * h.z).max(0.0);
-        (2.0 + inv) * sin2.powf(0.5 * inv) / TAU
+        (2.0 + inv) * pow(sin2, 0.5 * inv) / TAU
     }
 
     /// The sheen lobe, f (no cosine): D V with Neubelt and Pettineo's visibility.
-    #[inline]
+    #[inline(always)]
     fn sheen_f(&self, wo: Vec3, wi: Vec3, h: Vec3) -> f32 {
         let v = 1.0 / (4.0 * (wi.z + wo.z - wi.z * wo.z));
         let f = self.charlie(h) * v;
@@ -140,41 +144,45 @@ impl Layered {
     }
 
     /// The clearcoat's Fresnel weight at cosine `c`.
-    #[inline]
+    #[inline(always)]
     fn coat_fresnel(&self, c: f32) -> f32 {
         self.clearcoat * schlick(Vec3::splat(0.04), 1.0, c).x
     }
 
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return Vec3::ZERO;
-        }
-        let Some(h) = (wo + wi).try_normalize() else { return Vec3::ZERO };
+        self.eval_pdf(wo, wi).0
+    }
+
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.eval_pdf(wo, wi).1
+    }
+
+    /// The value f (no cosine) and the density of the continuous lobes' mixture toward
+    /// `wi`, without branches (every layer computed, a missing one weighing zero), so that
+    /// a lane kernel's loop over it vectorises; the one-path code calls it too.
+    #[inline(always)]
+    pub fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        let above = wo.z > 0.0 && wi.z > 0.0;
+        let (h, has_h) = normalized(wo + wi);
         let oh = wo.dot(h);
-        let geometric = 4.0 * wo.z * wi.z;
-        let lobe = ggx(self.alpha);
-        let spec = lobe.d(h) * lobe.g(wo, wi) / geometric;
-        let spec = if spec.is_finite() { spec } else { 0.0 };
+        let (spec, visible) = ggx(self.alpha).spec_and_visible_pdf(wo, wi, h);
+        let (coat, coat_visible) = ggx(self.coat_alpha).spec_and_visible_pdf(wo, wi, h);
         let diffuse =
             self.diffuse * (Vec3::ONE - self.specular_weight * schlick(self.dielectric_f0, 1.0, oh)) * FRAC_1_PI;
         let base = diffuse + schlick(self.f0, self.f90, oh) * spec;
-        let mut f = base * self.sheen_scaling;
-        if self.sheen != Vec3::ZERO {
-            f += self.sheen * self.sheen_f(wo, wi, h);
-        }
-        if self.clearcoat > 0.0 {
-            let coat = ggx(self.coat_alpha);
-            let c = coat.d(h) * coat.g(wo, wi) / geometric;
-            let c = if c.is_finite() { self.coat_fresnel(oh) * c } else { 0.0 };
-            f = f * (1.0 - self.coat_fresnel(wo.z)) + Vec3::splat(c);
-        }
-        f
+        let f = base * self.sheen_scaling + self.sheen * self.sheen_f(wo, wi, h);
+        let f = f * (1.0 - self.coat_fresnel(wo.z)) + Vec3::splat(self.coat_fresnel(oh) * coat);
+        let [pc, ps, pd, _] = self.lobe_probabilities(wo);
+        let glossy = if ps > 0.0 { ps * visible } else { 0.0 } + if pc > 0.0 { pc * coat_visible } else { 0.0 };
+        let pdf = pd * warp::cosine_hemisphere_pdf(wi.z) + if has_h { glossy } else { 0.0 };
+        (if above && has_h { f } else { Vec3::ZERO }, if above { pdf } else { 0.0 })
     }
 
     /// The lobes' probabilities seen from `wo`: clearcoat, specular, diffuse (and sheen,
     /// sampled with it), transmission; they sum to 1.
-    #[inline]
+    #[inline(always)]
     fn lobe_probabilities(&self, wo: Vec3) -> [f32; 4] {
         let fc = self.coat_fresnel(wo.z);
         let under = (1.0 - fc) * self.sheen_scaling;
@@ -183,71 +191,67 @@ impl Layered {
         let d = under * self.diffuse.element_sum() + (1.0 - fc) * self.sheen.element_sum();
         let t = under * self.transmit.element_sum();
         let sum = c + s + d + t;
-        if !(sum > 0.0 && sum.is_finite()) {
-            return [0.0, 1.0, 0.0, 0.0];
-        }
-        [c / sum, s / sum, d / sum, t / sum]
+        let ok = sum > 0.0 && sum.is_finite();
+        let share = |x: f32, otherwise: f32| if ok { x / sum } else { otherwise };
+        [share(c, 0.0), share(s, 1.0), share(d, 0.0), share(t, 0.0)]
     }
 
     /// `u[2]` chooses the lobe, `u[0]` and `u[1]` the direction within it.
     #[inline]
     pub fn sample(&self, wo: Vec3, u: [f32; 3]) -> Option<BsdfSample> {
-        if wo.z <= 0.0 {
-            return None;
-        }
+        let (s, ok) = self.sample_at(wo, u, (TAU * u[1]).sin_cos());
+        ok.then_some(s)
+    }
+
+    /// [`sample`](Self::sample) with the sine and cosine of `2 pi u[1]` given (a lane kernel
+    /// takes them one lane at a time), without branches: every lobe's direction computed and
+    /// the chosen one kept, with whether there is a sample.
+    #[inline(always)]
+    pub fn sample_at(&self, wo: Vec3, u: [f32; 3], sin_cos: (f32, f32)) -> (BsdfSample, bool) {
         let [pc, ps, pd, pt] = self.lobe_probabilities(wo);
         let x = u[2];
-        if x >= pc + ps + pd && pt > 0.0 {
-            return self.sample_transmission(wo, pt);
-        }
-        let wi = if x < pc {
-            ggx(self.coat_alpha).sample_visible(wo, [u[0], u[1]])?
+        let transmitted = x >= pc + ps + pd && pt > 0.0;
+        let (coat_wi, coat_ok) = ggx(self.coat_alpha).sample_visible_at(wo, u[0], sin_cos);
+        let (spec_wi, spec_ok) = ggx(self.alpha).sample_visible_at(wo, u[0], sin_cos);
+        let (wi, wi_ok) = if x < pc {
+            (coat_wi, coat_ok)
         } else if x < pc + ps {
-            ggx(self.alpha).sample_visible(wo, [u[0], u[1]])?
+            (spec_wi, spec_ok)
         } else {
-            warp::cosine_hemisphere(u[0], u[1])
+            (warp::cosine_hemisphere(u[0], u[1]), true)
         };
-        BsdfSample::continuous(wi, self.pdf(wo, wi), || self.eval(wo, wi))
+        let (f, pdf) = self.eval_pdf(wo, wi);
+        let weight = f * (wi.z / pdf);
+        let continuous = wi_ok && pdf > 0.0 && pdf.is_finite() && weight.is_finite();
+        let (delta, delta_ok) = self.transmission_at(wo, pt);
+        let s = if transmitted { delta } else { BsdfSample { wi, weight, pdf, delta: false } };
+        (s, wo.z > 0.0 && if transmitted { delta_ok } else { continuous })
     }
 
     /// The delta transmission lobe, chosen with probability `pt`: what the layers above
-    /// and the dielectric's reflection leave, tinted by the base colour.
-    #[inline]
-    fn sample_transmission(&self, wo: Vec3, pt: f32) -> Option<BsdfSample> {
+    /// and the dielectric's reflection leave, tinted by the base colour; without branches,
+    /// with whether it carries light.
+    #[inline(always)]
+    fn transmission_at(&self, wo: Vec3, pt: f32) -> (BsdfSample, bool) {
         let c = wo.z;
         let left = (1.0 - self.coat_fresnel(c))
             * self.sheen_scaling
             * (Vec3::ONE - self.specular_weight * schlick(self.dielectric_f0, 1.0, c));
         let t = self.transmit * left;
+        let sin2_t = (1.0 - c * c).max(0.0) / (self.eta * self.eta);
+        let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
+        // Radiance is compressed into the narrower cone by 1 / eta^2.
+        let refracted = (Vec3::new(-wo.x / self.eta, -wo.y / self.eta, -cos_t), 1.0 / (self.eta * self.eta));
         let (wi, scale) = if self.thin {
             (-wo, 1.0)
         } else if fresnel_dielectric(c, self.eta) >= 1.0 {
             // Total internal reflection: the light stays on this side.
             (reflect(wo), 1.0)
         } else {
-            let sin2_t = (1.0 - c * c).max(0.0) / (self.eta * self.eta);
-            let cos_t = (1.0 - sin2_t).max(0.0).sqrt();
-            // Radiance is compressed into the narrower cone by 1 / eta^2.
-            (Vec3::new(-wo.x / self.eta, -wo.y / self.eta, -cos_t), 1.0 / (self.eta * self.eta))
+            refracted
         };
         let weight = t * (scale / pt);
-        (weight.is_finite() && t != Vec3::ZERO).then_some(BsdfSample { wi, weight, pdf: pt, delta: true })
-    }
-
-    #[inline]
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if wo.z <= 0.0 || wi.z <= 0.0 {
-            return 0.0;
-        }
-        let [pc, ps, pd, _] = self.lobe_probabilities(wo);
-        let mut p = pd * warp::cosine_hemisphere_pdf(wi.z);
-        if ps > 0.0 {
-            p += ps * ggx(self.alpha).visible_pdf(wo, wi);
-        }
-        if pc > 0.0 {
-            p += pc * ggx(self.coat_alpha).visible_pdf(wo, wi);
-        }
-        p
+        (BsdfSample { wi, weight, pdf: pt, delta: true }, weight.is_finite() && t != Vec3::ZERO)
     }
 }
 

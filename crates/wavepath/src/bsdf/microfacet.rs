@@ -1,4 +1,5 @@
 use super::BsdfSample;
+use super::branch_free::exp;
 use glam::Vec3;
 use std::f32::consts::{PI, TAU};
 
@@ -50,25 +51,6 @@ pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
 pub fn normalized(v: Vec3) -> (Vec3, bool) {
     let rcp = v.length_recip();
     (v * rcp, rcp.is_finite() && rcp > 0.0)
-}
-
-/// e^x in f32 without a branch or a library call (Cephes' `expf`: x = n ln 2 + r with
-/// |r| <= ln 2 / 2, a degree-5 polynomial for e^r, 2^n from the exponent bits), so that the
-/// loops that evaluate Beckmann's D vectorise; within 2 ulp of e^x. Below -87.3 (where e^x
-/// leaves the normal numbers) it is 0, above 88 it stays at e^88; a NaN gives e^-87.3.
-#[inline(always)]
-pub fn exp(x: f32) -> f32 {
-    const ROUND: f32 = 12_582_912.0; // 1.5 * 2^23: adding and subtracting it rounds to an integer
-    let underflow = x < -87.3;
-    // Not `clamp`, which keeps a NaN.
-    #[allow(clippy::manual_clamp)]
-    let x = x.max(-87.3).min(88.0);
-    let n = (x * std::f32::consts::LOG2_E + ROUND) - ROUND;
-    let r = x - n * 0.693_359_4 - n * -2.121_944_4e-4;
-    let p = ((((1.987_569_1e-4 * r + 1.398_199_9e-3) * r + 8.333_452e-3) * r + 4.166_579_6e-2) * r + 0.166_666_65) * r
-        + 0.5;
-    let e = (p * (r * r) + r + 1.0) * f32::from_bits(((n as i32 + 127) as u32) << 23);
-    if underflow { 0.0 } else { e }
 }
 
 impl Microfacet {
@@ -289,25 +271,6 @@ mod tests {
         let expect = ((n - 1.0f32).powi(2) + k * k) / ((n + 1.0f32).powi(2) + k * k);
         assert!((fresnel_conductor(1.0, n, k) - expect).abs() < 1e-5);
         assert!((fresnel_conductor(0.0, n, k) - 1.0).abs() < 1e-5);
-    }
-
-    /// The branch-free e^x against f64's, relative error within 2 ulp over the whole range
-    /// Beckmann's D uses (and beyond), exact at 0, and 0 below the normal numbers.
-    #[test]
-    fn exp_is_within_two_ulp() {
-        let mut worst = 0.0f64;
-        for i in 0..=2_000_000 {
-            let x = -87.0 + 175.0 * i as f32 / 2_000_000.0;
-            let want = (x as f64).exp();
-            let err = ((exp(x) as f64 - want) / want).abs();
-            worst = worst.max(err);
-        }
-        assert!(worst < 2.0 * f32::EPSILON as f64, "worst relative error {worst:e}");
-        assert_eq!(exp(0.0), 1.0);
-        assert_eq!(exp(-100.0), 0.0);
-        assert_eq!(exp(f32::NEG_INFINITY), 0.0);
-        assert!(exp(f32::NAN).is_finite());
-        assert!(exp(200.0).is_finite() && exp(200.0) > 1e38);
     }
 
     /// Beckmann's conductor: `sample`'s density is `pdf`'s of the direction drawn, its weight

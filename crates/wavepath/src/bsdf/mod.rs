@@ -8,6 +8,7 @@
 //! returns NaN or Inf for any unit input (grazing or below-surface directions give zero or
 //! `None`).
 
+mod branch_free;
 mod dielectric;
 mod glossy;
 mod lambert;
@@ -171,6 +172,7 @@ impl Model {
         match self {
             Model::Pbr(m) => m.eval_pdf(wo, wi),
             Model::Glossy(m) => m.eval_pdf(wo, wi),
+            Model::Layered(m) => layered_eval_pdf(m, wo, wi),
             m => (m.eval(wo, wi), m.pdf(wo, wi)),
         }
     }
@@ -198,6 +200,11 @@ fn layered_eval(m: &Layered, wo: Vec3, wi: Vec3) -> Vec3 {
 #[inline(never)]
 fn layered_sample(m: &Layered, wo: Vec3, u: [f32; 3]) -> Option<BsdfSample> {
     m.sample(wo, u)
+}
+
+#[inline(never)]
+fn layered_eval_pdf(m: &Layered, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+    m.eval_pdf(wo, wi)
 }
 
 #[inline(never)]

@@ -1,15 +1,15 @@
 //! The models whose sample is written without branches (`LaneModel`: glTF metallic-roughness
-//! and specular-glossiness, MTL PBR and Phong, the rough conductor, mirror, glass) leaving
-//! their vertices eight or sixteen at a time: the shading frames, the light samples of every
-//! light (emissive triangles, the light from infinity, point, spot and directional lights) or
-//! hemisphere sampling's probes, the BSDF's value and density at each, the MIS weights, the
-//! shadow rays, and the continuation's sample with its value, density and ray, all in fixed
-//! loops over the lanes that the compiler vectorises. What is per lane and irregular stays one
-//! lane at a time: the material's parameters at the vertex ([`Transport::model_at`]), which
-//! emissive triangle a sample picks and what it emits, an environment map's or a point light's
-//! sample, the library calls a sample needs (the sine and cosine of an angle, Beckmann's
-//! logarithm), Russian roulette. Mirror and glass take no light samples: theirs is the
-//! continuation alone.
+//! and specular-glossiness, the layered glTF model, MTL PBR and Phong, the rough conductor,
+//! mirror, glass) leaving their vertices eight or sixteen at a time: the shading frames, the
+//! light samples of every light (emissive triangles, the light from infinity, point, spot and
+//! directional lights) or hemisphere sampling's probes, the BSDF's value and density at each,
+//! the MIS weights, the shadow rays, and the continuation's sample with its value, density
+//! and ray, all in fixed loops over the lanes that the compiler vectorises. What is per lane
+//! and irregular stays one lane at a time: the material's parameters at the vertex
+//! ([`Transport::model_at`], the layered model's sheen table), which emissive triangle a
+//! sample picks and what it emits, an environment map's or a point light's sample, the
+//! library calls a sample needs (the sine and cosine of an angle, Beckmann's logarithm),
+//! Russian roulette. Mirror and glass take no light samples: theirs is the continuation alone.
 //!
 //! The per-sample functions are the ones the one-path code calls (`eval_pdf`, `sample_at`,
 //! the light sample's geometry, `offset_origin`), written without branches, so the rays and
@@ -21,7 +21,7 @@ use super::Features;
 use super::lanes::{Emitters, LightPoints, Points, Rays, get, put};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
-use crate::bsdf::{BsdfSample, Dielectric, Distribution, Glossy, Microfacet, Mirror, Pbr};
+use crate::bsdf::{BsdfSample, Dielectric, Distribution, Glossy, Layered, Microfacet, Mirror, Pbr};
 use crate::bsdf::{power_heuristic, to_local};
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax_at};
@@ -34,8 +34,8 @@ use crate::sampling::numbers::Drawn;
 use crate::sampling::{Frame, Sampler, warp};
 use glam::Vec3;
 
-/// Most numbers a model's parameters take.
-const PARAMS: usize = 10;
+/// Most numbers a model's parameters take (the layered glTF model's).
+const PARAMS: usize = 24;
 
 /// A model this kernel shades: its value and density and its sample without branches, and
 /// its parameters as numbers (the kernel keeps them one array per parameter).
@@ -60,6 +60,12 @@ pub(super) trait LaneModel: Copy {
     fn sample_at(&self, wo: Vec3, u: [f32; 3], calls: [f32; 3]) -> (BsdfSample, bool);
 }
 
+/// A model's `N` parameters, the rest of the kernel's `PARAMS` zero.
+#[inline(always)]
+fn pad<const N: usize>(p: [f32; N]) -> [f32; PARAMS] {
+    std::array::from_fn(|k| if k < N { p[k] } else { 0.0 })
+}
+
 /// The sine and cosine of the visible-normal sample's disk angle, `2 pi u[1]`.
 #[inline(always)]
 fn disk_angle(u: [f32; 3]) -> [f32; 3] {
@@ -74,7 +80,7 @@ impl LaneModel for Pbr {
     #[inline(always)]
     fn params(&self) -> [f32; PARAMS] {
         let (d, f, g) = (self.diffuse, self.f0, self.diffuse_f0);
-        [d.x, d.y, d.z, f.x, f.y, f.z, g.x, g.y, g.z, self.alpha]
+        pad([d.x, d.y, d.z, f.x, f.y, f.z, g.x, g.y, g.z, self.alpha])
     }
 
     #[inline(always)]
@@ -110,7 +116,7 @@ impl LaneModel for Glossy {
     #[inline(always)]
     fn params(&self) -> [f32; PARAMS] {
         let (d, s) = (self.diffuse, self.specular);
-        [d.x, d.y, d.z, s.x, s.y, s.z, self.alpha, 0.0, 0.0, 0.0]
+        pad([d.x, d.y, d.z, s.x, s.y, s.z, self.alpha])
     }
 
     #[inline(always)]
@@ -144,7 +150,7 @@ impl LaneModel for Microfacet {
     fn params(&self) -> [f32; PARAMS] {
         let (e, k) = (self.eta, self.k);
         let ggx = (self.distribution == Distribution::Ggx) as u32 as f32;
-        [e.x, e.y, e.z, k.x, k.y, k.z, self.alpha, ggx, 0.0, 0.0]
+        pad([e.x, e.y, e.z, k.x, k.y, k.z, self.alpha, ggx])
     }
 
     #[inline(always)]
@@ -176,7 +182,7 @@ impl LaneModel for Mirror {
     #[inline(always)]
     fn params(&self) -> [f32; PARAMS] {
         let r = self.reflectance;
-        [r.x, r.y, r.z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]
+        pad([r.x, r.y, r.z])
     }
 
     #[inline(always)]
@@ -198,7 +204,7 @@ impl LaneModel for Dielectric {
     #[inline(always)]
     fn params(&self) -> [f32; PARAMS] {
         let (r, t) = (self.reflectance, self.transmittance);
-        [r.x, r.y, r.z, t.x, t.y, t.z, self.eta, self.reflect as u32 as f32, 0.0, 0.0]
+        pad([r.x, r.y, r.z, t.x, t.y, t.z, self.eta, self.reflect as u32 as f32])
     }
 
     #[inline(always)]
@@ -214,6 +220,96 @@ impl LaneModel for Dielectric {
     #[inline(always)]
     fn sample_at(&self, wo: Vec3, u: [f32; 3], _: [f32; 3]) -> (BsdfSample, bool) {
         Dielectric::sample_at(self, wo, u[2])
+    }
+}
+
+/// The glTF model with its extensions' layers (clearcoat, sheen, transmission), seen from
+/// the lane's direction ([`LayerData::at`](crate::integrator::layers::LayerData::at)): its
+/// delta transmission lobe mixed with the continuous ones, so the sample says per lane
+/// whether it is a delta one.
+impl LaneModel for Layered {
+    const NONE: Self = Layered {
+        diffuse: Vec3::ZERO,
+        transmit: Vec3::ZERO,
+        f0: Vec3::ZERO,
+        f90: 0.0,
+        dielectric_f0: Vec3::ZERO,
+        specular_weight: 0.0,
+        alpha: 0.0,
+        eta: 1.0,
+        thin: true,
+        clearcoat: 0.0,
+        coat_alpha: 0.0,
+        sheen: Vec3::ZERO,
+        sheen_alpha: 1.0,
+        sheen_scaling: 1.0,
+    };
+    const DELTA: bool = false;
+
+    #[inline(always)]
+    fn params(&self) -> [f32; PARAMS] {
+        let (d, t, f, g, s) = (self.diffuse, self.transmit, self.f0, self.dielectric_f0, self.sheen);
+        [
+            d.x,
+            d.y,
+            d.z,
+            t.x,
+            t.y,
+            t.z,
+            f.x,
+            f.y,
+            f.z,
+            self.f90,
+            g.x,
+            g.y,
+            g.z,
+            self.specular_weight,
+            self.alpha,
+            self.eta,
+            self.thin as u32 as f32,
+            self.clearcoat,
+            self.coat_alpha,
+            s.x,
+            s.y,
+            s.z,
+            self.sheen_alpha,
+            self.sheen_scaling,
+        ]
+    }
+
+    #[inline(always)]
+    fn from_params(p: &[f32; PARAMS]) -> Self {
+        Layered {
+            diffuse: Vec3::new(p[0], p[1], p[2]),
+            transmit: Vec3::new(p[3], p[4], p[5]),
+            f0: Vec3::new(p[6], p[7], p[8]),
+            f90: p[9],
+            dielectric_f0: Vec3::new(p[10], p[11], p[12]),
+            specular_weight: p[13],
+            alpha: p[14],
+            eta: p[15],
+            thin: p[16] != 0.0,
+            clearcoat: p[17],
+            coat_alpha: p[18],
+            sheen: Vec3::new(p[19], p[20], p[21]),
+            sheen_alpha: p[22],
+            sheen_scaling: p[23],
+        }
+    }
+
+    #[inline(always)]
+    fn eval_pdf(&self, wo: Vec3, wi: Vec3) -> (Vec3, f32) {
+        Layered::eval_pdf(self, wo, wi)
+    }
+
+    #[inline(always)]
+    fn sample_calls(&self, u: [f32; 3]) -> [f32; 3] {
+        disk_angle(u)
+    }
+
+    #[inline(always)]
+    fn sample_at(&self, wo: Vec3, u: [f32; 3], [sin, cos, _]: [f32; 3]) -> (BsdfSample, bool) {
+        Layered::sample_at(self, wo, u, (sin, cos))
     }
 }
 
@@ -295,8 +391,7 @@ impl<const L: usize> Soa<L> {
         let frame = Frame::new(sp.ns);
         let wo = to_local(&frame, -get(&self.dir, j));
         let a = &self.params;
-        let p = [a[0][j], a[1][j], a[2][j], a[3][j], a[4][j], a[5][j], a[6][j], a[7][j], a[8][j], a[9][j]];
-        let model = M::from_params(&p);
+        let model = M::from_params(&std::array::from_fn(|k| a[k][j]));
         Lane { p: sp.p, p_error: sp.p_error, ng: sp.ng, ns: sp.ns, frame, wo, model, bumped: self.bumped[j] }
     }
 }
@@ -621,6 +716,7 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
     }
     let mut rays = Rays::<L>::default();
     let mut pdf = [0.0f32; L];
+    let mut delta = [M::DELTA; L];
     let mut weight = [[0.0f32; L]; 3];
     for j in 0..L {
         let l = soa.lane::<M>(j);
@@ -630,6 +726,7 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
         rays.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
         put(&mut weight, j, s.weight);
         pdf[j] = s.pdf;
+        delta[j] = s.delta;
         rays.valid[j] = cont[j] & ok & (s.weight != Vec3::ZERO) & l.consistent(wi);
     }
     for j in 0..g.n {
@@ -641,7 +738,7 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
         q.throughput[i] *= get(&weight, j);
         q.depth[i] = depth[j] + 1;
         q.alive[i] = true;
-        q.bounce[i] = if M::DELTA {
+        q.bounce[i] = if M::DELTA || delta[j] {
             Bounce::DELTA
         } else if mis {
             Bounce { n: g.vertex[j].ns, pdf: pdf[j] }

@@ -10,10 +10,11 @@
 //! (Sobol's Owen scrambling and index shuffling, per dimension and per vertex). The models
 //! with a branch-free sample (`LaneModel`) then leave their vertices in lanes
 //! ([`super::lanes_glossy`]), sorted out of the group by model: those that mix a diffuse lobe
-//! with a GGX one (metallic-roughness, specular-glossiness, Phong) and the rough conductor
-//! where their light samples or hemisphere probes are drawn ahead, mirror and glass always
-//! (they take no light samples). The layered glTF model leaves one lane at a time with the
-//! one-path code ([`one_path::leave`]).
+//! with a GGX one (metallic-roughness, specular-glossiness, Phong), the layered glTF model
+//! (clearcoat, sheen, transmission) and the rough conductor where their light samples or
+//! hemisphere probes are drawn ahead, mirror and glass always (they take no light samples).
+//! Vertices whose numbers are not all drawn ahead leave one lane at a time with the one-path
+//! code ([`one_path::leave`]).
 
 #![allow(clippy::needless_range_loop)]
 
@@ -23,11 +24,11 @@ use super::lanes::Rays;
 use super::lanes_glossy::{self, GlossyGroup};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
-use crate::bsdf::{Dielectric, Glossy, Kind, Microfacet, Mirror, Model, Pbr};
+use crate::bsdf::{Dielectric, Glossy, Kind, Layered, Microfacet, Mirror, Model, Pbr, to_local};
 use crate::cpu::{Avx2, Avx512};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::sampling::numbers::Drawn;
-use crate::sampling::{Sampler, SamplerKind, rng8};
+use crate::sampling::{Frame, Sampler, SamplerKind, rng8};
 
 /// Shades the paths `idx` (hits on non-Lambertian materials), `L` at a time; `table` is
 /// scratch for the numbers drawn ahead.
@@ -93,6 +94,7 @@ fn shade_groups<F: Features, const L: usize>(
     let mut conductor = GlossyGroup::<Microfacet, L>::new();
     let mut mirror = GlossyGroup::<Mirror, L>::new();
     let mut glass = GlossyGroup::<Dielectric, L>::new();
+    let mut layered = GlossyGroup::<Layered, L>::new();
     let mut pending: Vec<Rays<L>> = Vec::new();
     for chunk in idx.chunks(L) {
         let mut vertex: [Option<Vertex>; L] = [None; L];
@@ -143,15 +145,15 @@ fn shade_groups<F: Features, const L: usize>(
                 }
             }
         }
-        (pbr.n, phong.n, conductor.n, mirror.n, glass.n) = (0, 0, 0, 0, 0);
+        (pbr.n, phong.n, conductor.n, mirror.n, glass.n, layered.n) = (0, 0, 0, 0, 0, 0);
         for (j, &pi) in chunk.iter().enumerate() {
             let Some(v) = &vertex[j] else { continue };
             // Delta kinds take no light samples, so they leave in lanes whatever the rules;
             // the glossy ones where their light samples are drawn ahead.
             let in_lanes = match t.materials.models[v.material as usize] {
                 Model::Mirror(_) | Model::Dielectric(_) => true,
-                Model::Pbr(_) | Model::Glossy(_) | Model::Microfacet(_) => glossy_lanes,
-                Model::Lambert(_) | Model::Layered(_) => false,
+                Model::Pbr(_) | Model::Glossy(_) | Model::Microfacet(_) | Model::Layered(_) => glossy_lanes,
+                Model::Lambert(_) => false,
             };
             if in_lanes {
                 let i = pi as usize;
@@ -161,7 +163,12 @@ fn shade_groups<F: Features, const L: usize>(
                     Model::Microfacet(m) => conductor.push(i, j, v, m),
                     Model::Mirror(m) => mirror.push(i, j, v, m),
                     Model::Dielectric(m) => glass.push(i, j, v, m),
-                    Model::Lambert(_) | Model::Layered(_) => false,
+                    // Seen from the direction the path arrives along (`Transport::shading`).
+                    Model::Layered(_) => {
+                        let cos_o = to_local(&Frame::new(v.ns), -q.ray[i].dir).z;
+                        layered.push(i, j, v, t.materials.layers.at(t, v, cos_o))
+                    }
+                    Model::Lambert(_) => false,
                 };
                 if taken {
                     continue;
@@ -185,6 +192,9 @@ fn shade_groups<F: Features, const L: usize>(
         }
         if glass.n > 0 {
             lanes_glossy::leave::<F, Dielectric, L>(t, q, &glass, table, dims, &rng, &mut pending, shadow);
+        }
+        if layered.n > 0 {
+            lanes_glossy::leave::<F, Layered, L>(t, q, &layered, table, dims, &rng, &mut pending, shadow);
         }
     }
 }
