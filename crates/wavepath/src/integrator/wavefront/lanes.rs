@@ -11,8 +11,7 @@
 //! the same, bit for bit, as [`super::shade::shade_scalar`]'s.
 //!
 //! Any light, MIS, one-sided emitters, textures, vertex colours, relief maps, volumes and
-//! hemisphere sampling run here (hemisphere sampling one lane at a time, with
-//! [`Transport::direct_rays`]).
+//! hemisphere sampling run here.
 //!
 //! The kernel is compiled with AVX2 and FMA enabled (behind run-time detection; Rust never
 //! contracts `a * b + c` into an FMA, so the bits do not change) and everything it calls is
@@ -24,14 +23,15 @@
 
 use super::Features;
 use super::ShadeWidth;
-use super::queues::{PathQueue, ShadowEntry, ShadowQueue, ShadowSlots};
+use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
 use crate::cpu::{Avx2, Avx512};
+use crate::geometry::offset::offset_origin;
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
 use crate::integrator::light_ray::{LightPoint, diffuse_light_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
 use crate::lights::{EmissiveTriangles, Emitter, SampledLight, Sky};
-use crate::sampling::{Sampler, SamplerKind, rng8};
+use crate::sampling::{Frame, Sampler, SamplerKind, rng8, warp};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
@@ -700,14 +700,7 @@ fn direct_light<const L: usize>(
     shadow: &mut ShadowQueue,
 ) {
     if t.rules.hemisphere {
-        for j in 0..g.n {
-            if g.direct[j] {
-                let (i, tp) = (g.path[j], q.throughput[g.path[j]]);
-                t.direct_rays(&g.vertex[j], g.depth[j], rng[j], |d| {
-                    shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-                });
-            }
-        }
+        hemisphere_probes(avx, t, q, g, pts, rng, pending, shadow);
         return;
     }
     let mut dim = DIM_DIRECT;
@@ -744,6 +737,56 @@ fn direct_light<const L: usize>(
         }
         push_samples(q, g, &pending[..ns as usize], true, shadow);
     }
+}
+
+/// Hemisphere sampling's probes of a group (`Transport::direct_rays` under `-H`): uniform
+/// directions weighted by the Lambertian value and cosine, in lanes; the sine and cosine of
+/// each probe's azimuth one lane at a time. Pushed path-major.
+#[cfg(target_arch = "x86_64")]
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn hemisphere_probes<const L: usize>(
+    avx: Avx2,
+    t: &Transport,
+    q: &PathQueue,
+    g: &Group<L>,
+    pts: &Points<L>,
+    rng: &[Sampler; L],
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
+    let n = t.rules.direct_per_vertex as usize;
+    let mut scale = [[0.0; L]; 3];
+    for j in 0..L {
+        put(&mut scale, j, g.vertex[j].albedo * FRAC_1_PI / (warp::UNIFORM_HEMISPHERE_PDF * n as f32));
+    }
+    if pending.len() < n {
+        pending.resize_with(n, Rays::default);
+    }
+    for (k, p) in pending.iter_mut().take(n).enumerate() {
+        let (z, b) = rng8::next_2d_lanes(avx, rng, DIM_DIRECT + k as u32);
+        let (mut sin, mut cos) = ([0.0f32; L], [1.0f32; L]);
+        for j in 0..g.n {
+            if g.direct[j] {
+                (sin[j], cos[j]) = (std::f32::consts::TAU * b[j]).sin_cos();
+            }
+        }
+        let z = unused_half(z, &g.direct);
+        // Into a local first (see `emissive_rays`).
+        let mut out = Rays::<L>::default();
+        for j in 0..L {
+            let s = pts.get(j);
+            let local = warp::uniform_hemisphere_at(z[j], (sin[j], cos[j]));
+            let wi = Frame::new(s.ns).to_world(local);
+            let origin = offset_origin(s.p, s.p_error, s.ng, wi);
+            out.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
+            out.set_weight(j, get(&scale, j) * local.z);
+            out.valid[j] = g.direct[j];
+        }
+        *p = out;
+    }
+    // `check`: a probe below the geometric surface (a relief map's normal) is dropped.
+    push_samples(q, g, &pending[..n], true, shadow);
 }
 
 /// The samples of light `li` (`light`: the light from infinity, point, spot and directional

@@ -240,9 +240,16 @@ mod tests {
         colours.mesh.colors = Some((0..n).map(|i| Vec3::new(0.5 + 0.1 * (i % 5) as f32, 0.7, 0.9)).collect());
         assert!(compare::<K>(&colours, &s, avx) > 500);
 
+        // Hemisphere probes in lanes, with corner normals and with every sampler.
         let mut hemisphere = s.clone();
         hemisphere.paths.hemisphere = true;
         assert!(compare::<K>(&crate::load::default_scene(), &hemisphere, avx) > 500);
+        let mut tilted = crate::load::default_scene();
+        tilted_normals(&mut tilted);
+        for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
+            hemisphere.sampling.sampler = sampler;
+            assert!(compare::<K>(&tilted, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+        }
 
         let mut mixed = emissive_box();
         mixed.materials[4].bsdf =
