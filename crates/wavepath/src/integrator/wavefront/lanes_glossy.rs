@@ -314,7 +314,7 @@ impl LaneModel for Layered {
 }
 
 /// A group's vertices of one model (lanes `0..n`), gathered by the shaded kinds' kernel.
-pub(super) struct GlossyGroup<M, const L: usize> {
+pub(super) struct ModelGroup<M, const L: usize> {
     pub n: usize,
     /// Path index of each lane.
     pub path: [usize; L],
@@ -324,9 +324,9 @@ pub(super) struct GlossyGroup<M, const L: usize> {
     pub model: [M; L],
 }
 
-impl<M: LaneModel, const L: usize> GlossyGroup<M, L> {
+impl<M: LaneModel, const L: usize> ModelGroup<M, L> {
     pub fn new() -> Self {
-        GlossyGroup { n: 0, path: [0; L], row: [0; L], vertex: [super::lanes::NO_VERTEX; L], model: [M::NONE; L] }
+        ModelGroup { n: 0, path: [0; L], row: [0; L], vertex: [super::lanes::NO_VERTEX; L], model: [M::NONE; L] }
     }
 
     /// Adds path `path` (row `row` of the group's numbers) at vertex `v` with model `m`;
@@ -405,14 +405,14 @@ pub(super) fn takes(t: &Transport) -> bool {
 
 /// Leaves the vertices of `g` as [`one_path::leave`] does: shadow rays (throughput applied)
 /// and continuations after Russian roulette. `table` holds the numbers drawn for the shaded
-/// group (`dims` per lane, rows by [`GlossyGroup::row`]), `rng` its streams; `pending` is
+/// group (`dims` per lane, rows by [`ModelGroup::row`]), `rng` its streams; `pending` is
 /// scratch for a light's samples.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
     t: &Transport,
     q: &mut PathQueue,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     table: &[[f32; 2]],
     dims: usize,
     rng: &[Sampler],
@@ -455,7 +455,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
 fn direct_light<M: LaneModel, const L: usize>(
     t: &Transport,
     q: &PathQueue,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     soa: &Soa<L>,
     direct: &[bool; L],
     table: &[[f32; 2]],
@@ -506,7 +506,7 @@ fn direct_light<M: LaneModel, const L: usize>(
 #[inline(always)]
 fn light_samples<M: LaneModel, const L: usize>(
     t: &Transport,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     soa: &Soa<L>,
     direct: &[bool; L],
     light: &SampledLight,
@@ -555,7 +555,7 @@ fn light_samples<M: LaneModel, const L: usize>(
 fn hemisphere_probes<M: LaneModel, const L: usize>(
     t: &Transport,
     q: &PathQueue,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     soa: &Soa<L>,
     direct: &[bool; L],
     table: &[[f32; 2]],
@@ -601,7 +601,7 @@ fn hemisphere_probes<M: LaneModel, const L: usize>(
 #[inline(always)]
 fn emissive_samples<M: LaneModel, const L: usize>(
     t: &Transport,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     soa: &Soa<L>,
     direct: &[bool; L],
     e: &EmissiveTriangles,
@@ -661,7 +661,7 @@ fn emissive_samples<M: LaneModel, const L: usize>(
 #[inline(always)]
 fn push_samples<M, const L: usize>(
     q: &PathQueue,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     direct: &[bool; L],
     samples: &[Rays<L>],
     shadow: &mut ShadowQueue,
@@ -689,7 +689,7 @@ fn push_samples<M, const L: usize>(
 fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
     t: &Transport,
     q: &mut PathQueue,
-    g: &GlossyGroup<M, L>,
+    g: &ModelGroup<M, L>,
     soa: &Soa<L>,
     depth: &[u32; L],
     table: &[[f32; 2]],

@@ -21,7 +21,7 @@
 use super::Features;
 use super::ShadeWidth;
 use super::lanes::Rays;
-use super::lanes_glossy::{self, GlossyGroup};
+use super::lanes_glossy::{self, ModelGroup};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::bsdf::{Dielectric, Glossy, Kind, Layered, Microfacet, Mirror, Model, Pbr, to_local};
@@ -89,12 +89,12 @@ fn shade_groups<F: Features, const L: usize>(
     table.resize(L * dims, [0.0; 2]);
     let hashed = t.streams.pattern.kind == SamplerKind::Independent;
     let glossy_lanes = lanes_glossy::takes(t);
-    let mut pbr = GlossyGroup::<Pbr, L>::new();
-    let mut phong = GlossyGroup::<Glossy, L>::new();
-    let mut conductor = GlossyGroup::<Microfacet, L>::new();
-    let mut mirror = GlossyGroup::<Mirror, L>::new();
-    let mut glass = GlossyGroup::<Dielectric, L>::new();
-    let mut layered = GlossyGroup::<Layered, L>::new();
+    let mut pbr = ModelGroup::<Pbr, L>::new();
+    let mut phong = ModelGroup::<Glossy, L>::new();
+    let mut conductor = ModelGroup::<Microfacet, L>::new();
+    let mut mirror = ModelGroup::<Mirror, L>::new();
+    let mut glass = ModelGroup::<Dielectric, L>::new();
+    let mut layered = ModelGroup::<Layered, L>::new();
     let mut pending: Vec<Rays<L>> = Vec::new();
     for chunk in idx.chunks(L) {
         let mut vertex: [Option<Vertex>; L] = [None; L];
