@@ -316,25 +316,32 @@ fn cosine_rays<const L: usize>(pts: &Points<L>, ua: &[f32; L], ub: &[f32; L], ou
     }
 }
 
+/// What a group's direct-light functions read (light samples of every kind, hemisphere
+/// probes): the transport, the paths, and the group's vertices, shading points and streams.
+#[derive(Clone, Copy)]
+struct GroupLight<'a, 's, const L: usize> {
+    avx: Avx2,
+    t: &'a Transport<'s>,
+    q: &'a PathQueue,
+    g: &'a Group<L>,
+    pts: &'a Points<L>,
+    rng: &'a [Sampler; L],
+}
+
 /// The samples of emissive-triangle light `li` (`e`) of a group, from dimension `dim` on: the
 /// triangle and its point picked one lane at a time, the rest lane-parallel
 /// ([`triangle_ray`]); pushed path-major as the area lights' are.
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn emissive_rays<const L: usize>(
-    avx: Avx2,
-    t: &Transport,
-    q: &PathQueue,
-    g: &Group<L>,
-    pts: &Points<L>,
-    rng: &[Sampler; L],
+    gl: GroupLight<'_, '_, L>,
     e: &EmissiveTriangles,
     li: usize,
     mut dim: u32,
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
+    let GroupLight { avx, t, q, g, pts, rng } = gl;
     let ns = t.lights.set.samples_for(li, t.rules.light_samples);
     let margin = t.lights.shadow_margins[li];
     let mut inv = [[0.0; L]; 3];
@@ -651,7 +658,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             }
         }
         if F::DIRECT && g.direct.iter().any(|&d| d) {
-            direct_light(avx, t, q, &g, &pts, &rng, &mut pending, shadow);
+            direct_light(GroupLight { avx, t, q: &*q, g: &g, pts: &pts, rng: &rng }, &mut pending, shadow);
         }
         if F::INDIRECT && g.cont.iter().any(|&c| c) {
             let (ua, ub) = rng8::next_2d_lanes(avx, &rng, 0);
@@ -687,32 +694,23 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
 /// of one point sit together in the queue, where the shadow stage traces them as one packet,
 /// and each path still adds its own in the order the one-path code makes them.
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn direct_light<const L: usize>(
-    avx: Avx2,
-    t: &Transport,
-    q: &PathQueue,
-    g: &Group<L>,
-    pts: &Points<L>,
-    rng: &[Sampler; L],
-    pending: &mut Vec<Rays<L>>,
-    shadow: &mut ShadowQueue,
-) {
+fn direct_light<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Rays<L>>, shadow: &mut ShadowQueue) {
+    let GroupLight { avx, t, q, g, pts, rng } = gl;
     if t.rules.hemisphere {
-        hemisphere_probes(avx, t, q, g, pts, rng, pending, shadow);
+        hemisphere_probes(gl, pending, shadow);
         return;
     }
     let mut dim = DIM_DIRECT;
     for (li, light) in t.lights.set.lights.iter().enumerate() {
         let ns = t.lights.set.samples_for(li, t.rules.light_samples);
         if let SampledLight::Emissive(e) = light {
-            emissive_rays(avx, t, q, g, pts, rng, e, li, dim, pending, shadow);
+            emissive_rays(gl, e, li, dim, pending, shadow);
             dim += t.light_dims(li);
             continue;
         }
         let (Some(al), SampledLight::Area { radiance, .. }) = (&t.lights.area_lights[li], light) else {
-            light_rays(avx, t, q, g, pts, rng, light, li, dim, pending, shadow);
+            light_rays(gl, light, li, dim, pending, shadow);
             dim += t.light_dims(li);
             continue;
         };
@@ -743,18 +741,9 @@ fn direct_light<const L: usize>(
 /// directions weighted by the Lambertian value and cosine, in lanes; the sine and cosine of
 /// each probe's azimuth one lane at a time. Pushed path-major.
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn hemisphere_probes<const L: usize>(
-    avx: Avx2,
-    t: &Transport,
-    q: &PathQueue,
-    g: &Group<L>,
-    pts: &Points<L>,
-    rng: &[Sampler; L],
-    pending: &mut Vec<Rays<L>>,
-    shadow: &mut ShadowQueue,
-) {
+fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Rays<L>>, shadow: &mut ShadowQueue) {
+    let GroupLight { avx, t, q, g, pts, rng } = gl;
     let n = t.rules.direct_per_vertex as usize;
     let mut scale = [[0.0; L]; 3];
     for j in 0..L {
@@ -795,21 +784,16 @@ fn hemisphere_probes<const L: usize>(
 /// at a time (`SampledLight::sample_pdf`: the map's table, a normalisation); then the MIS
 /// weights and shadow rays of all lanes ([`diffuse_light_ray`]). Pushed path-major.
 #[cfg(target_arch = "x86_64")]
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn light_rays<const L: usize>(
-    avx: Avx2,
-    t: &Transport,
-    q: &PathQueue,
-    g: &Group<L>,
-    pts: &Points<L>,
-    rng: &[Sampler; L],
+    gl: GroupLight<'_, '_, L>,
     light: &SampledLight,
     li: usize,
     mut dim: u32,
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
+    let GroupLight { avx, t, q, g, pts, rng } = gl;
     let ns = t.lights.set.samples_for(li, t.rules.light_samples);
     let margin = t.lights.shadow_margins[li];
     let sky = match light {

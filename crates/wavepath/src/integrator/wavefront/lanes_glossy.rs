@@ -436,10 +436,11 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
             direct[j] = t.rules.counts_direct(depth[j]);
         }
         if direct.iter().any(|&d| d) {
+            let gs = GroupSamples { t, q: &*q, g, soa: &soa, direct: &direct, table, dims };
             if t.rules.hemisphere {
-                hemisphere_probes(t, q, g, &soa, &direct, table, dims, pending, shadow);
+                hemisphere_probes(gs, pending, shadow);
             } else {
-                direct_light(t, q, g, &soa, &direct, table, dims, pending, shadow);
+                direct_light(gs, pending, shadow);
             }
         }
     }
@@ -448,21 +449,37 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
     }
 }
 
+/// What a group's direct-light functions read (light samples of every kind, hemisphere
+/// probes): the transport, the paths, the group and its lanes' arrays, which lanes take
+/// direct light, and the numbers drawn ahead (`dims` per lane).
+struct GroupSamples<'a, 's, M, const L: usize> {
+    t: &'a Transport<'s>,
+    q: &'a PathQueue,
+    g: &'a ModelGroup<M, L>,
+    soa: &'a Soa<L>,
+    direct: &'a [bool; L],
+    table: &'a [[f32; 2]],
+    dims: usize,
+}
+
+// By hand: a derive would ask `M: Copy` of the references' target.
+impl<M, const L: usize> Clone for GroupSamples<'_, '_, M, L> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<M, const L: usize> Copy for GroupSamples<'_, '_, M, L> {}
+
 /// The shadow rays of the lanes in `direct`, light by light, each path's in the order the
 /// one-path code makes them ([`Transport::direct_rays_shaded`]).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn direct_light<M: LaneModel, const L: usize>(
-    t: &Transport,
-    q: &PathQueue,
-    g: &ModelGroup<M, L>,
-    soa: &Soa<L>,
-    direct: &[bool; L],
-    table: &[[f32; 2]],
-    dims: usize,
+    gs: GroupSamples<'_, '_, M, L>,
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
+    let GroupSamples { t, q, g, direct, .. } = gs;
     let mut dim = DIM_DIRECT as usize;
     for (li, light) in t.lights.set.lights.iter().enumerate() {
         let ns = t.lights.set.samples_for(li, t.rules.light_samples);
@@ -475,7 +492,7 @@ fn direct_light<M: LaneModel, const L: usize>(
                 // Into a local first: a loop writing through the queue's buffer is left
                 // scalar (its stores might alias what it reads, for all the compiler knows).
                 let mut out = Rays::<L>::default();
-                emissive_samples(t, g, soa, direct, e, li, ns, table, dims, dim, &mut out);
+                emissive_samples(gs, e, li, ns, dim, &mut out);
                 *p = out;
                 dim += per_sample;
             }
@@ -488,7 +505,7 @@ fn direct_light<M: LaneModel, const L: usize>(
         for p in pending.iter_mut().take(ns as usize) {
             // Into a local first, as above.
             let mut out = Rays::<L>::default();
-            light_samples(t, g, soa, direct, light, li, ns, table, dims, dim, &mut out);
+            light_samples(gs, light, li, ns, dim, &mut out);
             *p = out;
             dim += per_sample;
         }
@@ -502,21 +519,16 @@ fn direct_light<M: LaneModel, const L: usize>(
 /// light one lane at a time (`SampledLight::sample_pdf`: the map's table, a normalisation);
 /// then the BSDF's value and density, the MIS weight and the shadow ray of all lanes, as
 /// [`Transport::direct_light_shaded`] computes them ([`glossy_light_ray`]).
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn light_samples<M: LaneModel, const L: usize>(
-    t: &Transport,
-    g: &ModelGroup<M, L>,
-    soa: &Soa<L>,
-    direct: &[bool; L],
+    gs: GroupSamples<'_, '_, M, L>,
     light: &SampledLight,
     li: usize,
     ns: u32,
-    table: &[[f32; 2]],
-    dims: usize,
     dim: usize,
     out: &mut Rays<L>,
 ) {
+    let GroupSamples { t, g, soa, direct, table, dims, .. } = gs;
     let (mut ua, mut ub) = ([0.5f32; L], [0.5f32; L]);
     for j in 0..g.n {
         [ua[j], ub[j]] = table[g.row[j] * dims + dim];
@@ -550,19 +562,13 @@ fn light_samples<M: LaneModel, const L: usize>(
 /// Hemisphere sampling's direct light ([`Transport::direct_rays_shaded`] under `-H`): the
 /// uniform probes of the lanes in `direct`, BSDF-weighted, each path's in its order; the
 /// sine and cosine of each probe's azimuth one lane at a time.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn hemisphere_probes<M: LaneModel, const L: usize>(
-    t: &Transport,
-    q: &PathQueue,
-    g: &ModelGroup<M, L>,
-    soa: &Soa<L>,
-    direct: &[bool; L],
-    table: &[[f32; 2]],
-    dims: usize,
+    gs: GroupSamples<'_, '_, M, L>,
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
+    let GroupSamples { t, q, g, soa, direct, table, dims } = gs;
     let n = t.rules.direct_per_vertex as usize;
     if pending.len() < n {
         pending.resize_with(n, Rays::default);
@@ -597,21 +603,16 @@ fn hemisphere_probes<M: LaneModel, const L: usize>(
 /// from dimension `dim` (the pair) and `dim + 1` (the triangle's pick): the triangle and its
 /// point one lane at a time, the rest lane-parallel, as `EmissiveTriangles::sample_pdf` and
 /// [`Transport::direct_light_shaded`] compute it.
-#[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn emissive_samples<M: LaneModel, const L: usize>(
-    t: &Transport,
-    g: &ModelGroup<M, L>,
-    soa: &Soa<L>,
-    direct: &[bool; L],
+    gs: GroupSamples<'_, '_, M, L>,
     e: &EmissiveTriangles,
     li: usize,
     ns: u32,
-    table: &[[f32; 2]],
-    dims: usize,
     dim: usize,
     out: &mut Rays<L>,
 ) {
+    let GroupSamples { t, g, soa, direct, table, dims, .. } = gs;
     let mut tri = Emitters::<L>::default();
     let mut point = [[0.0; L]; 3];
     let mut le = [[0.0; L]; 3];

@@ -269,7 +269,6 @@ mod tests {
     /// point light, with every sampler, both roulettes, and hemisphere sampling.
     #[test]
     fn shaded_kinds_in_lanes_match_the_scalar_kernel() {
-        type N = Kernel<true, false, true, true, true, true>;
         let Some(avx) = Avx2::new() else { return };
         let mut scene = emissive_box();
         scene.materials[0].bsdf =
@@ -296,6 +295,18 @@ mod tests {
         scene.spheres.push(Sphere { center: Vec3::new(-0.5, 1.0, 0.4), radius: 0.2, material: 6 });
         scene.spheres.push(Sphere { center: Vec3::new(0.5, 1.0, -0.4), radius: 0.2, material: 7 });
         tilted_normals(&mut scene);
+        compare_every_sampler(&scene, avx, |t| {
+            assert!(t.rules.mis && t.materials.non_diffuse);
+            assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
+            assert!(t.shaded_numbers.complete, "the glossy lanes read the table alone");
+        });
+    }
+
+    /// [`compare`] of the shaded kinds' kernel with every sampler (Sobol with the throughput
+    /// roulette), light sampling and hemisphere sampling; `check` is what the transport
+    /// must be for the lanes to be reached.
+    fn compare_every_sampler(scene: &Scene, avx: Avx2, check: impl Fn(&Transport)) {
+        type N = Kernel<true, false, true, true, true, true>;
         for (sampler, rr_throughput) in [
             (crate::sampling::SamplerKind::Independent, false),
             (crate::sampling::SamplerKind::Sobol, true),
@@ -303,14 +314,11 @@ mod tests {
         ] {
             let mut s = settings(2, rr_throughput);
             s.sampling.sampler = sampler;
-            let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
-            assert!(t.rules.mis && t.materials.non_diffuse);
-            assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
-            assert!(t.shaded_numbers.complete, "the glossy lanes read the table alone");
-            assert!(compare::<N>(&scene, &s, avx) > 500, "{sampler:?}");
+            check(&Transport::new(scene, &s, &crate::effects::Effects::of(scene, &s)));
+            assert!(compare::<N>(scene, &s, avx) > 500, "{sampler:?}");
             let mut hemisphere = s.clone();
             hemisphere.paths.hemisphere = true;
-            assert!(compare::<N>(&scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+            assert!(compare::<N>(scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
         }
     }
 
@@ -321,7 +329,6 @@ mod tests {
     /// group; every sampler, both roulettes, hemisphere sampling.
     #[test]
     fn layered_model_in_lanes_matches_the_scalar_kernel() {
-        type N = Kernel<true, false, true, true, true, true>;
         let Some(avx) = Avx2::new() else { return };
         let mut scene = emissive_box();
         let layered = |base: Vec3, metallic: f32, roughness: f32, l: Layers| {
@@ -377,21 +384,10 @@ mod tests {
         scene.spheres[1].material = 6;
         scene.spheres.push(Sphere { center: Vec3::new(0.4, 1.0, -0.3), radius: 0.25, material: 5 });
         tilted_normals(&mut scene);
-        for (sampler, rr_throughput) in [
-            (crate::sampling::SamplerKind::Independent, false),
-            (crate::sampling::SamplerKind::Sobol, true),
-            (crate::sampling::SamplerKind::Stratified, false),
-        ] {
-            let mut s = settings(2, rr_throughput);
-            s.sampling.sampler = sampler;
-            let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
+        compare_every_sampler(&scene, avx, |t| {
             assert!(t.rules.mis && t.shaded_numbers.complete);
             assert!(t.materials.models.iter().filter(|m| matches!(m, crate::bsdf::Model::Layered(_))).count() == 5);
-            assert!(compare::<N>(&scene, &s, avx) > 500, "{sampler:?}");
-            let mut hemisphere = s.clone();
-            hemisphere.paths.hemisphere = true;
-            assert!(compare::<N>(&scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
-        }
+        });
     }
 
     /// The default box without its ceiling and area light, lit from infinity through the
