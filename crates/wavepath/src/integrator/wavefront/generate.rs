@@ -3,7 +3,7 @@
 use super::queues::PathQueue;
 use crate::cpu::Avx2;
 use crate::integrator::Transport;
-use crate::sampling::{Sampler, rng8};
+use crate::sampling::{Sampler, SamplerKind, rng8};
 use glam::Vec3;
 
 /// Which samples of which pixels a wave takes: slot s is sample `base + s % batch` of pixel
@@ -30,8 +30,9 @@ impl Wave<'_> {
 /// Fills the path queue with the wave's camera rays, in slot order. A pixel's samples are
 /// consecutive slots, so the pixel's coordinates and the pixel part of the path key
 /// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
-/// With `lanes` (a pinhole camera, independent numbers and AVX2: `super::Lanes`), the rays of eight samples are
-/// set up lane-parallel (keys and jitters one by one, the directions' normalisations together).
+/// With `lanes` (a pinhole camera and AVX2: `super::Lanes`), the rays of eight samples are set
+/// up lane-parallel: the keys and jitters hashed or drawn eight at a time (independent
+/// numbers, or a pattern's: Sobol, stratified), the directions' normalisations together.
 pub fn generate(
     t: &Transport,
     lanes: Option<Avx2>,
@@ -71,10 +72,13 @@ pub fn generate(
 const L: usize = 8;
 
 /// The pinhole camera's rays of the wave, eight samples of a pixel at a time; the same rays
-/// as [`Transport::camera_ray_keyed`] (the same functions, per lane).
+/// as [`Transport::camera_ray_keyed`] (the same functions, per lane, and the streams'
+/// numbers as `rng8` draws them for the shading kernels).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+    let pattern = t.streams.pattern;
+    let hashed = pattern.kind == SamplerKind::Independent;
     for &pixel in wave.pixels {
         let (x, y) = (pixel % width as u32, pixel / width as u32);
         let pixel_key = Sampler::pixel_key(t.streams.seed, pixel as u64);
@@ -84,19 +88,33 @@ fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width
             let m = ((end - sample) as usize).min(L);
             // The keys and jitters of `Sampler::sample_key` and `Transport::camera_ray_keyed`,
             // hashed eight at a time (lanes past `m` are computed and dropped).
-            let mut inputs = [0u64; L];
-            for (j, input) in inputs.iter_mut().enumerate() {
-                *input = Sampler::sample_input(pixel_key, (sample + j as u32) as u64);
-            }
-            let keys = rng8::splitmix64_x8(avx, &inputs);
-            let (jx, jy) = if spp <= 1 {
-                ([0.5f32; L], [0.5f32; L])
-            } else {
-                for j in 0..L {
-                    inputs[j] = Sampler::vertex_input(keys[j], 0);
+            let (keys, (jx, jy)) = if hashed {
+                let mut inputs = [0u64; L];
+                for (j, input) in inputs.iter_mut().enumerate() {
+                    *input = Sampler::sample_input(pixel_key, (sample + j as u32) as u64);
                 }
-                let streams = rng8::for_vertex_x8(avx, &inputs);
-                rng8::next_2d_x8(avx, &streams, 0)
+                let keys = rng8::splitmix64_x8(avx, &inputs);
+                let jitter = if spp <= 1 {
+                    ([0.5f32; L], [0.5f32; L])
+                } else {
+                    for j in 0..L {
+                        inputs[j] = Sampler::vertex_input(keys[j], 0);
+                    }
+                    let streams = rng8::for_vertex_x8(avx, &inputs);
+                    rng8::next_2d_x8(avx, &streams, 0)
+                };
+                (keys, jitter)
+            } else {
+                // A patterned sampler's keys are the pixel's with the sample's index, and
+                // the eight streams are one pattern's (Sobol's points drawn eight at a time).
+                let mut keys = [0u64; L];
+                let mut streams = [Sampler::default(); L];
+                for j in 0..L {
+                    keys[j] = pattern.sample_key(pixel_key, (sample + j as u32) as u64);
+                    streams[j] = pattern.vertex(keys[j], 0);
+                }
+                let jitter = if spp <= 1 { ([0.5f32; L], [0.5f32; L]) } else { rng8::next_2d_x8(avx, &streams, 0) };
+                (keys, jitter)
             };
             let mut rays = [crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
             for j in 0..L {
@@ -115,16 +133,28 @@ mod tests {
     use crate::settings::Settings;
 
     /// The lane-parallel camera rays (when the CPU runs them) are bit for bit the rays of
-    /// `Transport::camera_ray_keyed`, for batches that fill 8 lanes and batches that do not.
+    /// `Transport::camera_ray_keyed`, for batches that fill 8 lanes and batches that do not,
+    /// with every sampler.
     #[test]
     fn wave_rays_are_the_single_camera_rays() {
         let scene = crate::load::default_scene();
         let (w, h) = (13, 7);
-        for (spp, batch) in [(16, 16), (16, 5), (1, 1), (64, 11)] {
+        for (spp, batch, sampler) in [
+            (16, 16, SamplerKind::Independent),
+            (16, 5, SamplerKind::Independent),
+            (1, 1, SamplerKind::Independent),
+            (64, 11, SamplerKind::Independent),
+            (16, 16, SamplerKind::Sobol),
+            (64, 21, SamplerKind::Sobol),
+            (1, 1, SamplerKind::Sobol),
+            (16, 16, SamplerKind::Stratified),
+            (9, 9, SamplerKind::Stratified),
+        ] {
             let mut s = Settings::default();
             s.image.width = w;
             s.image.height = h;
             s.sampling.spp = spp;
+            s.sampling.sampler = sampler;
             let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
             let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
             let wave = Wave { pixels: &pixels, base: 2, batch };

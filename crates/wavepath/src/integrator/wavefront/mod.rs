@@ -125,8 +125,7 @@ pub enum ShadeWidth {
 /// when the stage's lane kernel runs, `None` when its one-path-at-a-time kernel does.
 #[derive(Clone, Copy, Debug)]
 pub struct Lanes {
-    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers)
-    /// and independent numbers (the lanes hash them).
+    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers).
     pub camera: Option<Avx2>,
     /// Shading of the Lambertian hits, eight or sixteen paths at a time ([`lanes`]).
     pub shade: Option<ShadeWidth>,
@@ -138,8 +137,7 @@ impl Lanes {
     pub fn of(t: &Transport, isa: Isa) -> Lanes {
         let avx2 = isa.avx2();
         Lanes {
-            camera: avx2
-                .filter(|_| t.camera.pinhole() && t.streams.pattern.kind == crate::sampling::SamplerKind::Independent),
+            camera: avx2.filter(|_| t.camera.pinhole()),
             shade: isa.avx512().map(ShadeWidth::Sixteen).or(avx2.map(ShadeWidth::Eight)),
         }
     }
