@@ -74,7 +74,7 @@ LARGE_SOURCE = "meshes/lucy_100k.obj"
 E2E_QUICK = "--scenes box -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
 # The harness's older scenes were made when wavepath's emitters were two-sided (their Mitsuba
 # versions carry a back copy of each emitter): they compare like with like only so.
-E2E_OLDER = "--scenes cornell-flush,cornell-dragon --wavepath-args=--two-sided-emission"
+E2E_OLDER = "--scenes cornell,cornell-flush,cornell-dragon --wavepath-args=--two-sided-emission"
 # Effects every global-illumination render of a lit scene has; the table lists the others.
 COMMON_EFFECTS = {"emission", "area-lights", "direct-light", "indirect", "russian-roulette"}
 
