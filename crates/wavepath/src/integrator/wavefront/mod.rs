@@ -8,9 +8,9 @@
 //! A frame takes one batch of samples for every active pixel (with adaptive sampling a
 //! batch is the `-a` batch size and converged pixels leave before the next frame). A frame
 //! is cut into small waves (a few thousand paths, so a wave's queues stay in the L2 cache);
-//! rayon hands whole waves to worker threads, and each thread runs all stages of its wave
-//! itself on queues it reuses from wave to wave. There is no barrier per stage and no
-//! allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
+//! worker threads take whole waves one at a time from a shared counter ([`handout`]), and
+//! each thread runs all stages of its wave itself on queues it keeps for the whole render.
+//! There is no barrier per stage and no allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
 //! machine they include time the thread waited for a core).
 //!
 //! The kernels are specialised once per render for the [`Effects`] the scene needs (the
@@ -20,6 +20,7 @@
 
 pub mod compact;
 pub mod generate;
+mod handout;
 pub mod lanes;
 mod lanes_escaped;
 mod lanes_glossy;
@@ -40,7 +41,7 @@ use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
 use glam::Vec3;
 use queues::{PathQueue, ShadowQueue};
-use rayon::prelude::*;
+use handout::Workers;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -145,7 +146,7 @@ impl Lanes {
     }
 }
 
-/// A worker thread's queues, reused by every wave it runs.
+/// A worker thread's queues, reused by every wave it runs in every frame of the render.
 #[derive(Default)]
 pub struct WaveQueues {
     pub paths: PathQueue,
@@ -232,6 +233,7 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         None => None,
     };
     let mut partial: Vec<PixelSums> = Vec::new();
+    let workers = Workers::<WaveQueues>::for_current_pool();
     let (first, end) = s.sample_span();
     let mut n = first;
     while n < end && !active.is_empty() {
@@ -244,19 +246,16 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         let per_wave = (WAVE_PATHS / batch as usize).max(1);
         partial.clear();
         partial.resize(active.len(), PixelSums::default());
-        let frame = partial
-            .par_chunks_mut(per_wave)
-            .zip(active.par_chunks(per_wave))
-            .map_init(WaveQueues::default, |queues, (out, pixels)| {
-                if job.stop.load(Ordering::Relaxed) {
-                    return WaveStats::default();
-                }
-                let wave = Wave { pixels, base: n, batch };
-                let st = run_wave::<F>(job, &wave, queues, out);
-                (job.progress)(wave.len() as u64);
-                st
-            })
-            .reduce(WaveStats::default, WaveStats::sum);
+        let waves = partial.chunks_mut(per_wave).zip(active.chunks(per_wave));
+        let frame = workers.run(waves, WaveStats::default, WaveStats::sum, |queues, (out, pixels)| {
+            if job.stop.load(Ordering::Relaxed) {
+                return WaveStats::default();
+            }
+            let wave = Wave { pixels, base: n, batch };
+            let st = run_wave::<F>(job, &wave, queues, out);
+            (job.progress)(wave.len() as u64);
+            st
+        });
         if job.stop.load(Ordering::Relaxed) {
             return None;
         }
