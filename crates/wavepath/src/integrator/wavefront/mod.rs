@@ -40,8 +40,8 @@ use crate::settings::Settings;
 use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
 use glam::Vec3;
-use queues::{PathQueue, ShadowQueue};
 use handout::Workers;
+use queues::{PathQueue, ShadowQueue};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -232,7 +232,6 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         None if job.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
         None => None,
     };
-    let mut partial: Vec<PixelSums> = Vec::new();
     let workers = Workers::<WaveQueues>::for_current_pool();
     let (first, end) = s.sample_span();
     let mut n = first;
@@ -244,15 +243,13 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         .min(end);
         let batch = (check - n).min(WAVE_PATHS as u32);
         let per_wave = (WAVE_PATHS / batch as usize).max(1);
-        partial.clear();
-        partial.resize(active.len(), PixelSums::default());
-        let waves = partial.chunks_mut(per_wave).zip(active.chunks(per_wave));
-        let frame = workers.run(waves, WaveStats::default, WaveStats::sum, |queues, (out, pixels)| {
+        let waves = wave_windows(&mut acc.pixels, &active, per_wave);
+        let frame = workers.run(waves, WaveStats::default, WaveStats::sum, |queues, (pixels, window)| {
             if job.stop.load(Ordering::Relaxed) {
                 return WaveStats::default();
             }
             let wave = Wave { pixels, base: n, batch };
-            let st = run_wave::<F>(job, &wave, queues, out);
+            let st = run_wave::<F>(job, &wave, queues, window);
             (job.progress)(wave.len() as u64);
             st
         });
@@ -260,9 +257,6 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
             return None;
         }
         total = total.sum(frame);
-        for (&p, sums) in active.iter().zip(&partial) {
-            acc.pixels[p as usize].merge(sums);
-        }
         n += batch;
         if let Some((b, tol)) = adaptive
             && n.is_multiple_of(b)
@@ -285,9 +279,33 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
     Some((acc, stats))
 }
 
+/// A frame's waves: each wave's pixels and the window of the image's sums from its first
+/// pixel to its last. `active` rises, so the windows are disjoint and each wave's thread adds
+/// its pixels' sums into the image itself: no per-frame buffer, no merge on one thread while
+/// the others wait.
+fn wave_windows<'a>(sums: &'a mut [PixelSums], active: &'a [u32], per_wave: usize) -> Vec<(&'a [u32], Window<'a>)> {
+    debug_assert!(active.windows(2).all(|p| p[0] < p[1]), "active pixels rise");
+    let mut waves = Vec::with_capacity(active.len().div_ceil(per_wave));
+    let (mut rest, mut at) = (sums, 0usize);
+    for pixels in active.chunks(per_wave) {
+        let (first, last) = (pixels[0] as usize, pixels[pixels.len() - 1] as usize);
+        let (_, from_first) = rest.split_at_mut(first - at);
+        let (sums, after) = from_first.split_at_mut(last + 1 - first);
+        waves.push((pixels, Window { first: first as u32, sums }));
+        (rest, at) = (after, last + 1);
+    }
+    waves
+}
+
+/// The image's pixel sums from pixel `first` on, for one wave's thread alone.
+struct Window<'a> {
+    first: u32,
+    sums: &'a mut [PixelSums],
+}
+
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
-/// then each pixel's samples (in slot order) into `out`.
-fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: &mut [PixelSums]) -> WaveStats {
+/// then each pixel's samples, summed in slot order, into the image's sums.
+fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> WaveStats {
     let (t, accel, s) = (&job.transport, job.accel, job.settings);
     let mut st = WaveStats::default();
     let n = wave.len();
@@ -322,10 +340,14 @@ fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: 
         }
     }
     let batch = wave.batch as usize;
-    for (j, p) in out.iter_mut().enumerate() {
+    for (j, &pixel) in wave.pixels.iter().enumerate() {
+        // The frame's samples of a pixel are summed first and then added to its sums, the
+        // same order whatever frame or thread count.
+        let mut frame = PixelSums::default();
         for r in &q.slot_radiance[j * batch..(j + 1) * batch] {
-            p.add(*r);
+            frame.add(*r);
         }
+        out.sums[(pixel - out.first) as usize].merge(&frame);
     }
     st
 }
