@@ -3,7 +3,7 @@
 //!
 //! rayon's splitting of a parallel iterator leaves runs of waves (a quarter of a frame with
 //! two threads) that one thread works through alone and the other cannot steal from: the
-//! thread that finished first waited up to a tenth of a second per frame (docs/decisions.md,
+//! thread that finished first waited, up to a tenth of the threads' time (docs/decisions.md,
 //! "Two threads"). A counter lets a thread take the next wave whenever it is free, so the
 //! threads end a frame at most one wave apart; and a thread's queues are allocated once per
 //! render instead of once per rayon job.
