@@ -8,9 +8,9 @@
 //! A frame takes one batch of samples for every active pixel (with adaptive sampling a
 //! batch is the `-a` batch size and converged pixels leave before the next frame). A frame
 //! is cut into small waves (a few thousand paths, so a wave's queues stay in the L2 cache);
-//! rayon hands whole waves to worker threads, and each thread runs all stages of its wave
-//! itself on queues it reuses from wave to wave. There is no barrier per stage and no
-//! allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
+//! worker threads take whole waves one at a time from a shared counter ([`handout`]), and
+//! each thread runs all stages of its wave itself on queues it keeps for the whole render.
+//! There is no barrier per stage and no allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
 //! machine they include time the thread waited for a core).
 //!
 //! The kernels are specialised once per render for the [`Effects`] the scene needs (the
@@ -20,6 +20,7 @@
 
 pub mod compact;
 pub mod generate;
+mod handout;
 pub mod lanes;
 mod lanes_escaped;
 mod lanes_glossy;
@@ -39,8 +40,8 @@ use crate::settings::Settings;
 use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
 use glam::Vec3;
+use handout::Workers;
 use queues::{PathQueue, ShadowQueue};
-use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
@@ -143,7 +144,7 @@ impl Lanes {
     }
 }
 
-/// A worker thread's queues, reused by every wave it runs.
+/// A worker thread's queues, reused by every wave it runs in every frame of the render.
 #[derive(Default)]
 pub struct WaveQueues {
     pub paths: PathQueue,
@@ -229,7 +230,7 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         None if job.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
         None => None,
     };
-    let mut partial: Vec<PixelSums> = Vec::new();
+    let workers = Workers::<WaveQueues>::for_current_pool();
     let (first, end) = s.sample_span();
     let mut n = first;
     while n < end && !active.is_empty() {
@@ -240,28 +241,20 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         .min(end);
         let batch = (check - n).min(WAVE_PATHS as u32);
         let per_wave = (WAVE_PATHS / batch as usize).max(1);
-        partial.clear();
-        partial.resize(active.len(), PixelSums::default());
-        let frame = partial
-            .par_chunks_mut(per_wave)
-            .zip(active.par_chunks(per_wave))
-            .map_init(WaveQueues::default, |queues, (out, pixels)| {
-                if job.stop.load(Ordering::Relaxed) {
-                    return WaveStats::default();
-                }
-                let wave = Wave { pixels, base: n, batch };
-                let st = run_wave::<F>(job, &wave, queues, out);
-                (job.progress)(wave.len() as u64);
-                st
-            })
-            .reduce(WaveStats::default, WaveStats::sum);
+        let waves = wave_windows(&mut acc.pixels, &active, per_wave);
+        let frame = workers.run(waves, WaveStats::default, WaveStats::sum, |queues, (pixels, window)| {
+            if job.stop.load(Ordering::Relaxed) {
+                return WaveStats::default();
+            }
+            let wave = Wave { pixels, base: n, batch };
+            let st = run_wave::<F>(job, &wave, queues, window);
+            (job.progress)(wave.len() as u64);
+            st
+        });
         if job.stop.load(Ordering::Relaxed) {
             return None;
         }
         total = total.sum(frame);
-        for (&p, sums) in active.iter().zip(&partial) {
-            acc.pixels[p as usize].merge(sums);
-        }
         n += batch;
         if let Some((b, tol)) = adaptive
             && n.is_multiple_of(b)
@@ -284,9 +277,33 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
     Some((acc, stats))
 }
 
+/// A frame's waves: each wave's pixels and the window of the image's sums from its first
+/// pixel to its last. `active` rises, so the windows are disjoint and each wave's thread adds
+/// its pixels' sums into the image itself: no per-frame buffer, no merge on one thread while
+/// the others wait.
+fn wave_windows<'a>(sums: &'a mut [PixelSums], active: &'a [u32], per_wave: usize) -> Vec<(&'a [u32], Window<'a>)> {
+    debug_assert!(active.windows(2).all(|p| p[0] < p[1]), "active pixels rise");
+    let mut waves = Vec::with_capacity(active.len().div_ceil(per_wave));
+    let (mut rest, mut at) = (sums, 0usize);
+    for pixels in active.chunks(per_wave) {
+        let (first, last) = (pixels[0] as usize, pixels[pixels.len() - 1] as usize);
+        let (_, from_first) = rest.split_at_mut(first - at);
+        let (sums, after) = from_first.split_at_mut(last + 1 - first);
+        waves.push((pixels, Window { first: first as u32, sums }));
+        (rest, at) = (after, last + 1);
+    }
+    waves
+}
+
+/// The image's pixel sums from pixel `first` on, for one wave's thread alone.
+struct Window<'a> {
+    first: u32,
+    sums: &'a mut [PixelSums],
+}
+
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
-/// then each pixel's samples (in slot order) into `out`.
-fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: &mut [PixelSums]) -> WaveStats {
+/// then each pixel's samples, summed in slot order, into the image's sums.
+fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> WaveStats {
     let (t, accel, s) = (&job.transport, job.accel, job.settings);
     let mut st = WaveStats::default();
     let n = wave.len();
@@ -321,10 +338,14 @@ fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: 
         }
     }
     let batch = wave.batch as usize;
-    for (j, p) in out.iter_mut().enumerate() {
+    for (j, &pixel) in wave.pixels.iter().enumerate() {
+        // The frame's samples of a pixel are summed first and then added to its sums, the
+        // same order whatever frame or thread count.
+        let mut frame = PixelSums::default();
         for r in &q.slot_radiance[j * batch..(j + 1) * batch] {
-            p.add(*r);
+            frame.add(*r);
         }
+        out.sums[(pixel - out.first) as usize].merge(&frame);
     }
     st
 }
