@@ -49,8 +49,18 @@ def test_other_python_threads_run_during_a_render():
     assert during > 50_000 * elapsed, f"only {during} increments in {elapsed:.2f} s"
 
 
+@pytest.fixture
+def ctrl_c_handled():
+    """Python's own Ctrl-C handler for the test's duration. A shell without job control
+    starts background commands with SIGINT ignored, and a Python started so installs no
+    handler: Ctrl-C would never reach it, whatever the render does."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
 @pytest.mark.parametrize("how", ["interrupt_main", "SIGINT"])
-def test_ctrl_c_interrupts_a_render_within_a_second(how):
+def test_ctrl_c_interrupts_a_render_within_a_second(how, ctrl_c_handled):
     fired = {}
 
     def interrupt():
