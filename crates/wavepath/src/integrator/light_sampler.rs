@@ -2,6 +2,7 @@
 //! lights and each light's shadow-ray margin.
 
 use super::area::AreaLight;
+use super::emitter_filter::EmitterFilter;
 use crate::geometry::offset::shadow_margin;
 use crate::lights::{LightSet, SampledLight};
 use crate::scene::Scene;
@@ -17,6 +18,9 @@ pub struct LightSampler {
     pub area_arrivals: bool,
     /// The light from infinity's place in the set, if the scene has one.
     pub infinite: Option<usize>,
+    /// Where emissive triangles are the only light a ray can find: the test that lets a
+    /// last-depth ray that misses them all end untraced.
+    pub emitters: Option<EmitterFilter>,
 }
 
 impl LightSampler {
@@ -41,6 +45,7 @@ impl LightSampler {
             .collect();
         let area_arrivals = set.lights.iter().any(|l| matches!(l, SampledLight::Area { .. }));
         let infinite = set.lights.iter().position(|l| matches!(l, SampledLight::Infinite(_)));
-        LightSampler { set, area_lights, shadow_margins, area_arrivals, infinite }
+        let emitters = EmitterFilter::new(scene, area_arrivals || infinite.is_some(), settings.execution.isa);
+        LightSampler { set, area_lights, shadow_margins, area_arrivals, infinite, emitters }
     }
 }

@@ -2,9 +2,10 @@
 //! by both integrators and used only when the scene has such a material.
 //!
 //! Light is counted exactly once per path:
-//! - Lambertian vertices: light sampling and the cosine-sampled continuation, weighted by the
-//!   power heuristic where the continuation is traced and its light counts
-//!   ([`Rules::diffuse_mis`](super::rules::Rules::diffuse_mis)); light sampling alone elsewhere and with `--no-mis`.
+//! - Lambertian vertices: light sampling and the cosine-sampled ray, weighted by the power
+//!   heuristic where the scene calls for MIS
+//!   ([`Rules::diffuse_mis`](super::rules::Rules::diffuse_mis)); light sampling alone
+//!   elsewhere and with `--no-mis`.
 //! - Glossy vertices: light sampling and BSDF sampling, each weighted by the power
 //!   heuristic against the other (the light strategy counted `-l` times), so a small bright
 //!   light in a rough metal converges without fireflies. The BSDF-sampled ray counts what

@@ -8,6 +8,7 @@
 //! 2-d sample, plus one for a light that needs a third number).
 
 pub mod area;
+pub mod emitter_filter;
 pub mod layers;
 pub mod light_ray;
 mod material;
@@ -189,6 +190,17 @@ impl<'a> Transport<'a> {
         self.materials.non_diffuse || self.rules.mis
     }
 
+    /// Whether a path whose ray will reach a vertex of `depth` needs that ray traced: always,
+    /// except beyond the last vertex, where the ray only collects the light it arrives at and
+    /// one that misses every emitter finds none ([`emitter_filter`]).
+    #[inline]
+    pub fn traces(&self, ray: &Ray, depth: u32) -> bool {
+        match &self.lights.emitters {
+            Some(f) if depth >= self.rules.max_depth => f.may_find_light(ray),
+            _ => true,
+        }
+    }
+
     #[inline(always)]
     pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
         let sp = self.scene.surface_point_with(ray, hit, self.materials.textures.any());
@@ -332,7 +344,7 @@ impl<'a> Transport<'a> {
     /// `None`: the path ends here.
     #[inline]
     pub fn scatter(&self, v: &Vertex, depth: u32, rng: impl Numbers) -> Option<(Ray, Vec3, Bounce)> {
-        if !self.rules.continues(depth) || v.albedo == Vec3::ZERO {
+        if !self.rules.diffuse_continues(depth) || v.albedo == Vec3::ZERO {
             return None;
         }
         let (a, b) = rng.at(0).next_2d();

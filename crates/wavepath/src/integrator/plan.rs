@@ -77,6 +77,14 @@ impl<'s> RenderPlan<'s> {
         self.lanes
     }
 
+    /// The same plan tracing every ray from a last vertex, the emitter filter off: what the
+    /// filter must not change.
+    #[cfg(test)]
+    pub fn tracing_every_ray(mut self) -> Self {
+        self.transport.lights.emitters = None;
+        self
+    }
+
     /// The settings of one render of `extent`: the plan's, with its cell and sample range.
     pub fn settings_in(&self, extent: Extent) -> Settings {
         let mut s = self.settings.clone();

@@ -78,7 +78,7 @@ impl PathTracer<'_, '_> {
             Some(sh) => self.transport.continuation_shaded(v, sh, depth, rng, throughput),
             None => self.transport.continuation(v, depth, rng, throughput),
         };
-        if let Some((ray, w, bounce)) = next {
+        if let Some((ray, w, bounce)) = next.filter(|(ray, ..)| self.transport.traces(ray, depth + 1)) {
             self.st.extension += 1;
             match self.accel.closest_hit(&ray, &mut self.st.trace) {
                 Some(hit) => {

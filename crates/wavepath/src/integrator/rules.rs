@@ -67,13 +67,23 @@ impl Rules {
         depth < self.max_depth && (self.accumulate || depth + 1 == self.max_depth)
     }
 
-    /// Whether a diffuse vertex at `depth` combines its light samples with its continuation
-    /// ray by the power heuristic. Only where that ray is traced and the light it finds
-    /// counts: a vertex at the last depth keeps light sampling alone (no extra ray), as does
-    /// every vertex under `-o 0`.
+    /// Whether a diffuse vertex at `depth` combines its light samples with its BSDF-sampled
+    /// ray by the power heuristic: wherever its direct light counts, the last depth included.
+    /// There the ray is traced for the light it finds and nothing more
+    /// ([`diffuse_continues`](Self::diffuse_continues)), as glossy vertices do: light sampling
+    /// alone at the last vertex left an emitter's near neighbourhood (a light hung just below
+    /// a ceiling) to unweighted samples worth Le cos cos A / r^2, fireflies a thousand times
+    /// the image's mean.
     #[inline(always)]
     pub fn diffuse_mis(&self, depth: u32) -> bool {
-        self.mis && self.continues(depth) && self.counts_direct(depth)
+        self.mis && self.counts_direct(depth)
+    }
+
+    /// Whether a diffuse vertex at `depth` sends a BSDF-sampled ray: to continue the path, or
+    /// at the last depth to collect the light MIS weighs against its light samples.
+    #[inline(always)]
+    pub fn diffuse_continues(&self, depth: u32) -> bool {
+        self.continues(depth) || self.diffuse_mis(depth)
     }
 
     /// Whether a vertex of `depth` spawns a continuation ray.

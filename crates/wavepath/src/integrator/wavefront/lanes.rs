@@ -626,7 +626,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             }
             let albedo = g.vertex[j].albedo;
             g.direct[j] = F::DIRECT && t.rules.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
-            g.cont[j] = F::INDIRECT && t.rules.continues(depth) && albedo != Vec3::ZERO;
+            g.cont[j] = F::INDIRECT && t.rules.diffuse_continues(depth) && albedo != Vec3::ZERO;
             g.mis[j] = t.rules.diffuse_mis(depth);
         }
         if !g.direct.iter().chain(&g.cont).any(|&b| b) {

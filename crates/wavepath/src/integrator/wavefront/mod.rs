@@ -329,7 +329,7 @@ fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: 
             clock = lap(clock, &mut st.stages.shadow);
         }
         if F::INDIRECT {
-            compact::compact(&mut q.paths, &mut q.slot_radiance);
+            compact::compact(t, &mut q.paths, &mut q.slot_radiance);
             clock = lap(clock, &mut st.stages.compact);
         } else {
             // Every path ended at its first hit, still in slot order.

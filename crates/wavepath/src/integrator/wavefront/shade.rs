@@ -146,7 +146,7 @@ mod tests {
             assert_eq!(q.bounce, qs.bounce);
             assert_eq!(by_owner(&sl, q.len()), by_owner(&ss, q.len()));
             shadow_rays += sl.len();
-            compact::compact(&mut q, &mut slot_radiance);
+            compact::compact(&t, &mut q, &mut slot_radiance);
         }
         (shadow_rays, escaped)
     }

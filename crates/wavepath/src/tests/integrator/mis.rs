@@ -91,3 +91,23 @@ fn mis_is_on_where_the_lights_call_for_it() {
         assert!(!Effects::of(&scene(), &off).mis, "{off:?}");
     }
 }
+
+/// The last vertex too: depth-2 paths from a ceiling end on the floor beside the emitter.
+/// Light sampling alone there (no ray to weigh it against) gave each vertex within a few
+/// centimetres of the light an unweighted sample worth Le cos cos A / r^2; with the last
+/// vertex's BSDF ray traced for the light it finds and both weighed by MIS, the image keeps
+/// its mean (every 8x8 region agrees with light sampling alone and with the recursive
+/// reference) at under a fifth of the variance (0.06 measured).
+#[test]
+fn mis_at_the_last_vertex_keeps_the_mean_and_bounds_the_variance() {
+    let scene = super::emitter_filter::ceiling_scene(W as f32 / H as f32);
+    let s = render::settings(W, H, 2, 256);
+    let with = render::wavefront(&scene, &s).0;
+    let without = render::wavefront(&scene, &s.clone().with(|s| s.paths.mis = false)).0;
+    let reference = render::recursive(&scene, &s).0;
+    agree::assert_regions_agree(&with, &without, 8, 1e-4, "MIS against light sampling alone");
+    agree::assert_regions_agree(&with, &reference, 8, 1e-4, "wavefront against recursive");
+    let variance = |acc: &crate::film::Accumulator| acc.pixels.iter().map(|p| p.variance_of_mean().x).sum::<f64>();
+    let (var_with, var_without) = (variance(&with), variance(&without));
+    assert!(var_with < 0.2 * var_without, "variance with MIS {var_with}, light sampling alone {var_without}");
+}

@@ -5,6 +5,7 @@
 mod agree_controls;
 mod analytic;
 mod effects;
+pub mod emitter_filter;
 mod emitter_sides;
 mod envmap;
 mod lens;
