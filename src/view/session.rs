@@ -1,20 +1,22 @@
 //! One interactive render: the state clients change, and the loop that renders it frame by
 //! frame with the same wavefront integrator as an offline render. Any change bumps a
-//! generation counter; the loop notices it between batches, shows a quarter-resolution
-//! one-sample image at once, then refines the full-resolution image band by band, 16 samples
-//! per pixel per pass (sample indices 0, 1, 2, ... of the offline render, so the converged
-//! image is the offline one) until the samples-per-pixel cap. Frames are published as the latest one only: a slow
-//! client skips frames, it never queues them.
+//! generation counter and stops the band being rendered (between waves); the loop shows a
+//! quarter-resolution one-sample image at once, then refines the full-resolution image band
+//! by band, 16 samples per pixel per pass (sample indices 0, 1, 2, ... of the offline render,
+//! so the converged image is the offline one) until the samples-per-pixel cap. Every band of
+//! a generation adds into one [`Canvas`] (one set of sums, worker queues kept from band to
+//! band). Frames are published as the latest one only: a slow client skips frames, it never
+//! queues them.
 
 use super::controls::Change;
 use super::orbit::Orbit;
 use glam::Vec3;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 use wavepath::RouletteKind;
-use wavepath::{Accumulator, Film, Tonemap};
 use wavepath::{Bvh, Intersector};
+use wavepath::{Canvas, Film, Tonemap};
 use wavepath::{Environment, Scene};
 use wavepath::{Extent, RenderPlan};
 use wavepath::{Settings, Shading};
@@ -59,6 +61,8 @@ pub struct Session {
     pub changed: Condvar,
     pub frame: Mutex<Option<Arc<Frame>>>,
     pub new_frame: Condvar,
+    /// Set by every change: the band being rendered stops at its next wave.
+    interrupt: AtomicBool,
 }
 
 /// Bands of rows are chosen so that one takes about this long: short enough to notice a
@@ -80,6 +84,7 @@ impl Session {
             changed: Condvar::new(),
             frame: Mutex::new(None),
             new_frame: Condvar::new(),
+            interrupt: AtomicBool::new(false),
         })
     }
 
@@ -121,12 +126,14 @@ impl Session {
             }
         }
         st.generation += 1;
+        self.interrupt.store(true, Ordering::Relaxed);
         self.changed.notify_all();
     }
 
     /// Asks the loop to stop after its current batch.
     pub fn stop(&self) {
         self.state.lock().unwrap().stop = true;
+        self.interrupt.store(true, Ordering::Relaxed);
         self.changed.notify_all();
         self.new_frame.notify_all();
     }
@@ -156,9 +163,10 @@ impl Session {
         let never = AtomicBool::new(false);
         let mut seq = 0u64;
         let mut shown = 0u64;
-        let mut acc = Accumulator::new(1, 1);
-        // The generation's coarse image, shown where the first pass has not been yet.
-        let mut coarse: Option<Film> = None;
+        // The generation's sums, and its image as last published: a band's rows are the
+        // means of its pixels' sums, rows the first pass has not reached yet the coarse image.
+        let mut canvas: Option<Canvas> = None;
+        let mut film = Film::new(1, 1);
         // The generation's render plan, built once and reused by every band of every pass.
         let mut plan: Option<RenderPlan> = None;
         // Samples every pixel has (completed passes); the current pass renders band `band` of
@@ -167,6 +175,8 @@ impl Session {
         let (mut band, mut bands, mut pass_s) = (0usize, 1usize, 0.0f64);
         let mut totals = Totals::default();
         loop {
+            // Cleared before the state is read: a change after this point stops the next band.
+            self.interrupt.store(false, Ordering::Relaxed);
             let st = {
                 let guard = self.state.lock().unwrap();
                 let done = |s: &ViewState| {
@@ -180,6 +190,7 @@ impl Session {
                 guard.clone()
             };
             let s = &st.settings;
+            let (width, height) = (s.image.width, s.image.height);
             let fresh = st.generation != shown;
             if fresh {
                 // The scene changes with the generation: the old plan (which reads it) goes first.
@@ -187,12 +198,11 @@ impl Session {
                 scene.camera = st.orbit.camera;
                 scene.set_environment(if st.environment { environment.clone() } else { Environment::None });
                 shown = st.generation;
-                acc = Accumulator::new(s.image.width, s.image.height);
-                (taken, band, pass_s, coarse) = (0, 0, 0.0, None);
+                (taken, band, pass_s) = (0, 0, 0.0);
                 totals = Totals::default();
                 // A coarse image at once: a quarter of the resolution, one sample, a one-off
                 // render with its own settings and camera.
-                let (w, h) = ((s.image.width / 4).max(1), (s.image.height / 4).max(1));
+                let (w, h) = ((width / 4).max(1), (height / 4).max(1));
                 let mut quick = s.clone();
                 quick.image.width = w;
                 quick.image.height = h;
@@ -206,58 +216,76 @@ impl Session {
                 // The plan of every pass: the full resolution's camera, all samples at once
                 // per pixel (no adaptive batches).
                 scene.camera = st.orbit.camera;
-                scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
+                scene.camera.fit_to(width as f32, height as f32);
                 let mut full = s.clone();
                 full.sampling.adaptive = None;
                 full.sampling.sample_range = None;
                 let p = plan.insert(RenderPlan::new(&scene, &full));
+                film = Film::new(width, height);
                 if let Ok(out) = quick_out {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
                     let estimate = quick_s.as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.sampling.spp) as f64;
-                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
+                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, height);
                     totals.add(&out.stats, quick_s);
                     seq += 1;
                     let info = Self::info(&st, p, bvh, &totals, 0, (w, h));
-                    coarse = Some(out.film.clone());
+                    let c = &out.film;
+                    for (i, px) in film.pixels.iter_mut().enumerate() {
+                        let (x, y) = (i % width, i / width);
+                        *px = c.get((x * c.width / width).min(c.width - 1), (y * c.height / height).min(c.height - 1));
+                    }
                     self.publish(frame(seq, shown, out.film, 0, false, true, info));
                 }
                 if s.paths.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
                     if let Ok(out) = wavepath::render_plan(p, bvh, Extent::WHOLE, &|_| {}, &never) {
                         seq += 1;
-                        let info = Self::info(&st, p, bvh, &totals, s.sampling.spp, (s.image.width, s.image.height));
+                        let info = Self::info(&st, p, bvh, &totals, s.sampling.spp, (width, height));
                         self.publish(frame(seq, shown, out.film, s.sampling.spp, true, false, info));
                     }
                     taken = s.sampling.spp;
+                    canvas = None;
+                } else {
+                    // Allocated after the coarse image is out (its sums are tens of MB). Its
+                    // queues belong to this thread's rayon pool, where its bands run.
+                    match canvas.as_mut().filter(|c| (c.sums().width, c.sums().height) == (width, height)) {
+                        Some(c) => c.clear(),
+                        None => canvas = Some(Canvas::new(width, height)),
+                    }
                 }
                 continue;
             }
-            let Some(p) = plan.as_ref() else { continue };
+            let (Some(p), Some(c)) = (plan.as_ref(), canvas.as_mut()) else { continue };
             // One band of rows, the pass's samples for each of its pixels at once (as an
             // offline render takes them: a pixel's samples side by side in a wave trace
             // coherent rays; two samples per pixel over the whole image run 28% slower).
             let end = (taken + PASS_SAMPLES).min(s.sampling.spp);
-            let (y0, y1) = (band * s.image.height / bands, (band + 1) * s.image.height / bands);
-            let cell = wavepath::Cell { x: 0, y: y0, w: s.image.width, h: y1 - y0 };
+            let (y0, y1) = (band * height / bands, (band + 1) * height / bands);
+            let cell = wavepath::Cell { x: 0, y: y0, w: width, h: y1 - y0 };
             let extent = Extent { cell: Some(cell), samples: Some((taken, end)) };
             let t = Instant::now();
-            let Ok((sums, stats)) = wavepath::render_plan_sums(p, bvh, extent, &|_| {}, &never) else {
-                taken = s.sampling.spp;
-                continue;
+            let stats = match c.render(p, bvh, extent, &|_| {}, &self.interrupt) {
+                Ok(stats) => stats,
+                // A change stopped the band: the next turn starts its generation.
+                Err(_) if self.interrupt.load(Ordering::Relaxed) => continue,
+                Err(_) => {
+                    taken = s.sampling.spp;
+                    continue;
+                }
             };
             pass_s += t.elapsed().as_secs_f64();
             totals.add(&stats, t.elapsed());
-            let rows = y0 * s.image.width..y1 * s.image.width;
-            for (a, b) in acc.pixels[rows.clone()].iter_mut().zip(&sums.pixels[rows]) {
-                a.merge(b);
+            let sums = &c.sums().pixels;
+            for i in y0 * width..y1 * width {
+                film.pixels[i] = sums[i].mean();
             }
             band += 1;
             if band == bands {
                 // The pass is complete: the next one's bands take about the target time each.
                 taken = end;
                 band = 0;
-                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
+                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, height);
                 pass_s = 0.0;
             }
             // A newer generation makes this frame stale: skip publishing it.
@@ -266,20 +294,8 @@ impl Session {
             }
             seq += 1;
             let converged = taken >= s.sampling.spp;
-            let info = Self::info(&st, p, bvh, &totals, taken, (s.image.width, s.image.height));
-            let mut film = acc.to_film();
-            if let Some(c) = coarse.as_ref().filter(|_| taken == 0) {
-                for (i, p) in film.pixels.iter_mut().enumerate() {
-                    if acc.pixels[i].taken == 0 {
-                        let (x, y) = (i % s.image.width, i / s.image.width);
-                        *p = c.get(
-                            (x * c.width / s.image.width).min(c.width - 1),
-                            (y * c.height / s.image.height).min(c.height - 1),
-                        );
-                    }
-                }
-            }
-            self.publish(frame(seq, shown, film, taken, converged, false, info));
+            let info = Self::info(&st, p, bvh, &totals, taken, (width, height));
+            self.publish(frame(seq, shown, film.clone(), taken, converged, false, info));
         }
     }
 
