@@ -221,7 +221,7 @@ impl Session {
                 full.sampling.adaptive = None;
                 full.sampling.sample_range = None;
                 let p = plan.insert(RenderPlan::new(&scene, &full));
-                film = Film::new(width, height);
+                let mut upscaled = None;
                 if let Ok(out) = quick_out {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
@@ -230,12 +230,20 @@ impl Session {
                     totals.add(&out.stats, quick_s);
                     seq += 1;
                     let info = Self::info(&st, p, bvh, &totals, 0, (w, h));
-                    let c = &out.film;
-                    for (i, px) in film.pixels.iter_mut().enumerate() {
-                        let (x, y) = (i % width, i / width);
-                        *px = c.get((x * c.width / width).min(c.width - 1), (y * c.height / height).min(c.height - 1));
+                    let f = frame(seq, shown, out.film, 0, false, true, info);
+                    upscaled = Some(f.film.clone());
+                    self.publish(f);
+                }
+                // After the coarse image is out: the full-resolution image, the coarse one
+                // scaled up where the first pass has not been.
+                film = Film::new(width, height);
+                if let Some(c) = upscaled {
+                    for (y, row) in film.pixels.chunks_exact_mut(width).enumerate() {
+                        let cy = (y * c.height / height).min(c.height - 1);
+                        for (x, px) in row.iter_mut().enumerate() {
+                            *px = c.get((x * c.width / width).min(c.width - 1), cy);
+                        }
                     }
-                    self.publish(frame(seq, shown, out.film, 0, false, true, info));
                 }
                 if s.paths.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
@@ -277,8 +285,9 @@ impl Session {
             pass_s += t.elapsed().as_secs_f64();
             totals.add(&stats, t.elapsed());
             let sums = &c.sums().pixels;
-            for i in y0 * width..y1 * width {
-                film.pixels[i] = sums[i].mean();
+            let rows = y0 * width..y1 * width;
+            for (px, sum) in film.pixels[rows.clone()].iter_mut().zip(&sums[rows]) {
+                *px = sum.mean();
             }
             band += 1;
             if band == bands {
