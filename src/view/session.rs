@@ -1,20 +1,22 @@
 //! One interactive render: the state clients change, and the loop that renders it frame by
 //! frame with the same wavefront integrator as an offline render. Any change bumps a
-//! generation counter; the loop notices it between batches, shows a quarter-resolution
-//! one-sample image at once, then refines the full-resolution image band by band, 16 samples
-//! per pixel per pass (sample indices 0, 1, 2, ... of the offline render, so the converged
-//! image is the offline one) until the samples-per-pixel cap. Frames are published as the latest one only: a slow
-//! client skips frames, it never queues them.
+//! generation counter and stops the band being rendered (between waves); the loop shows a
+//! quarter-resolution one-sample image at once, then refines the full-resolution image band
+//! by band, 16 samples per pixel per pass (sample indices 0, 1, 2, ... of the offline render,
+//! so the converged image is the offline one) until the samples-per-pixel cap. Every band of
+//! a generation adds into one [`Canvas`] (one set of sums, worker queues kept from band to
+//! band). Frames are published as the latest one only: a slow client skips frames, it never
+//! queues them.
 
 use super::controls::Change;
 use super::orbit::Orbit;
 use glam::Vec3;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 use wavepath::RouletteKind;
-use wavepath::{Accumulator, Film, Tonemap};
 use wavepath::{Bvh, Intersector};
+use wavepath::{Canvas, Film, Tonemap};
 use wavepath::{Environment, Scene};
 use wavepath::{Extent, RenderPlan};
 use wavepath::{Settings, Shading};
@@ -28,7 +30,7 @@ pub struct Frame {
     pub generation: u64,
     /// Samples per pixel accumulated.
     pub spp: u32,
-    /// The cap was reached: the image is final (sent losslessly).
+    /// The cap was reached: the image is final (compressed harder: it is sent once).
     pub converged: bool,
     /// The quarter-resolution first image of a generation.
     pub coarse: bool,
@@ -59,6 +61,8 @@ pub struct Session {
     pub changed: Condvar,
     pub frame: Mutex<Option<Arc<Frame>>>,
     pub new_frame: Condvar,
+    /// Set by every change: the band being rendered stops at its next wave.
+    interrupt: AtomicBool,
 }
 
 /// Bands of rows are chosen so that one takes about this long: short enough to notice a
@@ -80,6 +84,7 @@ impl Session {
             changed: Condvar::new(),
             frame: Mutex::new(None),
             new_frame: Condvar::new(),
+            interrupt: AtomicBool::new(false),
         })
     }
 
@@ -121,12 +126,14 @@ impl Session {
             }
         }
         st.generation += 1;
+        self.interrupt.store(true, Ordering::Relaxed);
         self.changed.notify_all();
     }
 
     /// Asks the loop to stop after its current batch.
     pub fn stop(&self) {
         self.state.lock().unwrap().stop = true;
+        self.interrupt.store(true, Ordering::Relaxed);
         self.changed.notify_all();
         self.new_frame.notify_all();
     }
@@ -156,9 +163,10 @@ impl Session {
         let never = AtomicBool::new(false);
         let mut seq = 0u64;
         let mut shown = 0u64;
-        let mut acc = Accumulator::new(1, 1);
-        // The generation's coarse image, shown where the first pass has not been yet.
-        let mut coarse: Option<Film> = None;
+        // The generation's sums, and its image as last published: a band's rows are the
+        // means of its pixels' sums, rows the first pass has not reached yet the coarse image.
+        let mut canvas: Option<Canvas> = None;
+        let mut film = Film::new(1, 1);
         // The generation's render plan, built once and reused by every band of every pass.
         let mut plan: Option<RenderPlan> = None;
         // Samples every pixel has (completed passes); the current pass renders band `band` of
@@ -167,6 +175,8 @@ impl Session {
         let (mut band, mut bands, mut pass_s) = (0usize, 1usize, 0.0f64);
         let mut totals = Totals::default();
         loop {
+            // Cleared before the state is read: a change after this point stops the next band.
+            self.interrupt.store(false, Ordering::Relaxed);
             let st = {
                 let guard = self.state.lock().unwrap();
                 let done = |s: &ViewState| {
@@ -180,6 +190,7 @@ impl Session {
                 guard.clone()
             };
             let s = &st.settings;
+            let (width, height) = (s.image.width, s.image.height);
             let fresh = st.generation != shown;
             if fresh {
                 // The scene changes with the generation: the old plan (which reads it) goes first.
@@ -187,12 +198,11 @@ impl Session {
                 scene.camera = st.orbit.camera;
                 scene.set_environment(if st.environment { environment.clone() } else { Environment::None });
                 shown = st.generation;
-                acc = Accumulator::new(s.image.width, s.image.height);
-                (taken, band, pass_s, coarse) = (0, 0, 0.0, None);
+                (taken, band, pass_s) = (0, 0, 0.0);
                 totals = Totals::default();
                 // A coarse image at once: a quarter of the resolution, one sample, a one-off
                 // render with its own settings and camera.
-                let (w, h) = ((s.image.width / 4).max(1), (s.image.height / 4).max(1));
+                let (w, h) = ((width / 4).max(1), (height / 4).max(1));
                 let mut quick = s.clone();
                 quick.image.width = w;
                 quick.image.height = h;
@@ -206,58 +216,85 @@ impl Session {
                 // The plan of every pass: the full resolution's camera, all samples at once
                 // per pixel (no adaptive batches).
                 scene.camera = st.orbit.camera;
-                scene.camera.fit_to(s.image.width as f32, s.image.height as f32);
+                scene.camera.fit_to(width as f32, height as f32);
                 let mut full = s.clone();
                 full.sampling.adaptive = None;
                 full.sampling.sample_range = None;
                 let p = plan.insert(RenderPlan::new(&scene, &full));
+                let mut upscaled = None;
                 if let Ok(out) = quick_out {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
                     let estimate = quick_s.as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.sampling.spp) as f64;
-                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
+                    bands = ((estimate / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, height);
                     totals.add(&out.stats, quick_s);
                     seq += 1;
                     let info = Self::info(&st, p, bvh, &totals, 0, (w, h));
-                    coarse = Some(out.film.clone());
-                    self.publish(frame(seq, shown, out.film, 0, false, true, info));
+                    let f = frame(seq, shown, out.film, 0, false, true, info);
+                    upscaled = Some(f.film.clone());
+                    self.publish(f);
+                }
+                // After the coarse image is out: the full-resolution image, the coarse one
+                // scaled up where the first pass has not been.
+                film = Film::new(width, height);
+                if let Some(c) = upscaled {
+                    for (y, row) in film.pixels.chunks_exact_mut(width).enumerate() {
+                        let cy = (y * c.height / height).min(c.height - 1);
+                        for (x, px) in row.iter_mut().enumerate() {
+                            *px = c.get((x * c.width / width).min(c.width - 1), cy);
+                        }
+                    }
                 }
                 if s.paths.shading == Shading::Normals {
                     // Normals have no samples to accumulate: one full image and done.
                     if let Ok(out) = wavepath::render_plan(p, bvh, Extent::WHOLE, &|_| {}, &never) {
                         seq += 1;
-                        let info = Self::info(&st, p, bvh, &totals, s.sampling.spp, (s.image.width, s.image.height));
+                        let info = Self::info(&st, p, bvh, &totals, s.sampling.spp, (width, height));
                         self.publish(frame(seq, shown, out.film, s.sampling.spp, true, false, info));
                     }
                     taken = s.sampling.spp;
+                    canvas = None;
+                } else {
+                    // Allocated after the coarse image is out (its sums are tens of MB). Its
+                    // queues belong to this thread's rayon pool, where its bands run.
+                    match canvas.as_mut().filter(|c| (c.sums().width, c.sums().height) == (width, height)) {
+                        Some(c) => c.clear(),
+                        None => canvas = Some(Canvas::new(width, height)),
+                    }
                 }
                 continue;
             }
-            let Some(p) = plan.as_ref() else { continue };
+            let (Some(p), Some(c)) = (plan.as_ref(), canvas.as_mut()) else { continue };
             // One band of rows, the pass's samples for each of its pixels at once (as an
             // offline render takes them: a pixel's samples side by side in a wave trace
             // coherent rays; two samples per pixel over the whole image run 28% slower).
             let end = (taken + PASS_SAMPLES).min(s.sampling.spp);
-            let (y0, y1) = (band * s.image.height / bands, (band + 1) * s.image.height / bands);
-            let cell = wavepath::Cell { x: 0, y: y0, w: s.image.width, h: y1 - y0 };
+            let (y0, y1) = (band * height / bands, (band + 1) * height / bands);
+            let cell = wavepath::Cell { x: 0, y: y0, w: width, h: y1 - y0 };
             let extent = Extent { cell: Some(cell), samples: Some((taken, end)) };
             let t = Instant::now();
-            let Ok((sums, stats)) = wavepath::render_plan_sums(p, bvh, extent, &|_| {}, &never) else {
-                taken = s.sampling.spp;
-                continue;
+            let stats = match c.render(p, bvh, extent, &|_| {}, &self.interrupt) {
+                Ok(stats) => stats,
+                // A change stopped the band: the next turn starts its generation.
+                Err(_) if self.interrupt.load(Ordering::Relaxed) => continue,
+                Err(_) => {
+                    taken = s.sampling.spp;
+                    continue;
+                }
             };
             pass_s += t.elapsed().as_secs_f64();
             totals.add(&stats, t.elapsed());
-            let rows = y0 * s.image.width..y1 * s.image.width;
-            for (a, b) in acc.pixels[rows.clone()].iter_mut().zip(&sums.pixels[rows]) {
-                a.merge(b);
+            let sums = &c.sums().pixels;
+            let rows = y0 * width..y1 * width;
+            for (px, sum) in film.pixels[rows.clone()].iter_mut().zip(&sums[rows]) {
+                *px = sum.mean();
             }
             band += 1;
             if band == bands {
                 // The pass is complete: the next one's bands take about the target time each.
                 taken = end;
                 band = 0;
-                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, s.image.height);
+                bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, height);
                 pass_s = 0.0;
             }
             // A newer generation makes this frame stale: skip publishing it.
@@ -266,20 +303,8 @@ impl Session {
             }
             seq += 1;
             let converged = taken >= s.sampling.spp;
-            let info = Self::info(&st, p, bvh, &totals, taken, (s.image.width, s.image.height));
-            let mut film = acc.to_film();
-            if let Some(c) = coarse.as_ref().filter(|_| taken == 0) {
-                for (i, p) in film.pixels.iter_mut().enumerate() {
-                    if acc.pixels[i].taken == 0 {
-                        let (x, y) = (i % s.image.width, i / s.image.width);
-                        *p = c.get(
-                            (x * c.width / s.image.width).min(c.width - 1),
-                            (y * c.height / s.image.height).min(c.height - 1),
-                        );
-                    }
-                }
-            }
-            self.publish(frame(seq, shown, film, taken, converged, false, info));
+            let info = Self::info(&st, p, bvh, &totals, taken, (width, height));
+            self.publish(frame(seq, shown, film.clone(), taken, converged, false, info));
         }
     }
 
@@ -352,9 +377,9 @@ fn frame(
 }
 
 impl Frame {
-    /// JPEG while the image refines, PNG (lossless) once converged.
+    /// PNG: every frame is lossless.
     pub fn mime(&self) -> &'static str {
-        if self.converged { "image/png" } else { "image/jpeg" }
+        "image/png"
     }
 
     /// The encoded image. The first thread that asks (a client's) encodes it, never the
@@ -364,32 +389,29 @@ impl Frame {
     }
 }
 
-fn encode(film: &Film, lossless: bool) -> Vec<u8> {
+/// A PNG of `film`, sRGB. A frame's encoding takes a core from the render on a small
+/// machine, so refining frames are compressed fast: at 640x480 on 2 cores (loaded) fast
+/// PNG took 7.5 ms a frame where JPEG (quality 85) took 23 ms, for 290 KB instead of 60 KB
+/// (docs/decisions.md, "Interactive viewer"). The converged frame, sent once, is compressed
+/// as a saved image is.
+fn encode(film: &Film, last: bool) -> Vec<u8> {
+    use image::codecs::png::{CompressionType, FilterType, PngEncoder};
     let (w, h) = (film.width, film.height);
     // sRGB bytes from a table over [0, 1] in 4096 steps (a power per channel and pixel would
     // cost more than the encoding).
     let table: Vec<u8> = (0..=4096).map(|i| Tonemap::Srgb.byte(i as f32 / 4096.0)).collect();
     let byte = |l: f32| table[(l.clamp(0.0, 1.0) * 4096.0) as usize];
     let mut rgb = Vec::with_capacity(w * h * 3);
-    for y in (0..h).rev() {
-        for x in 0..w {
-            let p = film.get(x, y);
+    // The film's first row is the image's bottom one.
+    for row in film.pixels.chunks_exact(w.max(1)).rev() {
+        for p in row {
             rgb.extend([byte(p.x), byte(p.y), byte(p.z)]);
         }
     }
     let mut image = Vec::new();
-    let (w, h, rgb8) = (w as u32, h as u32, image::ExtendedColorType::Rgb8);
-    let _ = if lossless {
-        image::ImageEncoder::write_image(image::codecs::png::PngEncoder::new(&mut image), &rgb, w, h, rgb8)
-    } else {
-        image::ImageEncoder::write_image(
-            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut image, 85),
-            &rgb,
-            w,
-            h,
-            rgb8,
-        )
-    };
+    let compression = if last { CompressionType::Default } else { CompressionType::Fast };
+    let encoder = PngEncoder::new_with_quality(&mut image, compression, FilterType::Adaptive);
+    let _ = image::ImageEncoder::write_image(encoder, &rgb, w as u32, h as u32, image::ExtendedColorType::Rgb8);
     image
 }
 

@@ -108,6 +108,15 @@ impl Accumulator {
     pub fn invalid_samples(&self) -> u64 {
         self.pixels.iter().map(|p| (p.taken - p.valid) as u64).sum()
     }
+
+    /// [`invalid_samples`](Self::invalid_samples) of the pixels in `region` alone.
+    pub fn invalid_samples_in(&self, region: crate::settings::Cell) -> u64 {
+        let r = region;
+        (r.y..r.y + r.h)
+            .flat_map(|y| &self.pixels[y * self.width + r.x..y * self.width + r.x + r.w])
+            .map(|p| (p.taken - p.valid) as u64)
+            .sum()
+    }
 }
 
 #[cfg(test)]

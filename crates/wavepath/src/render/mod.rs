@@ -5,10 +5,10 @@ mod normals;
 pub use normals::render_normals;
 
 use crate::accel::Intersector;
-use crate::film::{Accumulator, Film};
+use crate::film::{Accumulator, Film, PixelSums};
 use crate::integrator::plan::{Extent, RenderPlan};
 use crate::integrator::recursive::render_recursive_until;
-use crate::integrator::wavefront::render_wavefront_until;
+use crate::integrator::wavefront::{WaveWorkers, render_wavefront_into, render_wavefront_until};
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, Settings, Shading};
 use crate::stats::RenderStats;
@@ -120,6 +120,81 @@ fn transport(
         IntegratorKind::Recursive => render_recursive_until(plan.transport(), settings, accel, progress, stop),
     };
     done.ok_or_else(|| anyhow::anyhow!(INTERRUPTED))
+}
+
+/// The sums of one image that many renders of extents of one plan add into, and the worker
+/// threads' queues they share: the viewer renders a band of rows after another without a
+/// whole image's sums and a set of queues allocated per band (each costs page faults of its
+/// own), and its threads keep their caches warm from band to band. A pixel's sums are those
+/// of one render of all its extents.
+pub struct Canvas {
+    sums: Accumulator,
+    workers: WaveWorkers,
+}
+
+impl Canvas {
+    /// Zero sums for a `width x height` image; queues for the threads of the current rayon
+    /// pool (render on the same pool).
+    pub fn new(width: usize, height: usize) -> Canvas {
+        Canvas { sums: Accumulator::new(width, height), workers: WaveWorkers::for_current_pool() }
+    }
+
+    /// The sums added so far.
+    pub fn sums(&self) -> &Accumulator {
+        &self.sums
+    }
+
+    /// Back to zero sums, keeping the memory and the queues (a new view of the same size).
+    pub fn clear(&mut self) {
+        self.sums.pixels.fill(PixelSums::default());
+    }
+
+    /// Renders `extent` of `plan` (an image of the canvas's size) into the sums; stopped as
+    /// [`render_until`] (a stopped render has added part of its extent). The statistics'
+    /// samples per pixel and invalid samples are the canvas's in the extent's region.
+    pub fn render(
+        &mut self,
+        plan: &RenderPlan,
+        accel: &dyn Intersector,
+        extent: Extent,
+        progress: &(dyn Fn(u64) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<RenderStats> {
+        let s = plan.settings_in(extent);
+        if s.paths.shading == Shading::Normals {
+            anyhow::bail!("normals shading keeps no per-pixel sums");
+        }
+        if (s.image.width, s.image.height) != (self.sums.width, self.sums.height) {
+            anyhow::bail!(
+                "a {}x{} render cannot add into a {}x{} canvas",
+                s.image.width,
+                s.image.height,
+                self.sums.width,
+                self.sums.height
+            );
+        }
+        let done = match s.execution.integrator {
+            IntegratorKind::Wavefront => {
+                let (t, e, l) = (plan.transport(), plan.effects(), plan.lanes());
+                render_wavefront_into(t, e, l, &s, accel, progress, stop, &self.workers, &mut self.sums)
+            }
+            IntegratorKind::Recursive => {
+                render_recursive_until(plan.transport(), &s, accel, progress, stop).map(|(acc, mut stats)| {
+                    let r = s.region();
+                    for y in r.y..r.y + r.h {
+                        let row = y * acc.width + r.x..y * acc.width + r.x + r.w;
+                        for (a, b) in self.sums.pixels[row.clone()].iter_mut().zip(&acc.pixels[row]) {
+                            a.merge(b);
+                        }
+                    }
+                    stats.invalid_samples = self.sums.invalid_samples_in(r);
+                    stats.samples_per_pixel = self.sums.samples_taken_in(r);
+                    stats
+                })
+            }
+        };
+        done.ok_or_else(|| anyhow::anyhow!(INTERRUPTED))
+    }
 }
 
 /// Runs `f` on a rayon pool with `threads` workers (0 = all cores).

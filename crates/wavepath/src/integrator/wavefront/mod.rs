@@ -186,6 +186,17 @@ struct RenderJob<'a, 's> {
     stop: &'a AtomicBool,
 }
 
+/// Each worker thread's queues, kept by a caller that renders many extents of one plan (the
+/// viewer's bands) so that no render allocates them again.
+pub struct WaveWorkers(Workers<WaveQueues>);
+
+impl WaveWorkers {
+    /// One set of queues per thread of the current rayon pool, allocated by the first wave.
+    pub fn for_current_pool() -> Self {
+        WaveWorkers(Workers::for_current_pool())
+    }
+}
+
 /// Renders with the wavefront integrator: the image part `settings` covers (its cell and
 /// sample range), with the transport, effects and lane kernels of its render plan
 /// ([`RenderPlan`](crate::integrator::plan::RenderPlan)); `progress` is told how many
@@ -200,9 +211,32 @@ pub fn render_wavefront_until(
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Option<(Accumulator, RenderStats)> {
+    let mut acc = Accumulator::new(settings.image.width, settings.image.height);
+    let workers = WaveWorkers::for_current_pool();
+    let stats = render_wavefront_into(transport, effects, lanes, settings, accel, progress, stop, &workers, &mut acc)?;
+    Some((acc, stats))
+}
+
+/// As [`render_wavefront_until`], adding each pixel's sums of this render into `acc` (an
+/// image of the settings' size) with the queues of `workers`. A stopped render (`None`) has
+/// added some of its waves. The statistics' samples per pixel and invalid samples are
+/// `acc`'s in the settings' region, earlier renders' included.
+#[allow(clippy::too_many_arguments)]
+pub fn render_wavefront_into(
+    transport: &Transport,
+    effects: &Effects,
+    lanes: Lanes,
+    settings: &Settings,
+    accel: &dyn Intersector,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+    workers: &WaveWorkers,
+    acc: &mut Accumulator,
+) -> Option<RenderStats> {
+    debug_assert_eq!((acc.width, acc.height), (settings.image.width, settings.image.height));
     let job = RenderJob { transport, accel, settings, effects, lanes, progress, stop };
     with_kernel!(
-        render_frames(&job),
+        render_frames(&job, &workers.0, acc),
         [
             effects.emission,
             effects.environment,
@@ -214,12 +248,15 @@ pub fn render_wavefront_until(
     )
 }
 
-fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderStats)> {
+fn render_frames<F: Features>(
+    job: &RenderJob,
+    workers: &Workers<WaveQueues>,
+    acc: &mut Accumulator,
+) -> Option<RenderStats> {
     let start = Instant::now();
     let s = job.settings;
-    let (w, h) = (s.image.width, s.image.height);
+    let w = s.image.width;
     let region = s.region();
-    let mut acc = Accumulator::new(w, h);
     let mut total = WaveStats::default();
     let mut active: Vec<u32> = (region.y..region.y + region.h)
         .flat_map(|y| (region.x..region.x + region.w).map(move |x| (y * w + x) as u32))
@@ -230,7 +267,6 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         None if job.effects.adaptive => Some((FORCED_ADAPTIVE_BATCH, f32::NEG_INFINITY)),
         None => None,
     };
-    let workers = Workers::<WaveQueues>::for_current_pool();
     let (first, end) = s.sample_span();
     let mut n = first;
     while n < end && !active.is_empty() {
@@ -272,9 +308,9 @@ fn render_frames<F: Features>(job: &RenderJob) -> Option<(Accumulator, RenderSta
         ..RenderStats::default()
     };
     stats.render_s = start.elapsed().as_secs_f64();
-    stats.invalid_samples = acc.invalid_samples();
-    stats.samples_per_pixel = acc.samples_taken_in(s.region());
-    Some((acc, stats))
+    stats.invalid_samples = acc.invalid_samples_in(region);
+    stats.samples_per_pixel = acc.samples_taken_in(region);
+    Some(stats)
 }
 
 /// A frame's waves: each wave's pixels and the window of the image's sums from its first

@@ -2,10 +2,10 @@
 //! the extents' sums are the whole render's.
 
 use crate::integrator::plan::{Extent, RenderPlan};
-use crate::render::{render_plan, render_plan_sums, render_sums};
+use crate::render::{Canvas, INTERRUPTED, render_plan, render_plan_sums, render_sums};
 use crate::settings::{Cell, IntegratorKind, Settings};
 use crate::tests::common::render;
-use std::sync::atomic::AtomicBool;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 const W: usize = 23;
 const H: usize = 17;
@@ -122,4 +122,46 @@ fn the_plan_leaves_the_extent_out() {
     for (i, p) in part.pixels.iter().enumerate() {
         assert_eq!(p.taken, if inside(i) { 2 } else { 0 }, "pixel {i}");
     }
+}
+
+/// A canvas that renders extents one after another (the viewer's passes of sample ranges,
+/// each cut into cells) holds, bit for bit, the separate renders of those extents merged in
+/// the same order: keeping the sums and the worker queues from one extent to the next changes
+/// nothing. Its statistics count the canvas's samples; a stopped render says so, and a
+/// render of another image size is refused.
+#[test]
+fn a_canvas_holds_its_extents_merged_in_order() {
+    let never = AtomicBool::new(false);
+    for (name, scene, s) in cases() {
+        let (accel, _) = crate::accel::build(&scene, &s);
+        let plan = RenderPlan::new(&scene, &s);
+        let mut canvas = Canvas::new(W, H);
+        let mut merged = crate::film::Accumulator::new(W, H);
+        for range in [(0, 2), (2, 5), (5, 6)] {
+            for cell in cells() {
+                let extent = Extent { cell: Some(cell), samples: Some(range) };
+                let stats = canvas.render(&plan, accel.as_ref(), extent, &|_| {}, &never).unwrap();
+                assert_eq!(stats.samples_per_pixel, vec![range.1; cell.w * cell.h], "{name} {range:?} {cell:?}");
+                let (sums, _) = render_plan_sums(&plan, accel.as_ref(), extent, &|_| {}, &never).unwrap();
+                for (m, p) in merged.pixels.iter_mut().zip(&sums.pixels) {
+                    m.merge(p);
+                }
+            }
+        }
+        assert_eq!(canvas.sums().pixels, merged.pixels, "{name} {:?}", s.execution.integrator);
+        assert!(canvas.sums().pixels.iter().all(|p| p.taken == 6), "{name}");
+        assert!(canvas.sums().pixels.iter().filter(|p| p.sum.max_element() > 0.0).count() > W * H / 4, "{name}");
+        canvas.clear();
+        assert!(canvas.sums().pixels.iter().all(|p| *p == crate::film::PixelSums::default()), "{name}");
+    }
+    let scene = crate::load::default_scene();
+    let s = render::small_settings(W, H, 2, 3);
+    let (accel, _) = crate::accel::build(&scene, &s);
+    let plan = RenderPlan::new(&scene, &s);
+    let stop = AtomicBool::new(false);
+    stop.store(true, Ordering::Relaxed);
+    let err = Canvas::new(W, H).render(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &stop).unwrap_err();
+    assert_eq!(err.to_string(), INTERRUPTED);
+    let err = Canvas::new(W + 1, H).render(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &never).unwrap_err();
+    assert!(err.to_string().contains("canvas"), "{err}");
 }
