@@ -45,7 +45,7 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     }
     let session = viewer.session.clone();
     ctrlc::set_handler(move || session.stop())?;
-    wavepath::with_threads(s.execution.threads, || viewer.run(scene, &bvh, &opts))?;
+    viewer.run(scene, &bvh, &opts, s.execution.threads)?;
     eprintln!("[wavepath view] stopped");
     // The render thread has been joined. Connections whose clients stopped reading may still
     // block their writers (and the server's drop on them): the process ends without waiting.

@@ -7,6 +7,7 @@ pub mod command;
 pub mod controls;
 pub mod options;
 pub mod orbit;
+pub mod pacing;
 pub mod server;
 pub mod session;
 

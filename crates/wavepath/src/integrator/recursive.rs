@@ -103,22 +103,32 @@ impl PathTracer<'_, '_> {
     }
 }
 
-/// Renders with the recursive reference: the image part `settings` covers (its cell and
-/// sample range) with `transport` (its render plan's); `progress` is told how many samples
-/// finished. Gives up (`None`) once `stop` is set: rows not yet started are skipped, so the
-/// caller waits at most one row per thread.
-pub fn render_recursive_until(
+/// Whether a pixel's earlier sums and this render's, together, meet the adaptive tolerance.
+fn all_converged(mut before: PixelSums, sums: &PixelSums, tol: f32) -> bool {
+    before.merge(sums);
+    before.converged(tol)
+}
+
+/// Renders with the recursive reference the image part `settings` covers (its cell and
+/// sample range) with `transport` (its render plan's), adding each pixel's sums into `acc`
+/// (an image of the settings' size; adaptive sampling judges a pixel by all its sums, earlier
+/// renders' included); `progress` is told how many samples finished. Gives up (`None`) once
+/// `stop` is set: rows not yet started are skipped, so the caller waits at most one row per
+/// thread. The statistics' samples per pixel and invalid samples are `acc`'s in the
+/// settings' region.
+pub fn render_recursive_into(
     transport: &Transport,
     settings: &Settings,
     accel: &dyn Intersector,
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
-) -> Option<(Accumulator, RenderStats)> {
+    acc: &mut Accumulator,
+) -> Option<RenderStats> {
     let start = Instant::now();
     let (w, h) = (settings.image.width, settings.image.height);
+    debug_assert_eq!((acc.width, acc.height), (w, h));
     let region = settings.region();
     let spp = settings.sampling.spp.max(1);
-    let mut acc = Accumulator::new(w, h);
     let rows: Vec<RowStats> = acc
         .pixels
         .par_chunks_mut(w)
@@ -131,13 +141,16 @@ pub fn render_recursive_until(
             }
             for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
                 let pixel = (y * w + x) as u32;
+                // This render's sums, merged into the earlier ones at the end (as separate
+                // renders' sums are merged); the adaptive test judges all of them.
+                let before = *out;
                 let mut sums = PixelSums::default();
                 let (first, end) = settings.sample_span();
                 for i in first..end {
                     if let Some((b, tol)) = settings.sampling.adaptive
                         && i > first
                         && i.is_multiple_of(b)
-                        && sums.converged(tol)
+                        && all_converged(before, &sums, tol)
                     {
                         break;
                     }
@@ -148,7 +161,7 @@ pub fn render_recursive_until(
                     sums.add(l);
                 }
                 progress(sums.taken as u64);
-                *out = sums;
+                out.merge(&sums);
             }
             st
         })
@@ -164,7 +177,7 @@ pub fn render_recursive_until(
         stats.shadow_rays += r.shadow;
     }
     stats.render_s = start.elapsed().as_secs_f64();
-    stats.invalid_samples = acc.invalid_samples();
-    stats.samples_per_pixel = acc.samples_taken_in(settings.region());
-    Some((acc, stats))
+    stats.invalid_samples = acc.invalid_samples_in(region);
+    stats.samples_per_pixel = acc.samples_taken_in(region);
+    Some(stats)
 }

@@ -7,8 +7,8 @@ pub use normals::render_normals;
 use crate::accel::Intersector;
 use crate::film::{Accumulator, Film, PixelSums};
 use crate::integrator::plan::{Extent, RenderPlan};
-use crate::integrator::recursive::render_recursive_until;
-use crate::integrator::wavefront::{WaveWorkers, render_wavefront_into, render_wavefront_until};
+use crate::integrator::recursive::render_recursive_into;
+use crate::integrator::wavefront::{RenderJob, WaveWorkers, render_wavefront_into};
 use crate::scene::Scene;
 use crate::settings::{IntegratorKind, Settings, Shading};
 use crate::stats::RenderStats;
@@ -99,13 +99,21 @@ pub fn render_plan_sums(
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Result<(Accumulator, RenderStats)> {
-    if plan.settings().paths.shading == Shading::Normals {
-        anyhow::bail!("normals shading keeps no per-pixel sums");
-    }
-    transport(plan, &plan.settings_in(extent), accel, progress, stop)
+    transport(plan, &sums_settings(plan, extent)?, accel, progress, stop)
 }
 
-/// Light transport of the part `settings` covers with the integrator it asks for.
+/// The settings of `extent` of `plan` for a render that keeps per-pixel sums: light
+/// transport only, since normals shading keeps none.
+fn sums_settings(plan: &RenderPlan, extent: Extent) -> Result<Settings> {
+    let s = plan.settings_in(extent);
+    if s.paths.shading == Shading::Normals {
+        anyhow::bail!("normals shading keeps no per-pixel sums");
+    }
+    Ok(s)
+}
+
+/// Light transport of the part `settings` covers with the integrator it asks for, into a
+/// canvas of its own.
 fn transport(
     plan: &RenderPlan,
     settings: &Settings,
@@ -113,13 +121,9 @@ fn transport(
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Result<(Accumulator, RenderStats)> {
-    let done = match settings.execution.integrator {
-        IntegratorKind::Wavefront => {
-            render_wavefront_until(plan.transport(), plan.effects(), plan.lanes(), settings, accel, progress, stop)
-        }
-        IntegratorKind::Recursive => render_recursive_until(plan.transport(), settings, accel, progress, stop),
-    };
-    done.ok_or_else(|| anyhow::anyhow!(INTERRUPTED))
+    let mut canvas = Canvas::new(settings.image.width, settings.image.height);
+    let stats = canvas.add(plan, settings, accel, progress, stop)?;
+    Ok((canvas.sums, stats))
 }
 
 /// The sums of one image that many renders of extents of one plan add into, and the worker
@@ -160,10 +164,7 @@ impl Canvas {
         progress: &(dyn Fn(u64) + Sync),
         stop: &AtomicBool,
     ) -> Result<RenderStats> {
-        let s = plan.settings_in(extent);
-        if s.paths.shading == Shading::Normals {
-            anyhow::bail!("normals shading keeps no per-pixel sums");
-        }
+        let s = sums_settings(plan, extent)?;
         if (s.image.width, s.image.height) != (self.sums.width, self.sums.height) {
             anyhow::bail!(
                 "a {}x{} render cannot add into a {}x{} canvas",
@@ -173,24 +174,27 @@ impl Canvas {
                 self.sums.height
             );
         }
-        let done = match s.execution.integrator {
+        self.add(plan, &s, accel, progress, stop)
+    }
+
+    /// Light transport of the part `settings` (an image of the canvas's size) covers, added
+    /// into the sums by the integrator the settings ask for.
+    fn add(
+        &mut self,
+        plan: &RenderPlan,
+        settings: &Settings,
+        accel: &dyn Intersector,
+        progress: &(dyn Fn(u64) + Sync),
+        stop: &AtomicBool,
+    ) -> Result<RenderStats> {
+        let done = match settings.execution.integrator {
             IntegratorKind::Wavefront => {
-                let (t, e, l) = (plan.transport(), plan.effects(), plan.lanes());
-                render_wavefront_into(t, e, l, &s, accel, progress, stop, &self.workers, &mut self.sums)
+                let (transport, effects, lanes) = (plan.transport(), plan.effects(), plan.lanes());
+                let job = RenderJob { transport, effects, lanes, settings, accel, progress, stop };
+                render_wavefront_into(&job, &self.workers, &mut self.sums)
             }
             IntegratorKind::Recursive => {
-                render_recursive_until(plan.transport(), &s, accel, progress, stop).map(|(acc, mut stats)| {
-                    let r = s.region();
-                    for y in r.y..r.y + r.h {
-                        let row = y * acc.width + r.x..y * acc.width + r.x + r.w;
-                        for (a, b) in self.sums.pixels[row.clone()].iter_mut().zip(&acc.pixels[row]) {
-                            a.merge(b);
-                        }
-                    }
-                    stats.invalid_samples = self.sums.invalid_samples_in(r);
-                    stats.samples_per_pixel = self.sums.samples_taken_in(r);
-                    stats
-                })
+                render_recursive_into(plan.transport(), settings, accel, progress, stop, &mut self.sums)
             }
         };
         done.ok_or_else(|| anyhow::anyhow!(INTERRUPTED))

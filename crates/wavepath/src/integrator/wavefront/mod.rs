@@ -175,15 +175,18 @@ impl WaveStats {
     }
 }
 
-/// Everything the waves of one render share.
-struct RenderJob<'a, 's> {
-    transport: &'a Transport<'s>,
-    accel: &'a dyn Intersector,
-    settings: &'a Settings,
-    effects: &'a Effects,
-    lanes: Lanes,
-    progress: &'a (dyn Fn(u64) + Sync),
-    stop: &'a AtomicBool,
+/// Everything the waves of one render share: the parts of its render plan
+/// ([`RenderPlan`](crate::integrator::plan::RenderPlan)) a wave reads, the settings of the
+/// image part it renders (its cell and sample range), the scene's tree, and where it reports
+/// progress (`progress` is told how many samples finished) and learns it must stop.
+pub struct RenderJob<'a, 's> {
+    pub transport: &'a Transport<'s>,
+    pub effects: &'a Effects,
+    pub lanes: Lanes,
+    pub settings: &'a Settings,
+    pub accel: &'a dyn Intersector,
+    pub progress: &'a (dyn Fn(u64) + Sync),
+    pub stop: &'a AtomicBool,
 }
 
 /// Each worker thread's queues, kept by a caller that renders many extents of one plan (the
@@ -197,54 +200,18 @@ impl WaveWorkers {
     }
 }
 
-/// Renders with the wavefront integrator: the image part `settings` covers (its cell and
-/// sample range), with the transport, effects and lane kernels of its render plan
-/// ([`RenderPlan`](crate::integrator::plan::RenderPlan)); `progress` is told how many
-/// samples finished. Gives up (`None`) once `stop` is set: no new wave starts, so a caller
-/// that wants the render to end (Ctrl-C) waits at most one wave per thread.
-pub fn render_wavefront_until(
-    transport: &Transport,
-    effects: &Effects,
-    lanes: Lanes,
-    settings: &Settings,
-    accel: &dyn Intersector,
-    progress: &(dyn Fn(u64) + Sync),
-    stop: &AtomicBool,
-) -> Option<(Accumulator, RenderStats)> {
-    let mut acc = Accumulator::new(settings.image.width, settings.image.height);
-    let workers = WaveWorkers::for_current_pool();
-    let stats = render_wavefront_into(transport, effects, lanes, settings, accel, progress, stop, &workers, &mut acc)?;
-    Some((acc, stats))
-}
-
-/// As [`render_wavefront_until`], adding each pixel's sums of this render into `acc` (an
-/// image of the settings' size) with the queues of `workers`. A stopped render (`None`) has
-/// added some of its waves. The statistics' samples per pixel and invalid samples are
-/// `acc`'s in the settings' region, earlier renders' included.
-#[allow(clippy::too_many_arguments)]
-pub fn render_wavefront_into(
-    transport: &Transport,
-    effects: &Effects,
-    lanes: Lanes,
-    settings: &Settings,
-    accel: &dyn Intersector,
-    progress: &(dyn Fn(u64) + Sync),
-    stop: &AtomicBool,
-    workers: &WaveWorkers,
-    acc: &mut Accumulator,
-) -> Option<RenderStats> {
-    debug_assert_eq!((acc.width, acc.height), (settings.image.width, settings.image.height));
-    let job = RenderJob { transport, accel, settings, effects, lanes, progress, stop };
+/// Renders `job` with the wavefront integrator, adding each pixel's sums into `acc` (an
+/// image of the job's settings' size) with the queues of `workers`. Gives up (`None`) once
+/// the job's stop flag is set: no new wave starts, so a caller that wants the render to end
+/// (Ctrl-C) waits at most one wave per thread, and the waves already done stay added. The
+/// statistics' samples per pixel and invalid samples are `acc`'s in the settings' region,
+/// earlier renders' included.
+pub fn render_wavefront_into(job: &RenderJob, workers: &WaveWorkers, acc: &mut Accumulator) -> Option<RenderStats> {
+    debug_assert_eq!((acc.width, acc.height), (job.settings.image.width, job.settings.image.height));
+    let e = job.effects;
     with_kernel!(
-        render_frames(&job, &workers.0, acc),
-        [
-            effects.emission,
-            effects.environment,
-            effects.direct,
-            effects.indirect,
-            effects.russian_roulette,
-            effects.non_diffuse
-        ]
+        render_frames(job, &workers.0, acc),
+        [e.emission, e.environment, e.direct, e.indirect, e.russian_roulette, e.non_diffuse]
     )
 }
 
