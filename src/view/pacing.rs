@@ -1,20 +1,21 @@
-//! How often a frame stream sends an image that only refines the one it sent before.
+//! How often the viewer publishes a frame that only refines the one it published before.
 //!
-//! A stream encodes its frames (a PNG of the whole image) on its own thread, beside the
-//! render's workers: on a 2-core machine, a frame after every band of about 80 ms took close
-//! to a tenth of a core from the render. While a view refines, a stream therefore sends a
-//! frame at most every [`REFINE_GAP`], always the latest one; the first image of a new view (a
-//! camera move, a settings change) and the final image go out at once.
+//! Every frame costs the render thread a copy of the image and its figures, and the frame
+//! streams an encoding (a PNG of the whole image) on their threads, beside the render's
+//! workers: on a 2-core machine, a frame after every band of about 55 ms took close to a
+//! tenth of a core from the render. While a view refines, a frame is therefore published at
+//! most every [`REFINE_GAP`] (the bands between add their rows to the next one); the first
+//! image of a new view (a camera move, a settings change) and the final image go out at once.
 
 use std::time::{Duration, Instant};
 
 /// The shortest time between two frames of one view while it refines.
 pub const REFINE_GAP: Duration = Duration::from_millis(250);
 
-/// How long a stream whose last frame showed generation `sent.0` at `sent.1` holds a frame
-/// of `generation` (`converged`: the final image) back at `now`: zero when it may go.
-pub fn hold(sent: Option<(u64, Instant)>, generation: u64, converged: bool, now: Instant) -> Duration {
-    match sent {
+/// How long a frame of `generation` (`converged`: the final image) waits at `now` when the
+/// last one published showed generation `published.0` at `published.1`: zero when it may go.
+pub fn hold(published: Option<(u64, Instant)>, generation: u64, converged: bool, now: Instant) -> Duration {
+    match published {
         Some((g, at)) if g == generation && !converged => (at + REFINE_GAP).saturating_duration_since(now),
         _ => Duration::ZERO,
     }

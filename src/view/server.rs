@@ -4,7 +4,6 @@
 
 use super::controls::parse_query;
 use super::options::ViewOptions;
-use super::pacing;
 use super::session::{Frame, Session};
 use anyhow::{Context, Result};
 use base64::Engine;
@@ -12,7 +11,7 @@ use std::io::Write;
 use std::net::SocketAddr;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use tiny_http::{Header, Method, Request, Response, Server};
 use wavepath::Bvh;
 use wavepath::Scene;
@@ -197,32 +196,17 @@ fn encode_file(f: &Frame, ext: &str) -> Result<Vec<u8>> {
 /// (a buffering writer would hold an event's end back until the next one): each new frame as
 /// one server-sent event, a comment every 5 s without one (so a closed client is noticed),
 /// the end when the viewer stops. It always sends the latest frame: a slow client skips
-/// frames, it never queues them; while a view refines, frames go at most every
-/// [`REFINE_GAP`](pacing::REFINE_GAP) ([`pacing`]).
+/// frames, it never queues them.
 fn stream_frames(mut w: Box<dyn Write + Send>, session: &Session) -> std::io::Result<()> {
     w.write_all(
         b"HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\nConnection: close\r\n\r\n",
     )?;
     w.flush()?;
     let mut last = 0;
-    let mut sent = None;
     while !session.stopped() {
         match session.frame_after(last, Duration::from_secs(5)) {
-            Some(mut f) => {
-                // Held back, a frame gives way to newer ones; a new view or the final image
-                // ends the wait.
-                loop {
-                    let hold = pacing::hold(sent, f.generation, f.converged, Instant::now());
-                    if hold.is_zero() {
-                        break;
-                    }
-                    match session.frame_after(f.seq, hold) {
-                        Some(newer) => f = newer,
-                        None => break,
-                    }
-                }
+            Some(f) => {
                 last = f.seq;
-                sent = Some((f.generation, Instant::now()));
                 write!(w, "event: frame\ndata: {}\n\n", frame_json(&f, true))?;
             }
             None => w.write_all(b": waiting\n\n")?,

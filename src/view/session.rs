@@ -5,11 +5,12 @@
 //! by band, 16 samples per pixel per pass (sample indices 0, 1, 2, ... of the offline render,
 //! so the converged image is the offline one) until the samples-per-pixel cap. Every band of
 //! a generation adds into one [`Canvas`] (one set of sums, worker queues kept from band to
-//! band). Frames are published as the latest one only: a slow client skips frames, it never
-//! queues them.
+//! band). Frames are published as the latest one only, while a view refines at most every
+//! [`REFINE_GAP`](pacing::REFINE_GAP): a slow client skips frames, it never queues them.
 
 use super::controls::Change;
 use super::orbit::Orbit;
+use super::pacing;
 use glam::Vec3;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex, OnceLock};
@@ -174,6 +175,8 @@ impl Session {
         let mut taken = 0u32;
         let (mut band, mut bands, mut pass_s) = (0usize, 1usize, 0.0f64);
         let mut totals = Totals::default();
+        // The generation and time of the last frame published.
+        let mut published = None;
         loop {
             // Cleared before the state is read: a change after this point stops the next band.
             self.interrupt.store(false, Ordering::Relaxed);
@@ -233,6 +236,7 @@ impl Session {
                     let f = frame(seq, shown, out.film, 0, false, true, info);
                     upscaled = Some(f.film.clone());
                     self.publish(f);
+                    published = Some((shown, Instant::now()));
                 }
                 // After the coarse image is out: the full-resolution image, the coarse one
                 // scaled up where the first pass has not been.
@@ -297,14 +301,18 @@ impl Session {
                 bands = ((pass_s / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, height);
                 pass_s = 0.0;
             }
-            // A newer generation makes this frame stale: skip publishing it.
-            if self.state.lock().unwrap().generation != shown {
+            // A refining frame waits for its turn ([`pacing`]; the band's rows stay in `film`
+            // for the next one), and a newer generation makes it stale: skip publishing it.
+            let converged = taken >= s.sampling.spp;
+            if !pacing::hold(published, shown, converged, Instant::now()).is_zero()
+                || self.state.lock().unwrap().generation != shown
+            {
                 continue;
             }
             seq += 1;
-            let converged = taken >= s.sampling.spp;
             let info = Self::info(&st, p, bvh, &totals, taken, (width, height));
             self.publish(frame(seq, shown, film.clone(), taken, converged, false, info));
+            published = Some((shown, Instant::now()));
         }
     }
 
