@@ -274,6 +274,10 @@ pub struct DumpArgs {
     /// Seed of the diffuse directions.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Camera settings file (the CS184 camera dump format), as the renderer's `-c`: the rays
+    /// a render from that view traces.
+    #[arg(short = 'c', value_name = "FILE")]
+    pub camera_file: Option<PathBuf>,
 }
 
 #[derive(Args, Debug, Clone)]

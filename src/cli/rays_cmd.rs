@@ -15,7 +15,10 @@ pub fn run_dump(args: &DumpArgs) -> Result<()> {
         Some([w, h]) if *w > 0 && *h > 0 => (*w as usize, *h as usize),
         Some(_) => bail!("{}: -r needs a width and a height above 0", args.scene.display()),
     };
-    let scene = super::load_scene(&args.scene, &LoadOptions::default())?;
+    let mut scene = super::load_scene(&args.scene, &LoadOptions::default())?;
+    if let Some(c) = &args.camera_file {
+        scene.camera = wavepath::read_camera_file(c)?;
+    }
     let primary = primary_rays(&scene, w, h);
     let rays = match args.kind.as_str() {
         "primary" => primary,

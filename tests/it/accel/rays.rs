@@ -159,3 +159,34 @@ fn cli_dump_and_trace_a_mesh() {
     assert!((json["checksum"].as_f64().unwrap() - sum).abs() <= 1e-6 * sum.max(1.0));
     assert!(n > 0);
 }
+
+/// `rays dump -c` traces from the camera file's view (the harness scenes' cameras): every
+/// primary ray leaves the file's eye point, and the middle pixel's looks at its target.
+#[test]
+fn cli_dump_from_a_camera_file() {
+    let dir = temp_dir("rays-camera");
+    let cam = dir.join("camera.txt");
+    // The CS184 dump: hfov vfov aspect near far / eye target / phi theta r min max / c2w /
+    // screen w h distance / focal distance, lens radius.
+    let eye_target = "0.25 1.0 3.9 0.25 1.0 2.9";
+    std::fs::write(
+        &cam,
+        format!("39.32 30.0 1.3333334 0.01 100.0\n{eye_target}\n1.5707964 0.0 1 0 1e30\n1 0 0 0 1 0 0 0 1\n320 240 447.8\n4.7 0\n"),
+    )
+    .unwrap();
+    let rays = dir.join("primary.bin");
+    let st = Command::new(common::wavepath_bin())
+        .args(["rays", "dump", "--kind", "primary", "-r", "33", "25", "-c"])
+        .arg(&cam)
+        .arg(common::repo_root().join("scenes/cornell_mesh.obj"))
+        .arg("--out")
+        .arg(&rays)
+        .status()
+        .unwrap();
+    assert!(st.success());
+    let r = read_rays(&rays).unwrap();
+    assert_eq!(r.len(), 33 * 25);
+    assert!(r.iter().all(|r| r.origin == Vec3::new(0.25, 1.0, 3.9)), "{:?}", r[0]);
+    let mid = r[12 * 33 + 16].dir.normalize();
+    assert!(mid.dot(Vec3::NEG_Z) > 0.9999, "{mid}");
+}

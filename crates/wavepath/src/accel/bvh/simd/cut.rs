@@ -78,6 +78,11 @@ impl<K: BoxTest> BoxTest for Cut<'_, K> {
     fn tri_filter(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32, lanes: u32) -> u32 {
         self.k.tri_filter(blk, sr, tmin, end, lanes)
     }
+
+    #[inline(always)]
+    fn tri_hits(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, end: f32) -> Option<TriRays> {
+        self.k.tri_hits(blk, sr, tmin, tmax, end)
+    }
 }
 
 impl<K: PacketTest> PacketTest for Cut<'_, K> {
@@ -99,6 +104,11 @@ impl<K: PacketTest> PacketTest for Cut<'_, K> {
     #[inline(always)]
     fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32, lanes: u32) -> u32 {
         self.k.tri_filter_lane(blk, p, k, ray, end, lanes)
+    }
+
+    #[inline(always)]
+    fn tri_hits_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, tmax: f32, end: f32) -> Option<TriRays> {
+        self.k.tri_hits_lane(blk, p, k, ray, tmax, end)
     }
 
     #[inline(always)]

@@ -221,6 +221,16 @@ pub trait BoxTest: Copy {
         let _ = (blk, sr, tmin, end);
         lanes
     }
+
+    /// The whole watertight test of the four triangles of `blk` for one ray (set-up `sr`, range
+    /// `[tmin, tmax]`, `end` = `range_end(tmax)`), one triangle per lane: see [`TriRays`] (bit
+    /// `l` is triangle `l` here; padding and sphere lanes are the caller's to mask). None where
+    /// the instruction set has no such kernel: the caller filters, then tests lane by lane.
+    #[inline(always)]
+    fn tri_hits(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, end: f32) -> Option<TriRays> {
+        let _ = (blk, sr, tmin, tmax, end);
+        None
+    }
 }
 
 /// The packet kernels of an instruction set, beside its single-ray [`BoxTest`] (the scalar
@@ -253,6 +263,13 @@ pub trait PacketTest: BoxTest {
     #[inline(always)]
     fn tri_filter_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32, lanes: u32) -> u32 {
         self.tri_filter(blk, &p.sheared(k, ray), ray.tmin, end, lanes)
+    }
+
+    /// [`BoxTest::tri_hits`] for lane `k` of `p` (ray `ray`), with the closest hit so far at
+    /// `tmax` and `end` = `range_end(tmax)`; the SIMD paths start from the set-up's values.
+    #[inline(always)]
+    fn tri_hits_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, tmax: f32, end: f32) -> Option<TriRays> {
+        self.tri_hits(blk, &p.sheared(k, ray), ray.tmin, tmax, end)
     }
 
     /// The rays of `p` (bit `k`: lane `k`, live, direction octant `oct`, closest hit so far

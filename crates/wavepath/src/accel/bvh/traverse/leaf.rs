@@ -81,8 +81,29 @@ impl<K: BoxTest> Tracer<'_, K> {
     /// Offers `best` the hits closer than it in a leaf's block, already at hand.
     #[inline(always)]
     pub fn closest_in_block(self, blk: &Tri4, sr: &ShearedRay, ray: &Ray, best: &mut Best) {
-        let cand = self.block_candidates(blk, sr, ray.tmin, best.end);
+        let mut cand = self.block_candidates(blk, sr, ray.tmin, best.end);
+        if cand & blk.tri_lanes != 0
+            && let Some(r) = self.isa.tri_hits(blk, sr, ray.tmin, best.t, best.end)
+        {
+            cand = self.offer_hits(blk, &r, ray, best);
+        }
         self.offer_lanes(blk, cand, sr, ray, best);
+    }
+
+    /// Offers `best` the hits of a leaf's block that the whole SIMD test `r` finished; returns
+    /// the lanes it left for the exact test (edge functions of exactly zero, spheres). Their
+    /// order does not change the result: `Best` keeps the least (t, id) whatever the order.
+    #[inline(always)]
+    fn offer_hits(self, blk: &Tri4, r: &TriRays, ray: &Ray, best: &mut Best) -> u32 {
+        let mut exact = r.exact & blk.tri_lanes;
+        while exact != 0 {
+            let lane = exact.trailing_zeros() as usize;
+            exact &= exact - 1;
+            if self.isa.keeps(blk.ids[lane], r.u[lane], r.v[lane], ray) {
+                best.offer((r.t[lane], r.u[lane], r.v[lane]), blk.ids[lane]);
+            }
+        }
+        (r.unsure & blk.tri_lanes) | blk.other_lanes
     }
 
     /// Offers `best` the exact hits of the lanes `cand` of `blk` that count.
@@ -115,11 +136,36 @@ impl<K: BoxTest> Tracer<'_, K> {
         out
     }
 
+    /// The lanes of `exact` (bit `l`: triangle `l` of `blk`, its hit at `r.u[l]`, `r.v[l]`)
+    /// whose hits count for `ray`: all of them without cutouts.
+    #[inline(always)]
+    fn kept_lanes(self, blk: &Tri4, exact: u32, r: &TriRays, ray: &Ray) -> u32 {
+        if !K::CUTS {
+            return exact;
+        }
+        let (mut m, mut out) = (exact, 0);
+        while m != 0 {
+            let l = m.trailing_zeros() as usize;
+            m &= m - 1;
+            out |= (self.isa.keeps(blk.ids[l], r.u[l], r.v[l], ray) as u32) << l;
+        }
+        out
+    }
+
     /// Whether any primitive of leaf `r` is hit in `[ray.tmin, ray.tmax]`.
     #[inline(always)]
     pub fn leaf_any(self, r: u32, sr: &ShearedRay, ray: &Ray, scratch: &mut Tri4) -> bool {
         let blk = self.bvh.block(leaf_range(r).0, scratch);
-        let mut cand = self.block_candidates(blk, sr, ray.tmin, range_end(ray.tmax));
+        let end = range_end(ray.tmax);
+        let mut cand = self.block_candidates(blk, sr, ray.tmin, end);
+        if cand & blk.tri_lanes != 0
+            && let Some(h) = self.isa.tri_hits(blk, sr, ray.tmin, ray.tmax, end)
+        {
+            if self.kept_lanes(blk, h.exact & blk.tri_lanes, &h, ray) != 0 {
+                return true;
+            }
+            cand = (h.unsure & blk.tri_lanes) | blk.other_lanes;
+        }
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
@@ -134,6 +180,35 @@ impl<K: BoxTest> Tracer<'_, K> {
 }
 
 impl<K: PacketTest> Tracer<'_, K> {
+    /// Whether the ray `ray` of lane `k` of `p` hits a primitive of `blk` in its range (`end`
+    /// = `range_end(ray.tmax)`): [`Tracer::leaf_any`] from the packet's set-up.
+    #[inline(always)]
+    pub fn block_any_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, end: f32) -> bool {
+        let mut cand = self.isa.tri_filter_lane(blk, p, k, ray, end, blk.tri_lanes) | blk.other_lanes;
+        if cand & blk.tri_lanes != 0
+            && let Some(h) = self.isa.tri_hits_lane(blk, p, k, ray, ray.tmax, end)
+        {
+            if self.kept_lanes(blk, h.exact & blk.tri_lanes, &h, ray) != 0 {
+                return true;
+            }
+            cand = (h.unsure & blk.tri_lanes) | blk.other_lanes;
+        }
+        if cand == 0 {
+            return false;
+        }
+        let sr = p.sheared(k, ray);
+        while cand != 0 {
+            let lane = cand.trailing_zeros() as usize;
+            cand &= cand - 1;
+            if let Some((_, u, v)) = self.lane_hit(blk, lane, &sr, ray, ray.tmax)
+                && self.isa.keeps(blk.ids[lane], u, v, ray)
+            {
+                return true;
+            }
+        }
+        false
+    }
+
     /// Offers `best` the hits of leaf `r` closer than it (`scratch` holds the leaf's block
     /// when the leaves index their corners), with the ray's leaf set-up in lane `k` of `p` (its group's,
     /// made for eight rays at once ahead of their traversals): the filter reads it there, and
@@ -142,7 +217,14 @@ impl<K: PacketTest> Tracer<'_, K> {
     #[inline(always)]
     pub fn leaf_closest_lane(self, r: u32, p: &PacketShear, k: usize, ray: &Ray, best: &mut Best, scratch: &mut Tri4) {
         let blk = self.bvh.block(leaf_range(r).0, scratch);
-        let cand = self.isa.tri_filter_lane(blk, p, k, ray, best.end, blk.tri_lanes) | blk.other_lanes;
+        let mut cand = self.isa.tri_filter_lane(blk, p, k, ray, best.end, blk.tri_lanes) | blk.other_lanes;
+        // Most leaves keep no lane; one that keeps a triangle finishes the test of all four in
+        // SIMD, which leaves the exact test only the lanes it cannot settle.
+        if cand & blk.tri_lanes != 0
+            && let Some(h) = self.isa.tri_hits_lane(blk, p, k, ray, best.t, best.end)
+        {
+            cand = self.offer_hits(blk, &h, ray, best);
+        }
         if cand != 0 {
             self.offer_lanes(blk, cand, &p.sheared(k, ray), ray, best);
         }

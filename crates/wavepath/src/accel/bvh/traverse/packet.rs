@@ -161,9 +161,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                     }
                     let (first, count) = leaf_range(child);
                     let blk = bvh.block(first, &mut stack.leaf);
-                    // As `leaf_any`: the filter's triangle lanes and every other lane, then the
-                    // exact test in lane order up to the first hit.
-                    let others = blk.other_lanes;
+                    // As `leaf_any`, ray by ray, unless the eight-ray kernel takes the leaf.
                     let mut m = entered & !hit;
                     if m == 0 {
                         continue;
@@ -193,18 +191,7 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<u32>> {
                     while m != 0 {
                         let k = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let mut cand = isa.tri_filter_lane(blk, sh, k, &rays[k], sh.tend[k], blk.tri_lanes) | others;
-                        while cand != 0 {
-                            let lane = cand.trailing_zeros() as usize;
-                            cand &= cand - 1;
-                            let sr = sh.sheared(k, &rays[k]);
-                            if let Some((_, u, v)) = t.lane_hit(blk, lane, &sr, &rays[k], rays[k].tmax)
-                                && t.isa.keeps(blk.ids[lane], u, v, &rays[k])
-                            {
-                                hit |= 1 << k;
-                                break;
-                            }
-                        }
+                        hit |= (t.block_any_lane(blk, sh, k, &rays[k], sh.tend[k]) as u32) << k;
                     }
                     if hit == live {
                         break 'trace;

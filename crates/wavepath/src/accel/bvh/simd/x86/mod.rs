@@ -16,7 +16,7 @@ use crate::geometry::Ray;
 use boxes::{frustum8, push_ordered, slab8, slab8_lane, slot_rays8};
 use setup::{box_ray8, box_rays8, set_up8};
 use std::arch::x86_64::*;
-use triangles::{shear8, tri_filter4, tri_filter4_lane, tri_rays8};
+use triangles::{shear8, tri_filter4, tri_filter4_lane, tri_hits4, tri_hits4_lane, tri_rays8};
 
 impl BoxTest for Sse {
     #[inline(always)]
@@ -59,6 +59,12 @@ impl BoxTest for Sse {
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
         unsafe { tri_filter4(blk, sr, tmin, end) & lanes }
     }
+
+    #[inline(always)]
+    fn tri_hits(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, end: f32) -> Option<TriRays> {
+        // SAFETY: `Sse` exists only if SSE4.1 was detected.
+        Some(unsafe { tri_hits4(blk, sr, tmin, tmax, end) })
+    }
 }
 
 impl PacketTest for Sse {
@@ -67,6 +73,13 @@ impl PacketTest for Sse {
         let _ = ray;
         // SAFETY: `Sse` exists only if SSE4.1 was detected.
         unsafe { tri_filter4_lane(blk, p, k % PACKET, end) & lanes }
+    }
+
+    #[inline(always)]
+    fn tri_hits_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, tmax: f32, end: f32) -> Option<TriRays> {
+        let _ = ray;
+        // SAFETY: `Sse` exists only if SSE4.1 was detected; `k % PACKET` < 8.
+        Some(unsafe { tri_hits4_lane(blk, p, k % PACKET, tmax, end) })
     }
 }
 
@@ -172,6 +185,12 @@ impl BoxTest for Avx2 {
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
         unsafe { tri_filter4(blk, sr, tmin, end) & lanes }
     }
+
+    #[inline(always)]
+    fn tri_hits(self, blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, end: f32) -> Option<TriRays> {
+        // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
+        Some(unsafe { tri_hits4(blk, sr, tmin, tmax, end) })
+    }
 }
 
 impl PacketTest for Avx2 {
@@ -180,6 +199,13 @@ impl PacketTest for Avx2 {
         let _ = ray;
         // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected.
         unsafe { tri_filter4_lane(blk, p, k % PACKET, end) & lanes }
+    }
+
+    #[inline(always)]
+    fn tri_hits_lane(self, blk: &Tri4, p: &PacketShear, k: usize, ray: &Ray, tmax: f32, end: f32) -> Option<TriRays> {
+        let _ = ray;
+        // SAFETY: `Avx2` exists only if AVX2 (hence SSE4.1) was detected; `k % PACKET` < 8.
+        Some(unsafe { tri_hits4_lane(blk, p, k % PACKET, tmax, end) })
     }
 
     #[inline(always)]

@@ -44,6 +44,24 @@ pub(super) unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f3
 /// The CPU must have SSE4.1; `k` < 8.
 #[inline(always)]
 pub(super) unsafe fn tri_filter4_lane(blk: &Tri4, p: &PacketShear, k: usize, end: f32) -> u32 {
+    // SAFETY: the caller guarantees SSE4.1 and `k` < 8.
+    unsafe {
+        let (a, b, c, sz) = sheared_corners4_lane(blk, p, k);
+        filter4_tail(a, b, c, sz, p.tmin[k], end)
+    }
+}
+
+/// The corners of the four triangles of `blk` sheared for lane `k` of `p` (x, y, z each, the
+/// operations of [`tri_filter4`]'s corners with the set-up's rows), and that lane's `sz`.
+///
+/// # Safety
+/// The CPU must have SSE4.1; `k` < 8.
+#[inline(always)]
+unsafe fn sheared_corners4_lane(
+    blk: &Tri4,
+    p: &PacketShear,
+    k: usize,
+) -> ([__m128; 3], [__m128; 3], [__m128; 3], __m128) {
     // SAFETY: the caller guarantees SSE4.1; loads are aligned ones of 16 bytes at offsets
     // `p.rows[k][i]`, which are 16 * axis with axis < 3 (`PacketShear`), inside a corner's
     // three rows of 16 bytes (`Tri4` is 64-byte aligned).
@@ -60,8 +78,166 @@ pub(super) unsafe fn tri_filter4_lane(blk: &Tri4, p: &PacketShear, k: usize, end
             let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(q.add(rb).cast::<f32>()), oy), _mm_mul_ps(sy, z));
             [x, y, z]
         };
-        let (a, b, c) = (corner(0), corner(1), corner(2));
-        filter4_tail(a, b, c, sz, p.tmin[k], end)
+        (corner(0), corner(1), corner(2), sz)
+    }
+}
+
+/// The whole watertight test (`intersect_sheared`) of the four triangles of `blk` for lane `k`
+/// of `p`, with the closest hit so far at `tmax` and `end` = `range_end(tmax)`: bit `l` of the
+/// result is triangle `l` (not ray `l` as in [`tri_rays8`]). See [`hits4_tail`].
+///
+/// # Safety
+/// The CPU must have SSE4.1; `k` < 8.
+#[inline(always)]
+pub(super) unsafe fn tri_hits4_lane(blk: &Tri4, p: &PacketShear, k: usize, tmax: f32, end: f32) -> TriRays {
+    // SAFETY: the caller guarantees SSE4.1 and `k` < 8.
+    unsafe {
+        let (a, b, c, sz) = sheared_corners4_lane(blk, p, k);
+        let shear = Shear { sx: p.shear[0][k], sy: p.shear[1][k], sz, tmin: p.tmin[k], tmax, end };
+        hits4_tail(a, b, c, shear)
+    }
+}
+
+/// [`tri_hits4_lane`] for a ray's own set-up `sr`, range from `tmin` to `tmax` (`end` =
+/// `range_end(tmax)`).
+///
+/// # Safety
+/// The CPU must have SSE4.1.
+#[inline(always)]
+pub(super) unsafe fn tri_hits4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, end: f32) -> TriRays {
+    // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
+    // each lane array is 16 bytes at a multiple of 16).
+    unsafe {
+        let (kx, ky, kz) = (sr.kx, sr.ky, sr.kz);
+        let [okx, oky, okz] = sr.org_k;
+        let (ox, oy, oz) = (_mm_set1_ps(okx), _mm_set1_ps(oky), _mm_set1_ps(okz));
+        let (sx, sy) = (_mm_set1_ps(sr.sx), _mm_set1_ps(sr.sy));
+        // As in `tri_filter4`.
+        let corner = |c: usize| {
+            let p = &blk.c[c];
+            let z = _mm_sub_ps(_mm_load_ps(p[kz].as_ptr()), oz);
+            let x = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[kx].as_ptr()), ox), _mm_mul_ps(sx, z));
+            let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[ky].as_ptr()), oy), _mm_mul_ps(sy, z));
+            [x, y, z]
+        };
+        let shear = Shear { sx: sr.sx, sy: sr.sy, sz: _mm_set1_ps(sr.sz), tmin, tmax, end };
+        hits4_tail(corner(0), corner(1), corner(2), shear)
+    }
+}
+
+/// A ray's shear and range as [`hits4_tail`] reads them (`sz` broadcast).
+struct Shear {
+    sx: f32,
+    sy: f32,
+    sz: __m128,
+    tmin: f32,
+    tmax: f32,
+    end: f32,
+}
+
+#[inline(always)]
+unsafe fn abs4(x: __m128) -> __m128 {
+    // SAFETY: the caller guarantees SSE4.1.
+    unsafe { _mm_andnot_ps(_mm_set1_ps(-0.0), x) }
+}
+
+/// `|a|.max(|b|).max(|c|)`, as the scalar test's `amax` (no NaN reaches it).
+#[inline(always)]
+unsafe fn amax4(a: __m128, b: __m128, c: __m128) -> __m128 {
+    // SAFETY: the caller guarantees SSE4.1.
+    unsafe { _mm_max_ps(_mm_max_ps(abs4(a), abs4(b)), abs4(c)) }
+}
+
+/// The rest of `intersect_sheared` from the sheared corners `a`, `b`, `c` on, four triangles
+/// at once: the operations are the scalar test's, same operands, same order, never fused, down
+/// to the bound on t's rounding error, so a hit it finishes is the scalar one bit for bit; only
+/// lanes with an edge function of exactly zero (the scalar test's f64 recomputation) are left
+/// `unsure`. Padding lanes are computed like the others: the caller masks them.
+///
+/// # Safety
+/// The CPU must have SSE4.1.
+#[inline(always)]
+unsafe fn hits4_tail(a: [__m128; 3], b: [__m128; 3], c: [__m128; 3], r: Shear) -> TriRays {
+    // SAFETY: the caller guarantees SSE4.1; the stores are unaligned ones of 4 f32 into
+    // arrays of 8.
+    unsafe {
+        let ([ax, ay, az], [bx, by, bz], [cx, cy, cz]) = (a, b, c);
+        let (sz, tmax, end) = (r.sz, r.tmax, r.end);
+        let sign = _mm_set1_ps(-0.0);
+        let zero = _mm_setzero_ps();
+        let tmin = _mm_set1_ps(r.tmin);
+        let u = _mm_sub_ps(_mm_mul_ps(cx, by), _mm_mul_ps(cy, bx));
+        let v = _mm_sub_ps(_mm_mul_ps(ax, cy), _mm_mul_ps(ay, cx));
+        let w = _mm_sub_ps(_mm_mul_ps(bx, ay), _mm_mul_ps(by, ax));
+        let on_edge = _mm_or_ps(_mm_or_ps(_mm_cmpeq_ps(u, zero), _mm_cmpeq_ps(v, zero)), _mm_cmpeq_ps(w, zero));
+        // As in `filter4_tail`; here a lane is accepted only with a finite, non-zero det (the
+        // scalar test's check), so u, v, w are finite and the sign test by min and max is
+        // exactly the scalar one.
+        let neg = _mm_cmplt_ps(_mm_min_ps(_mm_min_ps(u, v), w), zero);
+        let pos = _mm_cmpgt_ps(_mm_max_ps(_mm_max_ps(u, v), w), zero);
+        let det = _mm_add_ps(_mm_add_ps(u, v), w);
+        let det_abs = _mm_andnot_ps(sign, det);
+        let det_ok = _mm_and_ps(_mm_cmpneq_ps(det, zero), _mm_cmplt_ps(det_abs, _mm_set1_ps(f32::INFINITY)));
+        // The corners' depths `sz * z`, as the scalar test's `az`, `bz`, `cz`.
+        let (da, db, dc) = (_mm_mul_ps(sz, az), _mm_mul_ps(sz, bz), _mm_mul_ps(sz, cz));
+        let tt = _mm_add_ps(_mm_add_ps(_mm_mul_ps(u, da), _mm_mul_ps(v, db)), _mm_mul_ps(w, dc));
+        let tt_s = _mm_xor_ps(tt, _mm_and_ps(det, sign));
+        let out_of_range = _mm_or_ps(
+            _mm_cmplt_ps(tt_s, _mm_mul_ps(tmin, det_abs)),
+            _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(end), det_abs)),
+        );
+        let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
+        let mut out = TriRays {
+            exact: 0,
+            unsure: _mm_movemask_ps(on_edge) as u32,
+            t: [0.0; PACKET],
+            u: [0.0; PACKET],
+            v: [0.0; PACKET],
+        };
+        let clean = _mm_andnot_ps(on_edge, accept);
+        if _mm_movemask_ps(clean) == 0 {
+            return out;
+        }
+        let inv = _mm_div_ps(_mm_set1_ps(1.0), det);
+        let t_hit = _mm_mul_ps(tt, inv);
+        let in_range = _mm_and_ps(_mm_cmpge_ps(t_hit, tmin), _mm_cmple_ps(t_hit, _mm_set1_ps(tmax)));
+        let hit = _mm_and_ps(clean, in_range);
+        if _mm_movemask_ps(hit) == 0 {
+            return out;
+        }
+        // `near <= gamma(3) * far && t <= t_error_bound(..)` rejects, as in the scalar test.
+        let near = _mm_min_ps(_mm_min_ps(da, db), dc);
+        let far = amax4(da, db, dc);
+        let reaches_back = _mm_cmple_ps(near, _mm_mul_ps(_mm_set1_ps(gamma(3)), far));
+        let (max_x, max_y, max_z, max_e) = (amax4(ax, bx, cx), amax4(ay, by, cy), far, amax4(u, v, w));
+        let max_z_world = _mm_div_ps(max_z, abs4(sz));
+        let delta_z = _mm_mul_ps(_mm_set1_ps(gamma(3)), max_z);
+        let (sx_abs, sy_abs) = (_mm_set1_ps(r.sx.abs()), _mm_set1_ps(r.sy.abs()));
+        let delta_x = _mm_mul_ps(_mm_set1_ps(gamma(5)), _mm_add_ps(max_x, _mm_mul_ps(sx_abs, max_z_world)));
+        let delta_y = _mm_mul_ps(_mm_set1_ps(gamma(5)), _mm_add_ps(max_y, _mm_mul_ps(sy_abs, max_z_world)));
+        let delta_e = _mm_mul_ps(
+            _mm_set1_ps(2.0),
+            _mm_add_ps(
+                _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(gamma(2)), max_x), max_y), _mm_mul_ps(delta_y, max_x)),
+                _mm_mul_ps(delta_x, max_y),
+            ),
+        );
+        let bound = _mm_mul_ps(
+            _mm_mul_ps(
+                _mm_set1_ps(3.0),
+                _mm_add_ps(
+                    _mm_add_ps(_mm_mul_ps(_mm_mul_ps(_mm_set1_ps(gamma(3)), max_e), max_z), _mm_mul_ps(delta_e, max_z)),
+                    _mm_mul_ps(delta_z, max_e),
+                ),
+            ),
+            abs4(inv),
+        );
+        let behind = _mm_and_ps(reaches_back, _mm_cmple_ps(t_hit, bound));
+        out.exact = _mm_movemask_ps(_mm_andnot_ps(behind, hit)) as u32;
+        _mm_storeu_ps(out.t.as_mut_ptr(), t_hit);
+        _mm_storeu_ps(out.u.as_mut_ptr(), _mm_mul_ps(v, inv));
+        _mm_storeu_ps(out.v.as_mut_ptr(), _mm_mul_ps(w, inv));
+        out
     }
 }
 
@@ -350,5 +526,91 @@ mod tests {
             }
         }
         assert!(hits > 4_000 && checked > 100_000, "{hits} hits in {checked} tests: the rays miss too often");
+    }
+
+    /// The whole SIMD test gives the scalar watertight test's hit bit for bit wherever it
+    /// settles a lane, and leaves undecided only lanes with an edge function of exactly zero:
+    /// random and special coordinates, rays through corners and edge midpoints, rays that
+    /// start on a triangle (the bound on t's rounding error decides those), short and open
+    /// ranges; from a ray's own set-up and from a packet's lane alike.
+    #[test]
+    fn whole_triangle_test_is_the_scalar_test() {
+        let Some(_) = Sse::new() else { return };
+        let special = [0.0, -0.0, 1.0, -1.0, 0.5, 1e-30, -1e-30, 1e-40, 1e20, -1e20, 3e38, -3e38];
+        let mut s = Sampler::for_sample(12, 0, 0);
+        let pick = |s: &mut Sampler| -> f32 {
+            if s.next_f32() < 0.2 {
+                special[(s.next_f32() * special.len() as f32) as usize % special.len()]
+            } else {
+                (s.next_f32() - 0.5) * 4.0
+            }
+        };
+        let (mut exact, mut unsure, mut reaching, mut leaving) = (0, 0, 0, 0);
+        for _ in 0..40_000 {
+            let tris: [[Vec3; 3]; 4] =
+                std::array::from_fn(|_| std::array::from_fn(|_| Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s))));
+            let mut blk = Tri4 { tri_lanes: 0b1111, ..Default::default() };
+            for (lane, t) in tris.iter().enumerate() {
+                for (corner, p) in t.iter().enumerate() {
+                    for axis in 0..3 {
+                        blk.c[corner][axis][lane] = p[axis];
+                    }
+                }
+            }
+            let own = (s.next_f32() * 4.0) as usize % 4;
+            let t = &tris[own];
+            let target = match (s.next_f32() * 3.0) as u32 {
+                0 => t[1],
+                1 => (t[1] + t[2]) * 0.5,
+                _ => Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)),
+            };
+            let from_inside = s.next_f32() < 0.2;
+            // From anywhere, from a corner, or from a point inside the triangle (a ray leaving
+            // the surface it starts on).
+            let origin = match (from_inside, s.next_f32() < 0.25) {
+                (true, _) => (t[0] + t[1] + t[2]) / 3.0,
+                (false, true) => t[0],
+                _ => Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)),
+            };
+            let ray = Ray::new(origin, target - origin);
+            if !crate::accel::triangle::ShearedRay::traceable(&ray) {
+                continue;
+            }
+            let sr = ShearedRay::of(&ray);
+            let tmax = [1.0, 0.5, f32::INFINITY][(s.next_f32() * 3.0) as usize % 3];
+            let mut p = PacketShear::EMPTY;
+            p.set(3, &ray);
+            // SAFETY: SSE4.1 was detected above; lane 3 < 8.
+            let (h, hl) = unsafe {
+                (tri_hits4(&blk, &sr, 0.0, tmax, range_end(tmax)), tri_hits4_lane(&blk, &p, 3, tmax, range_end(tmax)))
+            };
+            for (lane, t) in tris.iter().enumerate() {
+                let want = intersect_sheared(&sr, 0.0, tmax, t[0], t[1], t[2]);
+                let bits = |x: (f32, f32, f32)| [x.0.to_bits(), x.1.to_bits(), x.2.to_bits()];
+                for h in [&h, &hl] {
+                    if h.exact >> lane & 1 != 0 {
+                        let got = (h.t[lane], h.u[lane], h.v[lane]);
+                        assert_eq!(want.map(bits), Some(bits(got)), "lane {lane} of {tris:?}, {ray:?} (tmax {tmax})");
+                    } else if h.unsure >> lane & 1 == 0 {
+                        assert!(want.is_none(), "lane {lane} of {tris:?} missed for {ray:?} (tmax {tmax}): {want:?}");
+                    }
+                }
+                assert_eq!((h.exact >> lane & 1, h.unsure >> lane & 1), (hl.exact >> lane & 1, hl.unsure >> lane & 1));
+                exact += h.exact >> lane & 1;
+                unsure += h.unsure >> lane & 1;
+                // Settled hits on triangles that reach back to the origin's depth (the bound on
+                // t's rounding error decided them), and rays leaving their own triangle.
+                let depth = |p: Vec3| sr.sz * (p - origin).to_array()[sr.kz];
+                let d = t.map(depth);
+                let near = d[0].min(d[1]).min(d[2]);
+                let far = d[0].abs().max(d[1].abs()).max(d[2].abs());
+                reaching += (h.exact >> lane & 1 != 0 && near <= gamma(3) * far) as u32;
+                leaving += (from_inside && lane == own && want.is_none() && h.unsure >> lane & 1 == 0) as u32;
+            }
+        }
+        assert!(
+            exact > 3_000 && unsure > 100 && reaching > 100 && leaving > 1_000,
+            "{exact} settled ({reaching} reaching back), {unsure} undecided, {leaving} leaving their triangle"
+        );
     }
 }
