@@ -614,7 +614,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                 q.radiance[i] += emission;
             }
             if arrivals && depth > 0 {
-                q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &ray, Some(&hit), emission, depth);
+                q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &ray, &hit, emission, depth);
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;

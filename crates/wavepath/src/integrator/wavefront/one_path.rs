@@ -35,7 +35,7 @@ pub fn arrive<F: Features>(t: &Transport, q: &mut PathQueue, i: usize) -> Option
         q.radiance[i] += v.emission;
     }
     if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
-        q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], Some(&hit), v.emission, depth);
+        q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, v.emission, depth);
     }
     (F::DIRECT || F::INDIRECT).then_some(v)
 }

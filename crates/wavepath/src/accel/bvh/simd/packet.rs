@@ -13,7 +13,9 @@ pub const PACKET: usize = 8;
 /// so where it can finish the test its hit is the scalar one bit for bit; it leaves to the
 /// scalar test only the rays that need more than those operations: an edge function that is
 /// exactly zero (the f64 fallback) and hits whose triangle reaches back to the origin's depth
-/// (the bound on t's rounding error). Every other ray misses.
+/// (the bound on t's rounding error). Every other ray misses. The one-ray kernel for four
+/// triangles ([`PacketTest::tri_hits_lane`]) reports the same way, bit `l` for triangle `l`,
+/// and settles those hits too.
 #[derive(Clone, Copy, Debug)]
 pub struct TriRays {
     /// Rays (bit `k`: lane `k`) whose hit is `(t[k], u[k], v[k])`.
