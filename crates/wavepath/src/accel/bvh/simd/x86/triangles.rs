@@ -472,6 +472,44 @@ mod tests {
     use crate::sampling::Sampler;
     use glam::Vec3;
 
+    /// A coordinate: with probability `share` one of the special values (zeros of both signs,
+    /// tiny, subnormal, huge and near-overflowing), else uniform in [-2, 2).
+    fn coordinate(s: &mut Sampler, share: f32) -> f32 {
+        const SPECIAL: [f32; 12] = [0.0, -0.0, 1.0, -1.0, 0.5, 1e-30, -1e-30, 1e-40, 1e20, -1e20, 3e38, -3e38];
+        if s.next_f32() < share {
+            SPECIAL[(s.next_f32() * SPECIAL.len() as f32) as usize % SPECIAL.len()]
+        } else {
+            (s.next_f32() - 0.5) * 4.0
+        }
+    }
+
+    fn point(s: &mut Sampler, share: f32) -> Vec3 {
+        Vec3::new(coordinate(s, share), coordinate(s, share), coordinate(s, share))
+    }
+
+    /// Four triangles of such coordinates, and their block.
+    fn random_block(s: &mut Sampler, share: f32) -> ([[Vec3; 3]; 4], Tri4) {
+        let tris: [[Vec3; 3]; 4] = std::array::from_fn(|_| std::array::from_fn(|_| point(s, share)));
+        let mut blk = Tri4 { tri_lanes: 0b1111, ..Default::default() };
+        for (lane, t) in tris.iter().enumerate() {
+            for (corner, p) in t.iter().enumerate() {
+                for axis in 0..3 {
+                    blk.c[corner][axis][lane] = p[axis];
+                }
+            }
+        }
+        (tris, blk)
+    }
+
+    /// A point a ray aims at on or near triangle `t`: a corner, an edge's midpoint, or anywhere.
+    fn target(s: &mut Sampler, share: f32, t: &[Vec3; 3]) -> Vec3 {
+        match (s.next_f32() * 3.0) as u32 {
+            0 => t[1],
+            1 => (t[1] + t[2]) * 0.5,
+            _ => point(s, share),
+        }
+    }
+
     /// The SIMD triangle filter never drops a lane the scalar watertight test hits: rays
     /// through shared vertices and along edges (edge functions exactly zero), triangles with
     /// zero, tiny, huge and overflowing coordinates (edge functions of inf and NaN), rays
@@ -479,36 +517,15 @@ mod tests {
     #[test]
     fn triangle_filter_keeps_every_scalar_hit() {
         let Some(_) = Sse::new() else { return };
-        let special = [0.0, -0.0, 1.0, -1.0, 0.5, 1e-30, -1e-30, 1e-40, 1e20, -1e20, 3e38, -3e38];
         let mut s = Sampler::for_sample(11, 0, 0);
-        let pick = |s: &mut Sampler| -> f32 {
-            if s.next_f32() < 0.3 {
-                special[(s.next_f32() * special.len() as f32) as usize % special.len()]
-            } else {
-                (s.next_f32() - 0.5) * 4.0
-            }
-        };
         let (mut hits, mut checked) = (0, 0);
         for _ in 0..40_000 {
-            let tris: [[Vec3; 3]; 4] =
-                std::array::from_fn(|_| std::array::from_fn(|_| Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s))));
-            let mut blk = Tri4 { tri_lanes: 0b1111, ..Default::default() };
-            for (lane, t) in tris.iter().enumerate() {
-                for (corner, p) in t.iter().enumerate() {
-                    for axis in 0..3 {
-                        blk.c[corner][axis][lane] = p[axis];
-                    }
-                }
-            }
+            let (tris, blk) = random_block(&mut s, 0.3);
             // Aimed at a corner, at an edge's midpoint, or anywhere; from anywhere or from
             // the triangle's first corner.
             let t = &tris[(s.next_f32() * 4.0) as usize % 4];
-            let target = match (s.next_f32() * 3.0) as u32 {
-                0 => t[1],
-                1 => (t[1] + t[2]) * 0.5,
-                _ => Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)),
-            };
-            let origin = if s.next_f32() < 0.2 { t[0] } else { Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)) };
+            let target = target(&mut s, 0.3, t);
+            let origin = if s.next_f32() < 0.2 { t[0] } else { point(&mut s, 0.3) };
             let ray = Ray::new(origin, target - origin);
             if !crate::accel::triangle::ShearedRay::traceable(&ray) {
                 continue;
@@ -536,41 +553,20 @@ mod tests {
     #[test]
     fn whole_triangle_test_is_the_scalar_test() {
         let Some(_) = Sse::new() else { return };
-        let special = [0.0, -0.0, 1.0, -1.0, 0.5, 1e-30, -1e-30, 1e-40, 1e20, -1e20, 3e38, -3e38];
         let mut s = Sampler::for_sample(12, 0, 0);
-        let pick = |s: &mut Sampler| -> f32 {
-            if s.next_f32() < 0.2 {
-                special[(s.next_f32() * special.len() as f32) as usize % special.len()]
-            } else {
-                (s.next_f32() - 0.5) * 4.0
-            }
-        };
         let (mut exact, mut unsure, mut reaching, mut leaving) = (0, 0, 0, 0);
         for _ in 0..40_000 {
-            let tris: [[Vec3; 3]; 4] =
-                std::array::from_fn(|_| std::array::from_fn(|_| Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s))));
-            let mut blk = Tri4 { tri_lanes: 0b1111, ..Default::default() };
-            for (lane, t) in tris.iter().enumerate() {
-                for (corner, p) in t.iter().enumerate() {
-                    for axis in 0..3 {
-                        blk.c[corner][axis][lane] = p[axis];
-                    }
-                }
-            }
+            let (tris, blk) = random_block(&mut s, 0.2);
             let own = (s.next_f32() * 4.0) as usize % 4;
             let t = &tris[own];
-            let target = match (s.next_f32() * 3.0) as u32 {
-                0 => t[1],
-                1 => (t[1] + t[2]) * 0.5,
-                _ => Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)),
-            };
+            let target = target(&mut s, 0.2, t);
             let from_inside = s.next_f32() < 0.2;
             // From anywhere, from a corner, or from a point inside the triangle (a ray leaving
             // the surface it starts on).
             let origin = match (from_inside, s.next_f32() < 0.25) {
                 (true, _) => (t[0] + t[1] + t[2]) / 3.0,
                 (false, true) => t[0],
-                _ => Vec3::new(pick(&mut s), pick(&mut s), pick(&mut s)),
+                _ => point(&mut s, 0.2),
             };
             let ray = Ray::new(origin, target - origin);
             if !crate::accel::triangle::ShearedRay::traceable(&ray) {
