@@ -27,6 +27,14 @@ pub struct TriRays {
     pub v: [f32; PACKET],
 }
 
+impl TriRays {
+    /// Nothing settled yet: the rays (or triangles) `unsure` for the scalar test.
+    #[inline(always)]
+    pub fn undecided(unsure: u32) -> TriRays {
+        TriRays { exact: 0, unsure, t: [0.0; PACKET], u: [0.0; PACKET], v: [0.0; PACKET] }
+    }
+}
+
 /// The box-test values ([`BoxRay`]) of a packet's rays, one array per field (lane `k` is ray
 /// `k`), so the AVX2 path sets up eight rays with one register per field; each lane holds
 /// exactly the values of the ray's own [`BoxRay`] (dead or absent rays: not live, zeros).

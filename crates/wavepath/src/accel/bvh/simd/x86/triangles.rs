@@ -18,14 +18,28 @@ use std::arch::x86_64::*;
 /// The CPU must have SSE4.1.
 #[inline(always)]
 pub(super) unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f32) -> u32 {
+    // SAFETY: the caller guarantees SSE4.1.
+    unsafe {
+        let (a, b, c) = sheared_corners4(blk, sr);
+        filter4_tail(a, b, c, _mm_set1_ps(sr.sz), tmin, end)
+    }
+}
+
+/// The corners of the four triangles of `blk` sheared for the ray set up as `sr` (x, y, z
+/// each): (p[kx] - o[kx] - sx * z, p[ky] - o[ky] - sy * z, z) with z = p[kz] - o[kz], the
+/// scalar test's operations.
+///
+/// # Safety
+/// The CPU must have SSE4.1.
+#[inline(always)]
+unsafe fn sheared_corners4(blk: &Tri4, sr: &ShearedRay) -> ([__m128; 3], [__m128; 3], [__m128; 3]) {
     // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
     // each lane array is 16 bytes at a multiple of 16).
     unsafe {
         let (kx, ky, kz) = (sr.kx, sr.ky, sr.kz);
         let [okx, oky, okz] = sr.org_k;
         let (ox, oy, oz) = (_mm_set1_ps(okx), _mm_set1_ps(oky), _mm_set1_ps(okz));
-        let (sx, sy, sz) = (_mm_set1_ps(sr.sx), _mm_set1_ps(sr.sy), _mm_set1_ps(sr.sz));
-        // Sheared corner: (x, y, z) = (p[kx] - o[kx] - sx * az, p[ky] - o[ky] - sy * az, p[kz] - o[kz]).
+        let (sx, sy) = (_mm_set1_ps(sr.sx), _mm_set1_ps(sr.sy));
         let corner = |c: usize| {
             let p = &blk.c[c];
             let z = _mm_sub_ps(_mm_load_ps(p[kz].as_ptr()), oz);
@@ -33,7 +47,7 @@ pub(super) unsafe fn tri_filter4(blk: &Tri4, sr: &ShearedRay, tmin: f32, end: f3
             let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[ky].as_ptr()), oy), _mm_mul_ps(sy, z));
             [x, y, z]
         };
-        filter4_tail(corner(0), corner(1), corner(2), sz, tmin, end)
+        (corner(0), corner(1), corner(2))
     }
 }
 
@@ -105,23 +119,11 @@ pub(super) unsafe fn tri_hits4_lane(blk: &Tri4, p: &PacketShear, k: usize, tmax:
 /// The CPU must have SSE4.1.
 #[inline(always)]
 pub(super) unsafe fn tri_hits4(blk: &Tri4, sr: &ShearedRay, tmin: f32, tmax: f32, end: f32) -> TriRays {
-    // SAFETY: the caller guarantees SSE4.1; loads are aligned (`Tri4` is 64-byte aligned and
-    // each lane array is 16 bytes at a multiple of 16).
+    // SAFETY: the caller guarantees SSE4.1.
     unsafe {
-        let (kx, ky, kz) = (sr.kx, sr.ky, sr.kz);
-        let [okx, oky, okz] = sr.org_k;
-        let (ox, oy, oz) = (_mm_set1_ps(okx), _mm_set1_ps(oky), _mm_set1_ps(okz));
-        let (sx, sy) = (_mm_set1_ps(sr.sx), _mm_set1_ps(sr.sy));
-        // As in `tri_filter4`.
-        let corner = |c: usize| {
-            let p = &blk.c[c];
-            let z = _mm_sub_ps(_mm_load_ps(p[kz].as_ptr()), oz);
-            let x = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[kx].as_ptr()), ox), _mm_mul_ps(sx, z));
-            let y = _mm_sub_ps(_mm_sub_ps(_mm_load_ps(p[ky].as_ptr()), oy), _mm_mul_ps(sy, z));
-            [x, y, z]
-        };
+        let (a, b, c) = sheared_corners4(blk, sr);
         let shear = Shear { sx: sr.sx, sy: sr.sy, sz: _mm_set1_ps(sr.sz), tmin, tmax, end };
-        hits4_tail(corner(0), corner(1), corner(2), shear)
+        hits4_tail(a, b, c, shear)
     }
 }
 
@@ -187,13 +189,7 @@ unsafe fn hits4_tail(a: [__m128; 3], b: [__m128; 3], c: [__m128; 3], r: Shear) -
             _mm_cmpgt_ps(tt_s, _mm_mul_ps(_mm_set1_ps(end), det_abs)),
         );
         let accept = _mm_andnot_ps(_mm_or_ps(_mm_and_ps(neg, pos), out_of_range), det_ok);
-        let mut out = TriRays {
-            exact: 0,
-            unsure: _mm_movemask_ps(on_edge) as u32,
-            t: [0.0; PACKET],
-            u: [0.0; PACKET],
-            v: [0.0; PACKET],
-        };
+        let mut out = TriRays::undecided(_mm_movemask_ps(on_edge) as u32);
         let clean = _mm_andnot_ps(on_edge, accept);
         if _mm_movemask_ps(clean) == 0 {
             return out;
@@ -358,13 +354,7 @@ pub(super) unsafe fn tri_rays8(blk: &Tri4, lane: usize, p: &PacketShear, closest
             _mm256_cmp_ps::<_CMP_GT_OQ>(tt_s, _mm256_mul_ps(tend, det_abs)),
         );
         let accept = _mm256_andnot_ps(_mm256_or_ps(_mm256_and_ps(neg, pos), out_of_range), det_ok);
-        let mut out = TriRays {
-            exact: 0,
-            unsure: _mm256_movemask_ps(on_edge) as u32,
-            t: [0.0; PACKET],
-            u: [0.0; PACKET],
-            v: [0.0; PACKET],
-        };
+        let mut out = TriRays::undecided(_mm256_movemask_ps(on_edge) as u32);
         // Accepted means det is finite and non-zero, so u, v, w are not NaN and the sign test
         // by min and max was the scalar one exactly; most triangles keep no ray at all.
         let clean = _mm256_andnot_ps(on_edge, accept);
