@@ -166,6 +166,13 @@ impl<K: BoxTest> Tracer<'_, K> {
             }
             cand = (h.unsure & blk.tri_lanes) | blk.other_lanes;
         }
+        self.any_in_lanes(blk, cand, sr, ray)
+    }
+
+    /// Whether the exact test of a lane of `cand` finds a hit that counts in `[ray.tmin,
+    /// ray.tmax]`, in lane order up to the first.
+    #[inline(always)]
+    fn any_in_lanes(self, blk: &Tri4, mut cand: u32, sr: &ShearedRay, ray: &Ray) -> bool {
         while cand != 0 {
             let lane = cand.trailing_zeros() as usize;
             cand &= cand - 1;
@@ -193,20 +200,7 @@ impl<K: PacketTest> Tracer<'_, K> {
             }
             cand = (h.unsure & blk.tri_lanes) | blk.other_lanes;
         }
-        if cand == 0 {
-            return false;
-        }
-        let sr = p.sheared(k, ray);
-        while cand != 0 {
-            let lane = cand.trailing_zeros() as usize;
-            cand &= cand - 1;
-            if let Some((_, u, v)) = self.lane_hit(blk, lane, &sr, ray, ray.tmax)
-                && self.isa.keeps(blk.ids[lane], u, v, ray)
-            {
-                return true;
-            }
-        }
-        false
+        cand != 0 && self.any_in_lanes(blk, cand, &p.sheared(k, ray), ray)
     }
 
     /// Offers `best` the hits of leaf `r` closer than it (`scratch` holds the leaf's block
