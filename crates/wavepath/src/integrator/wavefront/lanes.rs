@@ -528,6 +528,8 @@ struct Group<const L: usize> {
     path: [usize; L],
     /// Lanes in use (the first `n`).
     n: usize,
+    /// Each lane's vertex; where the gather leaves the whole vertex out (`WHOLE` false) only
+    /// its albedo and material: the lane's point is in the group's [`Points`].
     vertex: [Vertex; L],
     /// The lane takes light samples / a continuation ray (as `Transport::direct_rays` and
     /// `Transport::scatter` decide).
@@ -650,12 +652,10 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                 pts.set(j, &g.vertex[j].shading_point());
             }
         } else {
+            // Only into `pts`: what follows reads a lane's point there, and the lanes' vertices
+            // (albedo and material only) are not relief-mapped, so `Vertex::consistent` reads
+            // no normal of theirs (copying the points back lane by lane was 6% of the stage).
             surface_points(&surf, normals, spheres, &mut pts);
-            for j in 0..L {
-                let sp = pts.get(j);
-                let v = &mut g.vertex[j];
-                (v.p, v.p_error, v.ng, v.ns) = (sp.p, sp.p_error, sp.ng, sp.ns);
-            }
         }
         if F::DIRECT && g.direct.iter().any(|&d| d) {
             direct_light(GroupLight { avx, t, q: &*q, g: &g, pts: &pts, rng: &rng }, &mut pending, shadow);
@@ -818,13 +818,13 @@ fn light_rays<const L: usize>(
                 let mut ls = LightPoints::<L>::default();
                 for j in 0..g.n {
                     if g.direct[j] {
-                        let (v, u) = (&g.vertex[j], [ua[j], ub[j], 0.0]);
+                        let (s, u) = (pts.get(j), [ua[j], ub[j], 0.0]);
                         ls.set(
                             j,
                             &LightPoint::of(if g.mis[j] {
-                                light.sample_pdf(v.p, v.ns, u)
+                                light.sample_pdf(s.p, s.ns, u)
                             } else {
-                                light.sample(v.p, v.ns, u).map(|s| (s, 0.0))
+                                light.sample(s.p, s.ns, u).map(|l| (l, 0.0))
                             }),
                         );
                     }
