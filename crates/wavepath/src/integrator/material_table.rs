@@ -6,6 +6,24 @@ use crate::bsdf::{Kind, Model};
 use crate::scene::{Bsdf, MaterialIds, Scene, Sphere, Textures};
 use glam::{Vec2, Vec3};
 
+/// Triangles up to which a mesh in several runs keeps each triangle's material one by one
+/// (8 MB of ids at most: built once per render plan).
+const DENSE_UP_TO: usize = 1 << 22;
+
+/// Each triangle's material of `ids` one by one, or nothing where the runs are cheap to
+/// search (one run) or the table would be large.
+fn dense_ids(ids: &MaterialIds, materials: usize) -> Vec<u16> {
+    if ids.len() > DENSE_UP_TO || ids.runs().nth(1).is_none() || materials > usize::from(u16::MAX) + 1 {
+        return Vec::new();
+    }
+    let mut out = Vec::with_capacity(ids.len());
+    for (start, end, id) in ids.runs() {
+        out.resize(end, id as u16);
+        debug_assert_eq!(out.len() - (end - start), start);
+    }
+    out
+}
+
 /// Per-material tables, indexed by material id.
 pub struct MaterialTable<'a> {
     /// Per material: diffuse albedo and emitted radiance.
@@ -25,6 +43,10 @@ pub struct MaterialTable<'a> {
     pub textures: Textures,
     /// What the glTF material extensions need per render ([`LayerData`]).
     pub layers: LayerData,
+    /// Each triangle's material one by one, for meshes of up to [`DENSE_UP_TO`] triangles in
+    /// more than one run (empty otherwise): a shaded hit's material is then one load instead
+    /// of a binary search over the runs, a chain of dependent loads every hit waited on.
+    dense: Vec<u16>,
     /// Which material each primitive has: triangles by their ids, then spheres.
     triangle_ids: &'a MaterialIds,
     triangles: usize,
@@ -51,6 +73,7 @@ impl<'a> MaterialTable<'a> {
             models,
             textures: Textures::new(scene),
             layers: LayerData::new(scene),
+            dense: dense_ids(&scene.mesh.material_ids, scene.materials.len()),
             triangle_ids: &scene.mesh.material_ids,
             triangles: scene.mesh.triangles.len(),
             spheres: &scene.spheres,
@@ -61,10 +84,38 @@ impl<'a> MaterialTable<'a> {
     #[inline]
     pub fn material_of(&self, prim: u32) -> usize {
         let p = prim as usize;
+        if let Some(&m) = self.dense.get(p) {
+            return m as usize;
+        }
         if p < self.triangles {
             self.triangle_ids[p] as usize
         } else {
             self.spheres[p - self.triangles].material as usize
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The table holds each triangle's material of the runs, and is left out where the runs
+    /// are cheap to search or the table would be large.
+    #[test]
+    fn dense_ids_are_the_runs_ids() {
+        let mut ids = MaterialIds::default();
+        for (id, count) in [(3, 5), (0, 1), (7, 12), (3, 2), (65535, 4)] {
+            ids.push_run(id, count);
+        }
+        let dense = dense_ids(&ids, 65536);
+        assert_eq!(dense.len(), 24);
+        for (t, &m) in dense.iter().enumerate() {
+            assert_eq!(u32::from(m), ids[t], "triangle {t}");
+        }
+        assert!(dense_ids(&ids, 65537).is_empty(), "ids beyond u16");
+        assert!(dense_ids(&MaterialIds::uniform(2, 100), 3).is_empty(), "one run");
+        let mut big = MaterialIds::uniform(0, DENSE_UP_TO);
+        big.push_run(1, 1);
+        assert!(dense_ids(&big, 2).is_empty(), "more than DENSE_UP_TO triangles");
     }
 }
