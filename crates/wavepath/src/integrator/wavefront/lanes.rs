@@ -612,11 +612,16 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                 g.vertex[j].material = m as u32;
                 emission_of(t, m, &ray, &hit)
             };
-            if F::EMISSION && depth == 0 && sees_emission {
+            // Most hits find no light: nothing is added (adding the zero cost the camera
+            // rays' hits a stalled reload of the emission each).
+            if F::EMISSION && depth == 0 && sees_emission && emission != Vec3::ZERO {
                 q.radiance[i] += emission;
             }
             if arrivals && depth > 0 {
-                q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &ray, &hit, emission, depth);
+                let found = t.arrival_at_hit(q.bounce[i], &ray, &hit, emission, depth);
+                if found != Vec3::ZERO {
+                    q.radiance[i] += q.throughput[i] * found;
+                }
             }
             if !F::DIRECT && !F::INDIRECT {
                 continue;
