@@ -204,15 +204,18 @@ impl<'a> Transport<'a> {
     #[inline(always)]
     pub fn vertex(&self, ray: &Ray, hit: &Hit) -> Vertex {
         let sp = self.scene.surface_point_with(ray, hit, self.materials.textures.any());
-        let bumped = self.materials.layers.any_relief && self.materials.layers.relief[sp.material as usize];
+        // The material from the render's table (one load for most meshes), as every shading
+        // kernel reads it; the same id as `sp.material`.
+        let material = self.materials.material_of(hit.prim) as u32;
+        let bumped = self.materials.layers.any_relief && self.materials.layers.relief[material as usize];
         let (ng, ns, front) = if bumped {
-            let n = self.scene.relief_normal(hit, sp.shading_normal, sp.uv, sp.material);
+            let n = self.scene.relief_normal(hit, sp.shading_normal, sp.uv, material);
             let (ng, ns, front) = orient(sp.geometric_normal, n, ray.dir);
             (ng, crate::scene::relief::keep_visible(ns, ng, -ray.dir), front)
         } else {
             orient(sp.geometric_normal, sp.shading_normal, ray.dir)
         };
-        let m = sp.material as usize;
+        let m = material as usize;
         let emission = if front || self.materials.two_sided_emission[m] {
             self.materials.textures.emission(m, sp.uv).unwrap_or(self.materials.emission[m])
         } else {
@@ -226,7 +229,7 @@ impl<'a> Transport<'a> {
             albedo: self.materials.textures.albedo(m, sp.uv).unwrap_or(self.materials.albedo[m]) * sp.color,
             emission,
             metal_rough: self.materials.textures.metal_rough(m, sp.uv).unwrap_or(self.materials.metal_rough[m]),
-            material: sp.material,
+            material,
             front,
             uv: sp.uv,
             bumped,
