@@ -195,7 +195,14 @@ impl Emitter {
     #[inline(always)]
     pub fn point(&self, u: f32, v: f32) -> (Vec3, f32, f32) {
         let (bu, bv) = warp::uniform_triangle(u, v);
-        (self.a + bu * self.e1 + bv * self.e2, bu, bv)
+        (Self::point_at(self.a, self.e1, self.e2, bu, bv), bu, bv)
+    }
+
+    /// The point at barycentrics (`bu`, `bv`) of the triangle with corner `a` and edges `e1`,
+    /// `e2` from it (the lane kernels hold the corners of a group's triangles in lanes).
+    #[inline(always)]
+    pub fn point_at(a: Vec3, e1: Vec3, e2: Vec3, bu: f32, bv: f32) -> Vec3 {
+        a + bu * e1 + bv * e2
     }
 }
 

@@ -355,16 +355,37 @@ fn emissive_rays<const L: usize>(
         let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
         let uc = rng8::next_f32_lanes(avx, rng, dim + 1);
         dim += 2;
+        // The picks first (independent searches), then each picked triangle's fields into
+        // lanes, then the points of all lanes at once: picking, reading and sampling one lane
+        // at a time made each lane wait on its own chain of loads.
+        let mut picked = [usize::MAX; L];
+        for j in 0..g.n {
+            if g.direct[j] {
+                picked[j] = e.pick(uc[j]).unwrap_or(usize::MAX);
+            }
+        }
         let mut tri = Emitters::<L>::default();
+        let mut corners = [[[0.0; L]; 3]; 3];
+        for j in 0..g.n {
+            if picked[j] != usize::MAX {
+                let t = e.triangle(picked[j]);
+                tri.set(j, t);
+                put(&mut corners[0], j, t.a);
+                put(&mut corners[1], j, t.e1);
+                put(&mut corners[2], j, t.e2);
+            }
+        }
         let mut point = [[0.0; L]; 3];
+        let (mut bu, mut bv) = ([0.0; L], [0.0; L]);
+        for j in 0..L {
+            (bu[j], bv[j]) = warp::uniform_triangle(ua[j], ub[j]);
+            let [a, e1, e2] = [get(&corners[0], j), get(&corners[1], j), get(&corners[2], j)];
+            put(&mut point, j, Emitter::point_at(a, e1, e2, bu[j], bv[j]));
+        }
         let mut le = [[0.0; L]; 3];
         for j in 0..g.n {
-            if let (true, Some(i)) = (g.direct[j], e.pick(uc[j])) {
-                let t = e.triangle(i);
-                tri.set(j, t);
-                let (qp, bu, bv) = t.point(ua[j], ub[j]);
-                put(&mut point, j, qp);
-                put(&mut le, j, e.emitted(i, bu, bv));
+            if picked[j] != usize::MAX {
+                put(&mut le, j, e.emitted(picked[j], bu[j], bv[j]));
             }
         }
         // Into a local first: a loop writing through the queue's buffer is left scalar (its
