@@ -287,29 +287,43 @@ mod tests {
         }
     }
 
+    /// Groups of `N` Sobol streams (a vertex of `1 + n % 5` bounces, sample indices below the
+    /// sequence's length, and in every `every`-th group lane `past` beyond it), one per `n`.
+    fn sobol_groups<const N: usize>(spp: u32, every: u32, past: usize) -> impl Iterator<Item = (u32, [Sampler; N])> {
+        let pattern = crate::sampling::Pattern::new(crate::sampling::SamplerKind::Sobol, spp);
+        let mut state = 0x0FED_CBA9_8765_4321u64 ^ N as u64;
+        (0..3000u32).map(move |n| {
+            let mut s = [Sampler::default(); N];
+            for (j, lane) in s.iter_mut().enumerate() {
+                state = splitmix64(state);
+                let index = if n % every == 0 && j == past { (1 << 16) + n } else { (state as u32) % 4096 };
+                *lane = pattern.vertex((state & !0xFFFF_FFFF) | index as u64, 1 + n % 5);
+            }
+            (n, s)
+        })
+    }
+
+    /// Each lane's numbers `((a, b), f)` at dimension `dim` are its scalar stream's.
+    fn assert_scalar<const N: usize>(s: &[Sampler; N], dim: u32, ((a, b), f): (([f32; N], [f32; N]), [f32; N])) {
+        for j in 0..N {
+            let (wa, wb) = s[j].at(dim).next_2d();
+            assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "dim {dim} lane {j}");
+            assert_eq!(f[j].to_bits(), s[j].at(dim).next_f32().to_bits(), "dim {dim} lane {j}");
+        }
+    }
+
     /// Sobol streams (the default sampler) give the scalar numbers too, lanes with sample
     /// indices inside the sequence and past it (hashed numbers) mixed or not.
     #[test]
     fn sobol_lanes_are_the_scalar_streams() {
         let Some(avx) = Avx2::new() else { return };
-        let pattern = crate::sampling::Pattern::new(crate::sampling::SamplerKind::Sobol, 64);
-        let mut state = 0x0FED_CBA9_8765_4321u64;
-        for n in 0..3000u32 {
-            let mut s = [Sampler::default(); LANES];
-            for (j, lane) in s.iter_mut().enumerate() {
-                state = splitmix64(state);
-                // Sample indices below the sequence's length, and in every fourth group one
-                // lane past it.
-                let index = if n % 4 == 0 && j == 3 { (1 << 16) + n } else { (state as u32) % 4096 };
-                *lane = pattern.vertex((state & !0xFFFF_FFFF) | index as u64, 1 + n % 5);
-            }
+        for (n, s) in sobol_groups::<LANES>(64, 4, 3) {
             let dim = n % 9;
-            let ((a, b), f) = crate::cpu::with_avx2(avx, |avx| (next_2d_x8(avx, &s, dim), next_f32_x8(avx, &s, dim)));
-            for j in 0..LANES {
-                let (wa, wb) = s[j].at(dim).next_2d();
-                assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "group {n} lane {j}");
-                assert_eq!(f[j].to_bits(), s[j].at(dim).next_f32().to_bits(), "group {n} lane {j}");
-            }
+            assert_scalar(
+                &s,
+                dim,
+                crate::cpu::with_avx2(avx, |avx| (next_2d_x8(avx, &s, dim), next_f32_x8(avx, &s, dim))),
+            );
         }
     }
 
@@ -318,23 +332,13 @@ mod tests {
     #[test]
     fn sixteen_sobol_lanes_are_the_scalar_streams() {
         let Some(avx) = Avx2::new() else { return };
-        let pattern = crate::sampling::Pattern::new(crate::sampling::SamplerKind::Sobol, 256);
-        let mut state = 0x5151_7E57_0000_0001u64;
-        for n in 0..2000u32 {
-            let mut s = [Sampler::default(); 16];
-            for (j, lane) in s.iter_mut().enumerate() {
-                state = splitmix64(state);
-                let index = if n % 3 == 0 && j == 11 { (1 << 16) + n } else { (state as u32) % 65536 };
-                *lane = pattern.vertex((state & !0xFFFF_FFFF) | index as u64, n % 6);
-            }
+        for (n, s) in sobol_groups::<16>(256, 3, 11) {
             let dim = n % 13;
-            let ((a, b), f) =
-                crate::cpu::with_avx2(avx, |avx| (next_2d_lanes(avx, &s, dim), next_f32_lanes(avx, &s, dim)));
-            for j in 0..16 {
-                let (wa, wb) = s[j].at(dim).next_2d();
-                assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "group {n} lane {j}");
-                assert_eq!(f[j].to_bits(), s[j].at(dim).next_f32().to_bits(), "group {n} lane {j}");
-            }
+            assert_scalar(
+                &s,
+                dim,
+                crate::cpu::with_avx2(avx, |avx| (next_2d_lanes(avx, &s, dim), next_f32_lanes(avx, &s, dim))),
+            );
         }
     }
 }
