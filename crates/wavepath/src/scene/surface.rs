@@ -40,6 +40,19 @@ impl Scene {
         n.dot(ray.dir) <= 0.0
     }
 
+    /// The uv of triangle `prim` at barycentrics (`u`, `v`): the mesh's uvs interpolated, or
+    /// (`u`, `v`) itself where the mesh has none.
+    #[inline(always)]
+    pub fn triangle_uv(&self, prim: usize, u: f32, v: f32) -> Vec2 {
+        match &self.mesh.uvs {
+            Some(t) => {
+                let [ia, ib, ic] = self.mesh.triangles[prim];
+                (1.0 - u - v) * t[ia as usize] + u * t[ib as usize] + v * t[ic as usize]
+            }
+            None => Vec2::new(u, v),
+        }
+    }
+
     /// [`surface_point`](Self::surface_point); a sphere point's `uv` (an `atan2` and an `acos`)
     /// only when `uv` is asked for (zero otherwise: untextured shading never reads it).
     #[inline(always)]
@@ -58,10 +71,7 @@ impl Scene {
                 }
                 None => geometric_normal,
             };
-            let uv = match &self.mesh.uvs {
-                Some(t) => w * t[ia as usize] + u * t[ib as usize] + v * t[ic as usize],
-                None => Vec2::new(u, v),
-            };
+            let uv = self.triangle_uv(prim, u, v);
             let color = match &self.mesh.colors {
                 Some(c) => w * c[ia as usize] + u * c[ib as usize] + v * c[ic as usize],
                 None => Vec3::ONE,

@@ -78,17 +78,22 @@ fn shade_width<F: Features, const L: usize>(
     idx: &[u32],
     shadow: &mut ShadowQueue,
 ) {
-    // Whole vertices (`Transport::vertex`, one lane at a time) where the surface has more than
-    // a position and normals to reconstruct; the lane-parallel reconstruction elsewhere.
-    let whole = t.materials.textures.any()
-        || t.scene.mesh.colors.is_some()
-        || t.materials.layers.any_relief
-        || (F::NON_DIFFUSE && t.materials.layers.volumes);
-    if whole {
+    if whole_vertices::<F>(t) {
         shade_groups::<F, true, L>(avx, t, q, idx, shadow)
     } else {
         shade_groups::<F, false, L>(avx, t, q, idx, shadow)
     }
+}
+
+/// Whether a kernel gathers whole vertices (`Transport::vertex`, one lane at a time): where
+/// the surface has more than a position and normals to reconstruct. Elsewhere the kernels
+/// reconstruct a group's points in lanes ([`surface_points`]).
+#[inline(always)]
+pub(super) fn whole_vertices<F: Features>(t: &Transport) -> bool {
+    t.materials.textures.any()
+        || t.scene.mesh.colors.is_some()
+        || t.materials.layers.any_relief
+        || (F::NON_DIFFUSE && t.materials.layers.volumes)
 }
 
 /// The shading points of a group, one array per component.
@@ -97,6 +102,8 @@ pub(super) struct Points<const L: usize> {
     pub e: [[f32; L]; 3],
     pub ng: [[f32; L]; 3],
     pub ns: [[f32; L]; 3],
+    /// The ray hit the front of the surface (`orient`'s third value).
+    pub front: [bool; L],
 }
 
 impl<const L: usize> Points<L> {
@@ -118,13 +125,13 @@ impl<const L: usize> Points<L> {
 impl<const L: usize> Default for Points<L> {
     fn default() -> Self {
         let z = [[0.0; L]; 3];
-        Points { p: z, e: z, ng: z, ns: z }
+        Points { p: z, e: z, ng: z, ns: z, front: [false; L] }
     }
 }
 
 /// What the surface points of a group are reconstructed from: a triangle's corners (and
 /// corner normals) and barycentrics, or a sphere and the ray's hit point on it.
-struct Surfaces<const L: usize> {
+pub(super) struct Surfaces<const L: usize> {
     corner: [[[f32; L]; 3]; 3],
     normal: [[[f32; L]; 3]; 3],
     u: [f32; L],
@@ -169,7 +176,7 @@ impl<const L: usize> Surfaces<L> {
     /// Gathers lane `j`'s hit (prim `prim`, on `ray`); `normals` is the mesh's corner
     /// normals, looked up once per stage rather than once per corner.
     #[inline(always)]
-    fn set(&mut self, t: &Transport, normals: Option<&[Vec3]>, j: usize, ray: &Ray, hit: &Hit) {
+    pub(super) fn set(&mut self, t: &Transport, normals: Option<&[Vec3]>, j: usize, ray: &Ray, hit: &Hit) {
         let mesh = &t.scene.mesh;
         let prim = hit.prim as usize;
         put(&mut self.dir, j, ray.dir);
@@ -197,7 +204,7 @@ impl<const L: usize> Surfaces<L> {
     /// `Scene::surface_point`), one kept, so all lanes run the same instructions; only the
     /// triangle's when the scene has no spheres (`SPHERES` false).
     #[inline(always)]
-    fn point<const NORMALS: bool, const SPHERES: bool>(&self, j: usize) -> ShadingPoint {
+    fn point<const NORMALS: bool, const SPHERES: bool>(&self, j: usize) -> (ShadingPoint, bool) {
         let (u, v) = (self.u[j], self.v[j]);
         let c = &self.corner;
         let (tp, te, tn) = triangle_point(get(&c[0], j), get(&c[1], j), get(&c[2], j), u, v);
@@ -213,14 +220,14 @@ impl<const L: usize> Surfaces<L> {
         } else {
             (tp, te, tn, ts)
         };
-        let (ng, ns, _) = orient(g, sh, get(&self.dir, j));
-        ShadingPoint { p, p_error, ng, ns }
+        let (ng, ns, front) = orient(g, sh, get(&self.dir, j));
+        (ShadingPoint { p, p_error, ng, ns }, front)
     }
 }
 
 /// Reconstructs the shading points of all lanes (lane-parallel).
 #[inline(always)]
-fn surface_points<const L: usize>(s: &Surfaces<L>, normals: bool, spheres: bool, out: &mut Points<L>) {
+pub(super) fn surface_points<const L: usize>(s: &Surfaces<L>, normals: bool, spheres: bool, out: &mut Points<L>) {
     // Plain loops, no closures: a closure may be compiled out of line, without AVX2.
     match (normals, spheres) {
         (true, true) => points_of::<true, true, L>(s, out),
@@ -233,7 +240,9 @@ fn surface_points<const L: usize>(s: &Surfaces<L>, normals: bool, spheres: bool,
 #[inline(always)]
 fn points_of<const NORMALS: bool, const SPHERES: bool, const L: usize>(s: &Surfaces<L>, out: &mut Points<L>) {
     for j in 0..L {
-        out.set(j, &s.point::<NORMALS, SPHERES>(j));
+        let (sp, front) = s.point::<NORMALS, SPHERES>(j);
+        out.set(j, &sp);
+        out.front[j] = front;
     }
 }
 
@@ -564,7 +573,7 @@ struct Group<const L: usize> {
 /// The emission of a hit on material `m` seen from `ray` (as `Transport::vertex` computes it
 /// where the material has no emission texture).
 #[inline(always)]
-fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
+pub(super) fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
     let e = t.materials.emission[m];
     if e == Vec3::ZERO || t.materials.two_sided_emission[m] {
         e

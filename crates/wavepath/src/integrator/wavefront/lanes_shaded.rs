@@ -1,7 +1,8 @@
 //! Shade for the hits on every material but the Lambertian one (glossy, metallic-roughness,
 //! conductors, mirror, glass, the layered glTF model), eight or sixteen paths at a time: each
-//! lane arrives one at a time ([`one_path::arrive`]: the vertex, its emission and the light
-//! its ray found), the group's random numbers are drawn in lanes, as many dimensions as the
+//! lane arrives one at a time ([`one_path::arrive_as`]: its emission and the light its ray
+//! found), the group's vertices are reconstructed in lanes (one lane at a time where the
+//! surface has textures, colours, relief or volumes), the group's random numbers are drawn in lanes, as many dimensions as the
 //! group's materials read ([`Transport::shaded_numbers`]), and the vertices leave by model.
 //! The numbers are the vertex streams' own ([`Drawn`]), so the rays are those of the
 //! one-path kernel, bit for bit.
@@ -20,15 +21,17 @@
 
 use super::Features;
 use super::ShadeWidth;
-use super::lanes::Rays;
+use super::lanes::{self, Points, Rays, Surfaces, get, surface_points};
 use super::lanes_glossy::{self, ModelGroup};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::bsdf::{Dielectric, Glossy, Kind, Layered, Microfacet, Mirror, Model, Pbr, to_local};
 use crate::cpu::{Avx2, Avx512};
+use crate::geometry::Hit;
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::sampling::numbers::Drawn;
 use crate::sampling::{Frame, Sampler, SamplerKind, rng8};
+use glam::{Vec2, Vec3};
 
 /// Shades the paths `idx` (hits on non-Lambertian materials), `L` at a time; `table` is
 /// scratch for the numbers drawn ahead.
@@ -96,6 +99,13 @@ fn shade_groups<F: Features, const L: usize>(
     let mut glass = ModelGroup::<Dielectric, L>::new();
     let mut layered = ModelGroup::<Layered, L>::new();
     let mut pending: Vec<Rays<L>> = Vec::new();
+    // Where the surfaces need no more than points and normals, the group's vertices are
+    // reconstructed in lanes (as the diffuse kernel's), not one lane at a time.
+    let whole = lanes::whole_vertices::<F>(t);
+    let corner_normals = t.scene.mesh.normals.as_deref();
+    let spheres = !t.scene.spheres.is_empty();
+    let mut surf = Surfaces::<L>::default();
+    let mut pts = Points::<L>::default();
     for chunk in idx.chunks(L) {
         let mut vertex: [Option<Vertex>; L] = [None; L];
         let mut vertex_input = [0u64; L];
@@ -104,21 +114,36 @@ fn shade_groups<F: Features, const L: usize>(
         // Whether a lane reads light samples (a glossy vertex whose direct light counts):
         // else only the continuation, lobe and roulette numbers are drawn.
         let mut lights = false;
+        let mut hits: [Option<(Hit, usize, Vec3)>; L] = [None; L];
         for (j, &pi) in chunk.iter().enumerate() {
             let i = pi as usize;
-            let Some(v) = one_path::arrive::<F>(t, q, i) else { continue };
+            let arrival =
+                if whole { one_path::arrive_as::<F, true>(t, q, i) } else { one_path::arrive_as::<F, false>(t, q, i) };
+            let Some(a) = arrival else { continue };
             let depth = q.depth[i];
             vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
             if !hashed {
                 patterned[j] = t.streams.vertex_sampler(q.key[i], depth);
             }
-            lights |= F::DIRECT
-                && t.rules.counts_direct(depth)
-                && t.materials.models[v.material as usize].kind() == Kind::Glossy;
+            lights |=
+                F::DIRECT && t.rules.counts_direct(depth) && t.materials.models[a.material].kind() == Kind::Glossy;
             first.get_or_insert(j);
-            vertex[j] = Some(v);
+            if whole {
+                vertex[j] = Some(a.vertex);
+            } else {
+                surf.set(t, corner_normals, j, &q.ray[i], &a.hit);
+                hits[j] = Some((a.hit, a.material, a.emission));
+            }
         }
         let Some(first) = first else { continue };
+        if !whole {
+            surface_points(&surf, corner_normals.is_some(), spheres, &mut pts);
+            for j in 0..L {
+                if let Some((hit, m, emission)) = &hits[j] {
+                    vertex[j] = Some(lane_vertex(t, &pts, j, hit, *m, *emission));
+                }
+            }
+        }
         let rng = if hashed {
             rng8::for_vertex_lanes(avx, &vertex_input)
         } else {
@@ -196,5 +221,35 @@ fn shade_groups<F: Features, const L: usize>(
         if layered.n > 0 {
             lanes_glossy::leave::<F, Layered, L>(t, q, &layered, table, dims, &rng, &mut pending, shadow);
         }
+    }
+}
+
+/// Lane `j`'s vertex from the group's points `pts` (hit `hit` on material `m`, emission seen
+/// `emission`): what `Transport::vertex` gives a surface with no textures, colours, relief or
+/// volumes, field for field.
+#[inline(always)]
+fn lane_vertex<const L: usize>(
+    t: &Transport,
+    pts: &Points<L>,
+    j: usize,
+    hit: &Hit,
+    m: usize,
+    emission: Vec3,
+) -> Vertex {
+    let prim = hit.prim as usize;
+    // A sphere's uv is computed only for textures (`Scene::surface_point_with`).
+    let uv = if prim < t.scene.mesh.triangles.len() { t.scene.triangle_uv(prim, hit.u, hit.v) } else { Vec2::ZERO };
+    Vertex {
+        p: get(&pts.p, j),
+        p_error: get(&pts.e, j),
+        ng: get(&pts.ng, j),
+        ns: get(&pts.ns, j),
+        albedo: t.materials.albedo[m],
+        emission,
+        metal_rough: t.materials.metal_rough[m],
+        material: m as u32,
+        front: pts.front[j],
+        uv,
+        bumped: false,
     }
 }

@@ -2,11 +2,13 @@
 //! emission, light its ray found, the vertex) and what it sends on from there ([`leave`]:
 //! direct-light rays and the continuation, from the vertex's random numbers). The one-path
 //! kernel runs both with the vertex's stream; the lane kernel for the non-Lambertian kinds
-//! runs [`arrive`] per lane, draws the group's numbers in lanes and then runs [`leave`] per
+//! runs [`arrive_as`] per lane, draws the group's numbers in lanes and then runs [`leave`] per
 //! lane with them, so both make the same rays, bit for bit.
 
 use super::Features;
+use super::lanes::{NO_VERTEX, emission_of};
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
+use crate::geometry::Hit;
 use crate::integrator::{Transport, Vertex};
 use crate::sampling::Numbers;
 use glam::Vec3;
@@ -15,6 +17,24 @@ use glam::Vec3;
 /// to leave from, `None` when the path ends here (escaped, or nothing is sent on).
 #[inline(always)]
 pub fn arrive<F: Features>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Vertex> {
+    arrive_as::<F, true>(t, q, i).map(|a| a.vertex)
+}
+
+/// What a path that goes on from its hit leaves for the lanes: the hit, its material and the
+/// emission seen, and (from [`arrive_as`] with `WHOLE`) its vertex.
+pub struct Arrival {
+    pub hit: Hit,
+    pub material: usize,
+    pub emission: Vec3,
+    pub vertex: Vertex,
+}
+
+/// [`arrive`]; without `WHOLE` the vertex is left out ([`super::lanes::NO_VERTEX`]) and the
+/// hit's material and emission are found without it, for kernels that reconstruct a group's
+/// vertices in lanes (surfaces with no textures, colours, relief or volumes:
+/// [`super::lanes::whole_vertices`] false; the emission is then the vertex's).
+#[inline(always)]
+pub fn arrive_as<F: Features, const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Arrival> {
     let sees_emission = t.rules.counts_emission();
     let depth = q.depth[i];
     q.alive[i] = false;
@@ -27,17 +47,23 @@ pub fn arrive<F: Features>(t: &Transport, q: &mut PathQueue, i: usize) -> Option
         }
         return None;
     };
-    let v = t.vertex(&q.ray[i], &hit);
-    if F::NON_DIFFUSE && t.materials.layers.volumes {
-        q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
-    }
+    let (material, emission, vertex) = if WHOLE {
+        let v = t.vertex(&q.ray[i], &hit);
+        if F::NON_DIFFUSE && t.materials.layers.volumes {
+            q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
+        }
+        (v.material as usize, v.emission, v)
+    } else {
+        let m = t.materials.material_of(hit.prim);
+        (m, emission_of(t, m, &q.ray[i], &hit), NO_VERTEX)
+    };
     if F::EMISSION && depth == 0 && sees_emission {
-        q.radiance[i] += v.emission;
+        q.radiance[i] += emission;
     }
     if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
-        q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, v.emission, depth);
+        q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, emission, depth);
     }
-    (F::DIRECT || F::INDIRECT).then_some(v)
+    (F::DIRECT || F::INDIRECT).then_some(Arrival { hit, material, emission, vertex })
 }
 
 /// Path `i` leaves vertex `v` (of its current depth) with the numbers `rng`: its shadow rays
