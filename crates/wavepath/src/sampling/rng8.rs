@@ -168,16 +168,7 @@ pub fn next_f32_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> 
 /// products per draw: the sampler was about a fifth of the diffuse kernel's time).
 #[inline(always)]
 fn sobol_wide<const L: usize>(s: &[Sampler; L], dim: u32) -> Option<([u32; L], [u32; L])> {
-    let mut index = [0u32; L];
-    let mut all = true;
-    for j in 0..L {
-        let i = s[j].sobol_index();
-        all &= i.is_some();
-        index[j] = i.unwrap_or(0);
-    }
-    if !all {
-        return None;
-    }
+    let index = sobol_indices(s)?;
     let mut seeds = [0u32; L];
     for j in 0..L {
         seeds[j] = (splitmix64(s[j].dim_input(dim)) >> 32) as u32;
@@ -185,11 +176,11 @@ fn sobol_wide<const L: usize>(s: &[Sampler; L], dim: u32) -> Option<([u32; L], [
     Some((index, seeds))
 }
 
-/// The point indices of eight Sobol streams, when every lane's numbers come from the sequence.
+/// The point indices of `N` Sobol streams, when every lane's numbers come from the sequence.
 #[inline(always)]
-fn sobol_indices(s: &[Sampler; LANES]) -> Option<[u32; LANES]> {
-    let mut index = [0u32; LANES];
-    for j in 0..LANES {
+fn sobol_indices<const N: usize>(s: &[Sampler; N]) -> Option<[u32; N]> {
+    let mut index = [0u32; N];
+    for j in 0..N {
         index[j] = s[j].sobol_index()?;
     }
     Some(index)
