@@ -85,14 +85,30 @@ impl Pattern {
     /// depth d).
     #[inline]
     pub fn vertex(self, key: u64, bounce: u32) -> Sampler {
+        self.with_hash(key, splitmix64(self.hash_input(key, bounce)))
+    }
+
+    /// What stream `bounce` of the path with key `key` hashes: a patterned stream keys its
+    /// dimensions by the pixel (the key's top half), an independent one by the whole key.
+    #[inline(always)]
+    pub(super) fn hash_input(self, key: u64, bounce: u32) -> u64 {
+        match self.kind {
+            SamplerKind::Independent => Sampler::vertex_input(key, bounce),
+            _ => Sampler::vertex_input(key & !0xFFFF_FFFF, bounce),
+        }
+    }
+
+    /// The stream of the path with key `key` whose [`hash_input`](Self::hash_input) hashes
+    /// to `hash` (hashed elsewhere: for all lanes of a kernel at once).
+    #[inline(always)]
+    pub(super) fn with_hash(self, key: u64, hash: u64) -> Sampler {
         let index = key as u32;
         let seq = match self.kind {
-            SamplerKind::Independent => return Sampler::for_vertex(key, bounce),
+            SamplerKind::Independent => Seq::Hashed,
             SamplerKind::Stratified => Seq::Stratified { index, strata: self.strata },
             SamplerKind::Sobol => Seq::Sobol { index },
         };
-        let key = splitmix64(Sampler::vertex_input(key & !0xFFFF_FFFF, bounce));
-        Sampler { key, dim: 0, seq }
+        Sampler { key: hash, dim: 0, seq }
     }
 }
 

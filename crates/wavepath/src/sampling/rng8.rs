@@ -4,9 +4,9 @@
 //! so the bits are those of the scalar streams. The compiler keeps a plain loop of eight
 //! `wrapping_mul`s scalar.
 
-use super::Sampler;
 use super::pattern::{sobol_1d, sobol_2d};
 use super::splitmix::{splitmix64, unit_f32};
+use super::{Pattern, Sampler};
 use crate::cpu::Avx2;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -106,14 +106,32 @@ pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
     next_2d_x8(avx, s, dim).0
 }
 
-/// The streams of `L` vertices (a multiple of eight) from their inputs, eight at a time.
+/// [`Pattern::vertex`] of `L` paths (a multiple of eight): the streams of vertex `bounces[j]`
+/// of the paths with keys `keys[j]`, hashed for all lanes at once (sixteen lanes in plain
+/// loops, which the AVX-512 kernels compile to 64-bit vector products; eight with the AVX2
+/// forms). One lane at a time in a kernel's gather, each lane's hash was a chain of dependent
+/// 64-bit products.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn for_vertex_lanes<const L: usize>(avx: Avx2, inputs: &[u64; L]) -> [Sampler; L] {
+pub fn vertex_lanes<const L: usize>(avx: Avx2, pattern: Pattern, keys: &[u64; L], bounces: &[u32; L]) -> [Sampler; L] {
+    let mut inputs = [0u64; L];
+    for j in 0..L {
+        inputs[j] = pattern.hash_input(keys[j], bounces[j]);
+    }
+    let mut hashes = [0u64; L];
+    if L > LANES {
+        for j in 0..L {
+            hashes[j] = splitmix64(inputs[j]);
+        }
+    } else {
+        for c in (0..L).step_by(LANES) {
+            let part: &[u64; LANES] = inputs[c..c + LANES].try_into().expect("groups of eight");
+            hashes[c..c + LANES].copy_from_slice(&splitmix64_x8(avx, part));
+        }
+    }
     let mut out = [Sampler::default(); L];
-    for c in (0..L).step_by(LANES) {
-        let part: &[u64; LANES] = inputs[c..c + LANES].try_into().expect("groups of eight");
-        out[c..c + LANES].copy_from_slice(&for_vertex_x8(avx, part));
+    for j in 0..L {
+        out[j] = pattern.with_hash(keys[j], hashes[j]);
     }
     out
 }

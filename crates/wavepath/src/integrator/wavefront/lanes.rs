@@ -614,8 +614,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
         depth: [0; L],
     };
     for chunk in idx.chunks(L) {
-        let mut vertex_input = [0u64; L];
-        let mut patterned = [Sampler::default(); L];
+        let mut keys = [0u64; L];
         g.direct = [false; L];
         g.cont = [false; L];
         g.n = chunk.len();
@@ -656,11 +655,8 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             if !F::DIRECT && !F::INDIRECT {
                 continue;
             }
-            // As `Transport::vertex_sampler`, hashed for all lanes below.
-            vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
-            if !hashed {
-                patterned[j] = t.streams.vertex_sampler(q.key[i], depth);
-            }
+            // The lane's stream (`Transport::vertex_sampler`) is hashed for all lanes below.
+            keys[j] = q.key[i];
             let albedo = g.vertex[j].albedo;
             g.direct[j] = F::DIRECT && t.rules.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
             g.cont[j] = F::INDIRECT && t.rules.diffuse_continues(depth) && albedo != Vec3::ZERO;
@@ -669,19 +665,21 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
         if !g.direct.iter().chain(&g.cont).any(|&b| b) {
             continue;
         }
-        let rng = if hashed {
-            rng8::for_vertex_lanes(avx, &vertex_input)
-        } else {
-            // Lanes that draw nothing take an active lane's stream, so that `rng8` sees eight
-            // streams of one pattern (Sobol's are drawn eight at a time).
+        let mut bounces = [0u32; L];
+        for j in 0..L {
+            bounces[j] = g.depth[j] + 1;
+        }
+        let mut rng = rng8::vertex_lanes(avx, t.streams.pattern, &keys, &bounces);
+        if !hashed {
+            // Lanes that draw nothing take an active lane's stream, so that `rng8` sees
+            // streams of one pattern (Sobol's are drawn for all lanes at once).
             let active = (0..g.n).find(|&j| g.direct[j] || g.cont[j]).unwrap_or(0);
             for j in 0..L {
                 if !(j < g.n && (g.direct[j] || g.cont[j])) {
-                    patterned[j] = patterned[active];
+                    rng[j] = rng[active];
                 }
             }
-            patterned
-        };
+        }
         if WHOLE {
             for j in 0..L {
                 pts.set(j, &g.vertex[j].shading_point());

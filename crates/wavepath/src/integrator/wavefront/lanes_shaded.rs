@@ -30,7 +30,7 @@ use crate::cpu::{Avx2, Avx512};
 use crate::geometry::Hit;
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::sampling::numbers::Drawn;
-use crate::sampling::{Frame, Sampler, SamplerKind, rng8};
+use crate::sampling::{Frame, SamplerKind, rng8};
 use glam::{Vec2, Vec3};
 
 /// Shades the paths `idx` (hits on non-Lambertian materials), `L` at a time; `table` is
@@ -108,8 +108,7 @@ fn shade_groups<F: Features, const L: usize>(
     let mut pts = Points::<L>::default();
     for chunk in idx.chunks(L) {
         let mut vertex: [Option<Vertex>; L] = [None; L];
-        let mut vertex_input = [0u64; L];
-        let mut patterned = [Sampler::default(); L];
+        let (mut keys, mut bounces) = ([0u64; L], [0u32; L]);
         let mut first = None;
         // Whether a lane reads light samples (a glossy vertex whose direct light counts):
         // else only the continuation, lobe and roulette numbers are drawn.
@@ -121,10 +120,7 @@ fn shade_groups<F: Features, const L: usize>(
                 if whole { one_path::arrive_as::<F, true>(t, q, i) } else { one_path::arrive_as::<F, false>(t, q, i) };
             let Some(a) = arrival else { continue };
             let depth = q.depth[i];
-            vertex_input[j] = Sampler::vertex_input(q.key[i], depth + 1);
-            if !hashed {
-                patterned[j] = t.streams.vertex_sampler(q.key[i], depth);
-            }
+            (keys[j], bounces[j]) = (q.key[i], depth + 1);
             lights |=
                 F::DIRECT && t.rules.counts_direct(depth) && t.materials.models[a.material].kind() == Kind::Glossy;
             first.get_or_insert(j);
@@ -144,18 +140,16 @@ fn shade_groups<F: Features, const L: usize>(
                 }
             }
         }
-        let rng = if hashed {
-            rng8::for_vertex_lanes(avx, &vertex_input)
-        } else {
+        let mut rng = rng8::vertex_lanes(avx, t.streams.pattern, &keys, &bounces);
+        if !hashed {
             // Lanes without a vertex take an active lane's stream, so that the numbers are
-            // drawn for streams of one pattern (Sobol's eight at a time).
+            // drawn for streams of one pattern (Sobol's for all lanes at once).
             for j in 0..L {
                 if vertex[j].is_none() {
-                    patterned[j] = patterned[first];
+                    rng[j] = rng[first];
                 }
             }
-            patterned
-        };
+        }
         let drawn = if lights { dims } else { dims.min(DIM_DIRECT as usize) };
         for d in 0..drawn {
             if layout.one_d[d] {
