@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Regenerate BENCHMARKS.md: current results of wavepath on this machine.
 
-    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,viewer,large,python] [--quick] [options]
+    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,split,viewer,large,python] [--quick] [options]
 
 The page is one section per part, each between `<!-- part:NAME -->` and `<!-- /part:NAME -->`
 and each with the date, machine, binary and command it was measured with. A run replaces the
@@ -14,6 +14,8 @@ Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
   peers    ray throughput beside Embree, tinybvh and obvhs in ../shared/peers/run.sh, with
            wavepath as an EXTRA_PEER (`wavepath rays trace`); several passes, ratios per pass
   e2e      whole renders against Mitsuba 3 at equal error (../shared/peers/e2e/run.sh)
+  split    where a sample's time goes: wavepath's stages beside Mitsuba's Embree traversal and
+           compiled kernels (`perf`), one thread, the e2e scenes (run after e2e)
   large    meshes at the size users have: Lucy subdivided (`wavepath subdivide`) to 1.6M and
            6.4M triangles (100k converted and 25.6M with --large-levels 0,2,3,4): load, BVH build and peak memory
            beside Embree's build (medium and high quality) on the same triangles, alternating
@@ -657,6 +659,141 @@ def md_e2e(args, part):
     return out
 
 
+# ------------------------------------------------------------------- split ----
+# The harness scenes, each with the wavepath options its comparison needs (as E2E_OLDER says).
+SPLIT_SCENES = [("box", ""), ("dragon-box", ""), ("spheres-box", ""), ("cornell", "--two-sided-emission"),
+                ("cornell-flush", "--two-sided-emission"), ("cornell-dragon", "--two-sided-emission")]
+SPLIT_FLAGS = "-s 64 -m 5 -r 320 240 -t 1"
+PERF_HZ = 4000
+
+
+def timed(cmd):
+    """Runs cmd: (stdout, wall seconds, other processes' share of the CPUs meanwhile)."""
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    b0, t0 = busy_ticks(), time.monotonic()
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wall = time.monotonic() - t0
+    busy = (busy_ticks() - b0) / TICK
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    own = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    if p.returncode != 0:
+        raise SystemExit(f"failed: {shlex.join(cmd)}\n{p.stderr[-2000:]}")
+    return p.stdout, wall, max(0.0, busy - own) / (wall * NCPU)
+
+
+def perf_split(report):
+    """Seconds of Embree's closest-hit and any-hit traversal and of Dr.Jit's compiled kernels in a
+    `perf report --sort dso,symbol -n` of a Mitsuba process (samples at PERF_HZ)."""
+    out = {"intersect": 0, "occluded": 0, "jit": 0}
+    for line in report.splitlines():
+        m = re.match(r"\s*[\d.]+%\s+(\d+)\s+(.*)", line)
+        if not m:
+            continue
+        n, rest = int(m.group(1)), m.group(2)
+        if "embree" in rest and "::intersect" in rest:
+            out["intersect"] += n
+        elif "embree" in rest and "::occluded" in rest:
+            out["occluded"] += n
+        elif "[JIT]" in rest:
+            out["jit"] += n
+    return {k: v / PERF_HZ for k, v in out.items()}
+
+
+def part_split(args, scenes_dir, peers_dir):
+    """Where a sample's time goes, wavepath's stages beside Mitsuba's (`llvm_ad_rgb`): one thread,
+    the e2e harness's scenes; Mitsuba's share in Embree and in its compiled kernels from `perf`."""
+    build = os.path.join(args.peers_work, "e2e", "build")
+    scenes, py = os.path.join(build, "scenes"), os.path.join(build, "venv", "bin", "python")
+    render_py = os.path.join(args.peers_work, "e2e", "mitsuba_render.py")
+    if not (os.path.isdir(scenes) and os.access(py, os.X_OK) and os.path.exists(render_py)):
+        raise SystemExit(f"split: no e2e scenes or Mitsuba under {build}: run --parts e2e first (same --peers-work)")
+    perf = shutil.which("perf")
+    if not perf:
+        raise SystemExit("split: needs `perf` (Debian: linux-perf) to see where Mitsuba's time goes")
+    tmp = os.path.join(args.work, "split")
+    os.makedirs(tmp, exist_ok=True)
+    part = {"load_before": loadavg(), "date": now_utc(), "runs": []}
+    for rnd in range(args.rounds):
+        for name, extra in SPLIT_SCENES:
+            d = os.path.join(scenes, name)
+            if not os.path.exists(os.path.join(d, "spec.json")):
+                log(f"split: skip {name}: not built")
+                continue
+            with open(os.path.join(d, "spec.json")) as f:
+                spec = json.load(f)
+            cam = os.path.join(d, "camera.txt")
+            stats = os.path.join(tmp, "wavepath.json")
+            wp = ([args.bin] + (["-c", cam] if os.path.exists(cam) else []) +
+                  [os.path.normpath(os.path.join(d, spec["wavepath_scene"]))] + SPLIT_FLAGS.split() +
+                  extra.split() + ["-f", os.path.join(tmp, "wavepath.pfm"), "--stats", stats])
+            mi = [py, render_py, "--spec", os.path.join(d, "spec.json"), "--variant", "llvm_ad_rgb", "-r", "320",
+                  "240", "-m", "5", "--spp", "64", "--threads", "1", "--seed", "0", "--out",
+                  os.path.join(tmp, "mitsuba.npy")]
+            data = os.path.join(tmp, "perf.data")
+            perf_mi = [perf, "record", "-q", "-F", str(PERF_HZ), "-e", "cpu-clock", "-o", data] + mi
+            rec = {"scene": name, "round": rnd, "busy": []}
+            for which in (("wp", "mi", "perf") if rnd % 2 == 0 else ("mi", "perf", "wp")):
+                wait_quiet(args.wait_quiet)
+                if which == "wp":
+                    _, _, busy = timed(wp)
+                    with open(stats) as f:
+                        st = json.load(f)
+                    rec["wp"] = {"render_s": st["render_s"], **{k: st["stages"].get(k, 0.0) for k in STAGES}}
+                elif which == "mi":
+                    out, _, busy = timed(mi)
+                    rec["mi_render_s"] = json.loads(out.strip().splitlines()[-1])["render_s"]
+                else:
+                    out, _, busy = timed(perf_mi)
+                    rec["mi_perf_render_s"] = json.loads(out.strip().splitlines()[-1])["render_s"]
+                    rep = sh([perf, "report", "-i", data, "--no-children", "--sort", "dso,symbol", "-n"])
+                    rec["mi_split"] = perf_split(rep)
+                rec["busy"].append(busy)
+            log(f"split {name:15s} wavepath {rec['wp']['render_s']:.3f} s, Mitsuba {rec['mi_render_s']:.3f} s "
+                f"(under perf {rec['mi_perf_render_s']:.3f}: {rec['mi_split']})")
+            part["runs"].append(rec)
+    part["load_after"] = loadavg()
+    busy = [b for r in part["runs"] for b in r["busy"]] or [0.0]
+    part["busy_mean"], part["busy_max"] = statistics.mean(busy), max(busy)
+    return part
+
+
+def md_split(args, part):
+    def med(xs):
+        return statistics.median(xs) if xs else float("nan")
+
+    out = ["## Where a sample's time goes against Mitsuba 3\n"]
+    out.append(f"The e2e harness's scenes rendered by both renderers at `{SPLIT_FLAGS}` (one thread: thread-seconds "
+               "are seconds), seconds per render, medians over rounds of fresh processes alternating. wavepath's "
+               "stages from `--stats` (shading: shade + compact + generate). Mitsuba `llvm_ad_rgb`'s parts from "
+               f"`perf record -F {PERF_HZ}` of a separate run (Embree's closest-hit and any-hit traversal, the "
+               "compiled kernels Dr.Jit runs for everything else), scaled to its render time without perf; they "
+               "include its untimed 1-spp warm-up render (1/65 of the rays). Ratios wavepath / Mitsuba (> 1: "
+               "wavepath slower).\n")
+    out.append("| scene | wavepath s | Mitsuba s | ratio | closest hits wp / mi | any hits wp / mi | "
+               "shading wp / mi |")
+    out.append("|---|--:|--:|--:|--:|--:|--:|")
+    for name, _ in SPLIT_SCENES:
+        runs = [r for r in part["runs"] if r["scene"] == name]
+        if not runs:
+            continue
+        wp = med([r["wp"]["render_s"] for r in runs])
+        mi = med([r["mi_render_s"] for r in runs])
+        scale = [r["mi_render_s"] / r["mi_perf_render_s"] for r in runs]
+        mi_part = {k: med([r["mi_split"][k] * f for r, f in zip(runs, scale)]) for k in ("intersect", "occluded", "jit")}
+        trav = med([r["wp"]["traverse"] for r in runs])
+        shadow = med([r["wp"]["shadow"] for r in runs])
+        shading = med([r["wp"]["shade"] + r["wp"]["compact"] + r["wp"]["generate"] for r in runs])
+        out.append(f"| {name} | {wp:.3f} | {mi:.3f} | **{wp / mi:.2f}** | {trav:.3f} / {mi_part['intersect']:.3f} "
+                   f"({trav / mi_part['intersect']:.2f}) | {shadow:.3f} / {mi_part['occluded']:.3f} "
+                   f"({shadow / mi_part['occluded']:.2f}) | {shading:.3f} / {mi_part['jit']:.3f} "
+                   f"({shading / mi_part['jit']:.2f}) |")
+    out.append("")
+    out.append(f"Command: `tools/benchmarks.sh --parts split` (after `--parts e2e`, which builds the scenes and "
+               f"Mitsuba), {args.rounds} rounds.  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
 # ------------------------------------------------------------------ viewer ----
 VIEWER = ("cs184/sky/CBbunny.dae", "-r 640 480 -m 5 -s 64")
 
@@ -759,13 +896,16 @@ def md_python(args, part):
 
 # ------------------------------------------------------------------ page ----
 # The page's parts in order, with the title a part has before it was ever run.
-PART_ORDER = ["renders", "peers", "e2e", "viewer", "large", "python"]
+PART_ORDER = ["renders", "peers", "e2e", "split", "viewer", "large", "python"]
 PART_TITLES = {"renders": "Renders", "peers": "Ray throughput against the peers",
-               "e2e": "End to end against Mitsuba 3", "viewer": "Interactive viewer",
+               "e2e": "End to end against Mitsuba 3", "split": "Where a sample's time goes against Mitsuba 3",
+               "viewer": "Interactive viewer",
                "large": "Large meshes", "python": "Ray casting from Python"}
 NOT_RUN = {
     "e2e": "`tools/benchmarks.sh --parts e2e` adds whole renders against Mitsuba 3 at equal error "
            "(`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args '" + E2E_QUICK + "'` under a minute).",
+    "split": "`tools/benchmarks.sh --parts split` (after `--parts e2e`; needs `perf`) times each harness scene's "
+             "stages beside Mitsuba's Embree calls and compiled kernels, a few minutes.",
     "viewer": "`tools/benchmarks.sh --parts viewer` times `wavepath view` (tools/view_timing.py), about a minute.",
     "python": "`tools/benchmarks.sh --parts python --python VENV/bin/python` casts rays from numpy through the "
               "Python package beside embreex, Open3D and Mitsuba 3 (tools/python_bench.py, about 15 min; "
@@ -775,7 +915,7 @@ SECTION = re.compile(r"^<!-- part:([a-z0-9_-]+) -->\n(.*?)^<!-- /part:\1 -->[ \t
 PAGE_HEAD = """# Benchmarks
 
 Generated by `tools/benchmarks.sh`; rerun it rather than editing this page. Each section is one
-part (`--parts renders,peers,e2e,viewer,large,python`) and says when, on what machine, with
+part (`--parts renders,peers,e2e,split,viewer,large,python`) and says when, on what machine, with
 which binary and command it was measured: a run replaces the sections of the parts it ran and
 keeps the others as they were, with their dates, so sections of one page may come from
 different days and builds. Why the code is as it is, with the figures of past experiments:
@@ -898,7 +1038,7 @@ def main(argv):
     if not os.path.isdir(scenes_dir):
         ap.error(f"no scenes folder at {scenes_dir} (--scenes or WAVEPATH_SCENES)")
     peers_dir = os.path.abspath(args.peers or os.path.join(os.path.dirname(scenes_dir), "peers"))
-    if ("peers" in parts or "e2e" in parts) and not os.path.isfile(os.path.join(peers_dir, "run.sh")):
+    if ("peers" in parts or "e2e" in parts or "split" in parts) and not os.path.isfile(os.path.join(peers_dir, "run.sh")):
         ap.error(f"no peers harness at {peers_dir} (--peers)")
     os.makedirs(args.work, exist_ok=True)
     args.peers_work = os.path.abspath(args.peers_work or os.path.join(args.work, "peers"))
@@ -924,6 +1064,8 @@ def main(argv):
         results["peers"] = part_peers(args, scenes_dir, peers_dir)
     if "e2e" in parts:
         results["e2e"] = part_e2e(args, scenes_dir, peers_dir)
+    if "split" in parts:
+        results["split"] = part_split(args, scenes_dir, peers_dir)
     if "viewer" in parts:
         results["viewer"] = part_viewer(args, scenes_dir)
     if "large" in parts:
@@ -945,6 +1087,8 @@ def main(argv):
         md["peers"] = with_measured(md_peers(args, results["peers"], scenes_dir), run, results["peers"])
     if "e2e" in results:
         md["e2e"] = with_measured(md_e2e(args, results["e2e"]), run, results["e2e"])
+    if "split" in results:
+        md["split"] = with_measured(md_split(args, results["split"]), run, results["split"])
     if "viewer" in results:
         md["viewer"] = with_measured(md_viewer(args, results["viewer"]), run, results["viewer"])
     if "large" in results:
