@@ -1,14 +1,13 @@
 //! Shade for the Lambertian hits of a wave, eight paths at a time with AVX2 and sixteen with
-//! AVX-512 (the diffuse kind's
-//! kernel; [`super::shade`] sorts the paths by kind first). What is per path and irregular
-//! (the hit's surface point or whole vertex, the random numbers, an environment map's or a
-//! point light's sample) is gathered or computed one lane at a time; the light samples,
-//! offsets, shadow-ray setup, MIS weights and the continuation rays then run lane-parallel:
-//! [`crate::integrator::area`]'s and [`crate::integrator::light_ray`]'s branch-free
-//! per-sample functions in fixed loops over the
-//! lanes that the compiler vectorises (8 square roots and divisions per instruction instead
-//! of one). The functions are the ones the one-vertex-at-a-time code calls, so the image is
-//! the same, bit for bit, as [`super::shade::shade_scalar`]'s.
+//! AVX-512 (the diffuse kind's kernel; [`super::shade`] sorts the paths by kind first). What
+//! is per path and irregular (the hit's fields, a textured surface's whole vertex, an
+//! environment map's sample) is gathered or computed one lane at a time; the random numbers,
+//! surface points, light samples, offsets, shadow-ray setup, MIS weights and the
+//! continuation rays run lane-parallel: [`crate::integrator::area`]'s and
+//! [`crate::integrator::light_ray`]'s branch-free per-sample functions in fixed loops over the
+//! lanes that the compiler vectorises (8 or 16 square roots and divisions per instruction
+//! instead of one). The functions are the ones the one-vertex-at-a-time code calls, so the
+//! image is the same, bit for bit, as [`super::shade::shade_scalar`]'s.
 //!
 //! Any light, MIS, one-sided emitters, textures, vertex colours, relief maps, volumes and
 //! hemisphere sampling run here.
@@ -507,6 +506,65 @@ impl<const L: usize> LightPoints<L> {
     }
 }
 
+impl<const L: usize> LightPoints<L> {
+    /// The samples of a point, spot or directional light (`SampledLight::sample`, and
+    /// `sample_pdf`'s infinite density where `mis`) at the points `p` of every lane in `take`:
+    /// all lanes at once, the same operations lane by lane (`try_normalize` spelled out; a
+    /// spot's `powf` one lane at a time); `None` for any other light.
+    #[inline(always)]
+    pub fn delta(light: &SampledLight, p: &[[f32; L]; 3], mis: &[bool; L], take: &[bool; L]) -> Option<Self> {
+        let (position, intensity, spot) = match *light {
+            SampledLight::Point { position, intensity } => (position, intensity, None),
+            SampledLight::Spot { position, axis, cos_cutoff, exponent, intensity } => {
+                (position, intensity, Some((axis, cos_cutoff, exponent)))
+            }
+            SampledLight::Directional { to_light, radiance } => {
+                let mut out = LightPoints::default();
+                for j in 0..L {
+                    let pdf = if mis[j] { f32::INFINITY } else { 0.0 };
+                    let l = LightPoint {
+                        wi: to_light,
+                        weight: radiance,
+                        pdf,
+                        target: Vec3::ZERO,
+                        finite: false,
+                        valid: take[j],
+                    };
+                    out.set(j, &l);
+                }
+                return Some(out);
+            }
+            _ => return None,
+        };
+        let mut out = LightPoints::default();
+        let mut cos = [0.0f32; L];
+        for j in 0..L {
+            let d = position - get(p, j);
+            let rcp = d.length_recip();
+            let wi = d * rcp;
+            let mut valid = take[j] & rcp.is_finite() & (rcp > 0.0);
+            if let Some((axis, cos_cutoff, _)) = spot {
+                cos[j] = (-wi).dot(axis);
+                // As `sample`'s rejection (`c < cos_cutoff`), NaN included.
+                let outside = cos[j] < cos_cutoff;
+                valid &= !outside;
+            }
+            let pdf = if mis[j] { f32::INFINITY } else { 0.0 };
+            out.set(j, &LightPoint { wi, weight: intensity, pdf, target: position, finite: true, valid });
+        }
+        if let Some((_, _, exponent)) = spot
+            && exponent > 0.0
+        {
+            for j in 0..L {
+                if out.valid[j] {
+                    put(&mut out.weight, j, intensity * cos[j].max(0.0).powf(exponent));
+                }
+            }
+        }
+        Some(out)
+    }
+}
+
 /// A light's samples of a group (`samples`, sample-major, each with its whole weight) into the
 /// shadow queue path-major, throughput applied: every candidate is stored and the cursor moves
 /// past the valid ones only (`check`: and whose ray's direction is [`Vertex::consistent`]).
@@ -813,9 +871,10 @@ fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Ve
 
 /// The samples of light `li` (`light`: the light from infinity, point, spot and directional
 /// lights, an area light under the course's pdf) of a group, from dimension `dim` on: the
-/// light from infinity without a map sampled in all lanes at once, any other light one lane
-/// at a time (`SampledLight::sample_pdf`: the map's table, a normalisation); then the MIS
-/// weights and shadow rays of all lanes ([`diffuse_light_ray`]). Pushed path-major.
+/// light from infinity without a map and the delta lights sampled in all lanes at once, any
+/// other light one lane at a time (`SampledLight::sample_pdf`: the map's table, a
+/// normalisation); then the MIS weights and shadow rays of all lanes ([`diffuse_light_ray`]).
+/// Pushed path-major.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn light_rays<const L: usize>(
@@ -843,11 +902,14 @@ fn light_rays<const L: usize>(
         pending.resize_with(ns as usize, Rays::default);
     }
     for p in pending.iter_mut().take(ns as usize) {
-        let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
+        // A delta light reads no numbers: none are drawn.
+        let delta = LightPoints::delta(light, &pts.p, &g.mis, &g.direct);
+        let (ua, ub) = if delta.is_none() { rng8::next_2d_lanes(avx, rng, dim) } else { ([0.5; L], [0.5; L]) };
         dim += 1;
-        let ls = match sky {
-            Some(inf) => LightPoints::sky(inf, &pts.ns, &ua, &ub, &g.direct),
-            None => {
+        let ls = match (sky, delta) {
+            (_, Some(ls)) => ls,
+            (Some(inf), None) => LightPoints::sky(inf, &pts.ns, &ua, &ub, &g.direct),
+            (None, None) => {
                 let mut ls = LightPoints::<L>::default();
                 for j in 0..g.n {
                     if g.direct[j] {

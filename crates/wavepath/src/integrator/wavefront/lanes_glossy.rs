@@ -515,8 +515,8 @@ fn direct_light<M: LaneModel, const L: usize>(
 
 /// One sample of light `li` (`light`: the light from infinity, point, spot and directional
 /// lights, an area light; `ns` samples a vertex) for every lane, from the pair at dimension
-/// `dim`: the light from infinity without a map sampled in all lanes at once, any other
-/// light one lane at a time (`SampledLight::sample_pdf`: the map's table, a normalisation);
+/// `dim`: the light from infinity without a map and the delta lights sampled in all lanes at
+/// once, any other light one lane at a time (`SampledLight::sample_pdf`: the map's table, a normalisation);
 /// then the BSDF's value and density, the MIS weight and the shadow ray of all lanes, as
 /// [`Transport::direct_light_shaded`] computes them ([`glossy_light_ray`]).
 #[inline(always)]
@@ -533,8 +533,12 @@ fn light_samples<M: LaneModel, const L: usize>(
     for j in 0..g.n {
         [ua[j], ub[j]] = table[g.row[j] * dims + dim];
     }
-    let ls = match light {
-        SampledLight::Infinite(inf) if inf.map.is_none() => LightPoints::sky(inf.sky(), &soa.pts.ns, &ua, &ub, direct),
+    let delta = LightPoints::delta(light, &soa.pts.p, &[true; L], direct);
+    let ls = match (light, delta) {
+        (_, Some(ls)) => ls,
+        (SampledLight::Infinite(inf), None) if inf.map.is_none() => {
+            LightPoints::sky(inf.sky(), &soa.pts.ns, &ua, &ub, direct)
+        }
         _ => {
             let mut ls = LightPoints::<L>::default();
             for j in 0..g.n {

@@ -234,6 +234,13 @@ mod tests {
         });
         tilted_normals(&mut point);
         assert!(compare::<K>(&point, &s, avx) > 500);
+        // Spot lights (with and without a falloff exponent, a cone that leaves some walls out)
+        // and a directional light, under MIS (the emissive box) and without.
+        for mut scene in [crate::load::default_scene(), emissive_box()] {
+            scene.lights.extend(delta_lights());
+            tilted_normals(&mut scene);
+            assert!(compare::<K>(&scene, &s, avx) > 500);
+        }
 
         let mut colours = emissive_box();
         let n = colours.mesh.positions.len();
@@ -284,6 +291,7 @@ mod tests {
             intensity: Vec3::splat(2.0),
             attenuation: [1.0, 0.0, 0.0],
         });
+        scene.lights.extend(delta_lights());
         let mut glass = scene.materials[4].clone();
         glass.bsdf = Bsdf::Glass { reflectance: Vec3::ONE, transmittance: Vec3::ONE, roughness: 0.0, ior: 1.5 };
         let mut mirror = glass.clone();
@@ -300,6 +308,28 @@ mod tests {
             assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
             assert!(t.shaded_numbers.complete, "the glossy lanes read the table alone");
         });
+    }
+
+    /// Two spot lights (one with a falloff exponent, each a cone narrower than the box) and a
+    /// directional light.
+    fn delta_lights() -> [Light; 3] {
+        [
+            Light::Spot {
+                position: Vec3::new(-0.2, 1.4, 0.1),
+                direction: Vec3::new(0.2, -1.0, 0.1),
+                intensity: Vec3::new(1.5, 1.2, 1.0),
+                cone_angle: 70.0,
+                falloff_exponent: 3.0,
+            },
+            Light::Spot {
+                position: Vec3::new(0.4, 1.0, -0.3),
+                direction: Vec3::new(-0.5, -0.6, 0.4),
+                intensity: Vec3::splat(0.8),
+                cone_angle: 40.0,
+                falloff_exponent: 0.0,
+            },
+            Light::Directional { direction: Vec3::new(0.3, -1.0, -0.2), radiance: Vec3::splat(0.5) },
+        ]
     }
 
     /// [`compare`] of the shaded kinds' kernel with every sampler (Sobol with the throughput
