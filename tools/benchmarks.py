@@ -343,6 +343,21 @@ def md_large(args, part):
     return out
 
 
+def timed(cmd, failure=None):
+    """Runs cmd: (stdout, wall seconds, other processes' share of the CPUs meanwhile, its own CPU
+    seconds); exits with `failure` (or the command) and its stderr's tail if it fails."""
+    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    b0, t0 = busy_ticks(), time.monotonic()
+    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    wall = time.monotonic() - t0
+    busy = (busy_ticks() - b0) / TICK
+    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    own = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
+    if p.returncode != 0:
+        raise SystemExit(f"{failure or 'failed: ' + shlex.join(cmd)}\n{p.stderr[-2000:]}")
+    return p.stdout, wall, max(0.0, busy - own) / (wall * NCPU), own
+
+
 # ------------------------------------------------------------------ renders ----
 def run_render(args, name, scene, flags, integrator, tmp):
     st = os.path.join(tmp, f"{name}-{integrator}.json")
@@ -353,19 +368,11 @@ def run_render(args, name, scene, flags, integrator, tmp):
     cmd = [args.bin] + ([scene] if scene else []) + flags.split() + \
         ["-t", str(args.threads), "--integrator", integrator, "-f", img, "--stats", st]
     waited = wait_quiet(args.wait_quiet)
-    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    b0, t0 = busy_ticks(), time.monotonic()
-    p = subprocess.run(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    wall = time.monotonic() - t0
-    busy = (busy_ticks() - b0) / TICK
-    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    own = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
-    if p.returncode != 0:
-        raise SystemExit(f"render failed: {shlex.join(cmd)}\n{p.stderr[-2000:]}")
+    _, wall, other_busy, own = timed(cmd, f"render failed: {shlex.join(cmd)}")
     with open(st) as f:
         stats = json.load(f)
     rec = {"scene": name, "integrator": integrator, "wall_s": wall, "cpu_s": own, "waited_s": waited,
-           "other_busy": max(0.0, busy - own) / (wall * NCPU), "stats": stats}
+           "other_busy": other_busy, "stats": stats}
     log(f"{name:22s} {integrator:9s} render {stats['render_s']:.3f} s  {stats['mrays_per_s']:.2f} Mrays/s  "
         f"wall {wall:.2f} s  others {100 * rec['other_busy']:.0f}%")
     return rec
@@ -667,20 +674,6 @@ SPLIT_FLAGS = "-s 64 -m 5 -r 320 240 -t 1"
 PERF_HZ = 4000
 
 
-def timed(cmd):
-    """Runs cmd: (stdout, wall seconds, other processes' share of the CPUs meanwhile)."""
-    ru0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    b0, t0 = busy_ticks(), time.monotonic()
-    p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    wall = time.monotonic() - t0
-    busy = (busy_ticks() - b0) / TICK
-    ru1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    own = (ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)
-    if p.returncode != 0:
-        raise SystemExit(f"failed: {shlex.join(cmd)}\n{p.stderr[-2000:]}")
-    return p.stdout, wall, max(0.0, busy - own) / (wall * NCPU)
-
-
 def perf_split(report):
     """Seconds of Embree's closest-hit and any-hit traversal and of Dr.Jit's compiled kernels in a
     `perf report --sort dso,symbol -n` of a Mitsuba process (samples at PERF_HZ)."""
@@ -735,15 +728,15 @@ def part_split(args, scenes_dir, peers_dir):
             for which in (("wp", "mi", "perf") if rnd % 2 == 0 else ("mi", "perf", "wp")):
                 wait_quiet(args.wait_quiet)
                 if which == "wp":
-                    _, _, busy = timed(wp)
+                    _, _, busy, _ = timed(wp)
                     with open(stats) as f:
                         st = json.load(f)
                     rec["wp"] = {"render_s": st["render_s"], **{k: st["stages"].get(k, 0.0) for k in STAGES}}
                 elif which == "mi":
-                    out, _, busy = timed(mi)
+                    out, _, busy, _ = timed(mi)
                     rec["mi_render_s"] = json.loads(out.strip().splitlines()[-1])["render_s"]
                 else:
-                    out, _, busy = timed(perf_mi)
+                    out, _, busy, _ = timed(perf_mi)
                     rec["mi_perf_render_s"] = json.loads(out.strip().splitlines()[-1])["render_s"]
                     rep = sh([perf, "report", "-i", data, "--no-children", "--sort", "dso,symbol", "-n"])
                     rec["mi_split"] = perf_split(rep)
