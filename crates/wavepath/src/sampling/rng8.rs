@@ -336,6 +336,37 @@ mod tests {
         }
     }
 
+    /// Every lane's vertex stream, hashed for eight and sixteen lanes at once, is
+    /// `Pattern::vertex`'s, for every sampler, keys with high, low, zero and all-ones halves
+    /// and bounces from the camera ray's on.
+    #[test]
+    fn vertex_lanes_are_the_patterns_streams() {
+        let Some(avx) = Avx2::new() else { return };
+        fn check<const N: usize>(avx: Avx2, pattern: Pattern, keys: &[u64; N], bounces: &[u32; N]) {
+            let got = crate::cpu::with_avx2(avx, |avx| vertex_lanes(avx, pattern, keys, bounces));
+            for j in 0..N {
+                assert_eq!(got[j], pattern.vertex(keys[j], bounces[j]), "{pattern:?} lane {j}");
+            }
+        }
+        let mut state = 0x2545_F491_4F6C_DD1Du64;
+        let fixed = [0, u64::MAX, 1, 1 << 32, (1 << 32) - 1, u64::MAX << 32, 0x8000_0000_0000_0000, 42];
+        for kind in crate::sampling::SamplerKind::ALL {
+            let pattern = Pattern::new(kind, 64);
+            check::<LANES>(avx, pattern, &fixed, &[0, 1, 2, 3, 4, 5, 6, u32::MAX]);
+            for n in 0..500u32 {
+                let mut keys = [0u64; 16];
+                for k in keys.iter_mut() {
+                    state = splitmix64(state);
+                    *k = state;
+                }
+                let bounces: [u32; 16] = std::array::from_fn(|j| (n + j as u32) % 7);
+                check::<16>(avx, pattern, &keys, &bounces);
+                let (k8, b8) = (keys[..LANES].try_into().unwrap(), bounces[..LANES].try_into().unwrap());
+                check::<LANES>(avx, pattern, k8, b8);
+            }
+        }
+    }
+
     /// Sixteen lanes at once (the whole-width path, and the eight-at-a-time one where a lane
     /// leaves the sequence): each lane's numbers are its scalar stream's.
     #[test]

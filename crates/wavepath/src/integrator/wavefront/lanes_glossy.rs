@@ -516,8 +516,8 @@ fn direct_light<M: LaneModel, const L: usize>(
 /// One sample of light `li` (`light`: the light from infinity, point, spot and directional
 /// lights, an area light; `ns` samples a vertex) for every lane, from the pair at dimension
 /// `dim`: the light from infinity without a map and the delta lights sampled in all lanes at
-/// once, any other light one lane at a time (`SampledLight::sample_pdf`: the map's table, a normalisation);
-/// then the BSDF's value and density, the MIS weight and the shadow ray of all lanes, as
+/// once, any other light one lane at a time (`SampledLight::sample_pdf`: the map's table, a
+/// normalisation); then the BSDF's value and density, the MIS weight and the shadow ray of all lanes, as
 /// [`Transport::direct_light_shaded`] computes them ([`glossy_light_ray`]).
 #[inline(always)]
 fn light_samples<M: LaneModel, const L: usize>(
