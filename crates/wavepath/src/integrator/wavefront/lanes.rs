@@ -451,6 +451,7 @@ impl<const L: usize> Emitters<L> {
 }
 
 /// A group's samples of one light ([`LightPoint`]), one array per component.
+#[derive(Clone, Copy)]
 pub(super) struct LightPoints<const L: usize> {
     wi: [[f32; L]; 3],
     weight: [[f32; L]; 3],
@@ -892,6 +893,8 @@ fn light_rays<const L: usize>(
         SampledLight::Infinite(inf) if inf.map.is_none() => Some(inf.sky()),
         _ => None,
     };
+    // A delta light's samples are the same for each of its (one) sample and read no numbers.
+    let delta = LightPoints::delta(light, &pts.p, &g.mis, &g.direct);
     let mut inv = [[0.0; L]; 3];
     let mut bumped = [false; L];
     for j in 0..L {
@@ -902,8 +905,6 @@ fn light_rays<const L: usize>(
         pending.resize_with(ns as usize, Rays::default);
     }
     for p in pending.iter_mut().take(ns as usize) {
-        // A delta light reads no numbers: none are drawn.
-        let delta = LightPoints::delta(light, &pts.p, &g.mis, &g.direct);
         let (ua, ub) = if delta.is_none() { rng8::next_2d_lanes(avx, rng, dim) } else { ([0.5; L], [0.5; L]) };
         dim += 1;
         let ls = match (sky, delta) {
