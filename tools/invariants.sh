@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
 # Structural changes must not move a bit: renders a fixed set of scenes with both integrators
-# to PFM and traces fixed ray files, with the given binary, into OUT. Compare two such folders
+# and every instruction set this CPU has (ISAS, default "avx512 avx2 scalar"; a set the CPU
+# lacks falls back to the next) to PFM and traces fixed ray files, with the given binary,
+# into OUT. Compare two such folders
 # with `cmp` (the `compare` form does it).
 #
 #   tools/invariants.sh make target/release/wavepath /tmp/inv-new
@@ -24,8 +26,10 @@ make)
   for entry in "${scenes[@]}"; do
     name="${entry%%|*}"; file="${entry#*|}"
     for integ in wavefront recursive; do
-      "$BIN" -t 2 -s 4 -l 2 -m 5 -r 80 60 --integrator "$integ" -f "$OUT/$name-$integ.pfm" $file >/dev/null 2>&1 \
-        || { echo "render failed: $name $integ" >&2; exit 1; }
+      for isa in ${ISAS:-avx512 avx2 scalar}; do
+        "$BIN" -t 2 -s 4 -l 2 -m 5 -r 80 60 --integrator "$integ" --isa "$isa" -f "$OUT/$name-$integ-$isa.pfm" $file >/dev/null 2>&1 \
+          || { echo "render failed: $name $integ $isa" >&2; exit 1; }
+      done
     done
   done
   for mesh in "$S/meshes/lucy_100k.obj" "$S/meshes/dragon_100k.ply"; do

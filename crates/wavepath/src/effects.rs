@@ -1,9 +1,8 @@
 //! Which effects a scene calls for under given settings, and why.
 //!
 //! Derived once before rendering. The wavefront integrator reads the flags once per render
-//! to pick a kernel specialised (monomorphised) for exactly these effects: a stage whose
-//! effect is off is not run (its time is absent from the stats), a branch whose effect is
-//! off is not compiled into the kernel. The log and stats list the effects that are on,
+//! (the transport's `Features`): a stage whose effect is off is not run (its time is absent
+//! from the stats), a kernel part whose effect is off is skipped. The log and stats list the effects that are on,
 //! each with its reason. `--all-effects` forces every flag on (for benchmarks): the image
 //! stays the same, because every kernel part is exact when its effect is not needed (it
 //! adds zero, finds no light, or stops no path).

@@ -8,8 +8,50 @@ use crate::sampling::Numbers;
 use crate::settings::{RouletteKind, Settings, Shading};
 use glam::Vec3;
 
+/// Which optional parts of the vertex kernel a render runs, from the effects table: a part
+/// whose effect is off is skipped (a stage not run, a branch not taken). Tested at run time,
+/// once per path or group of lanes and always the same way in a render, so the branch is
+/// predicted; compiling a kernel per combination (2^6 copies of the wavefront) cost most of
+/// the engine's build and bought no measurable speed (docs/decisions.md, "Compile time").
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Features {
+    /// Emission seen by camera rays.
+    pub emission: bool,
+    /// The environment seen by camera rays that miss.
+    pub environment: bool,
+    /// Direct-light rays and the shadow stage.
+    pub direct: bool,
+    /// Continuation rays and the bounce (compact) stage.
+    pub indirect: bool,
+    /// Russian roulette (played in shade, where the vertex stream is at hand).
+    pub roulette: bool,
+    /// Materials other than Lambertian: shading goes through the BSDF models, and a path's
+    /// ray can find light (after a mirror, glass or glossy bounce).
+    pub non_diffuse: bool,
+}
+
+impl Features {
+    /// Every part on: the same image as the parts a scene needs, only slower.
+    pub const ALL: Features =
+        Features { emission: true, environment: true, direct: true, indirect: true, roulette: true, non_diffuse: true };
+
+    /// The parts the effects call for.
+    pub fn of(e: &Effects) -> Features {
+        Features {
+            emission: e.emission,
+            environment: e.environment,
+            direct: e.direct,
+            indirect: e.indirect,
+            roulette: e.russian_roulette,
+            non_diffuse: e.non_diffuse,
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug)]
 pub struct Rules {
+    /// The kernel's optional parts.
+    pub features: Features,
     pub max_depth: u32,
     pub accumulate: bool,
     pub hemisphere: bool,
@@ -42,6 +84,7 @@ impl Rules {
             lights.samples_per_point(light_samples)
         };
         Rules {
+            features: Features::of(effects),
             max_depth,
             accumulate: settings.paths.accumulate,
             hemisphere: settings.paths.hemisphere,

@@ -20,7 +20,6 @@
 // lane, the shape the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use super::Features;
 use super::ShadeWidth;
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
 use crate::cpu::{Avx2, Avx512};
@@ -37,18 +36,12 @@ use std::f32::consts::FRAC_1_PI;
 
 /// [`super::shade::shade`] for the Lambertian hits listed in `idx` (paths that hit, whose
 /// material is Lambertian), eight or sixteen at a time.
-pub fn shade_diffuse<F: Features>(
-    width: ShadeWidth,
-    t: &Transport,
-    q: &mut PathQueue,
-    idx: &[u32],
-    shadow: &mut ShadowQueue,
-) {
+pub fn shade_diffuse(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
     match width {
         // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512::<F>(avx512, t, q, idx, shadow) },
+        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512(avx512, t, q, idx, shadow) },
         // SAFETY: as above.
-        ShadeWidth::Eight(avx2) => unsafe { shade_avx2::<F>(avx2, t, q, idx, shadow) },
+        ShadeWidth::Eight(avx2) => unsafe { shade_avx2(avx2, t, q, idx, shadow) },
     }
 }
 
@@ -57,30 +50,24 @@ pub fn shade_diffuse<F: Features>(
 /// (callgrind, CBspheres_lambertian 128x96, shade stage).
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn shade_avx2<F: Features>(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
-    shade_width::<F, 8>(avx, t, q, idx, shadow)
+fn shade_avx2(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
+    shade_width::<8>(avx, t, q, idx, shadow)
 }
 
 /// Sixteen paths per group: the lane-parallel loops fill 512-bit registers.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-fn shade_avx512<F: Features>(avx: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
-    shade_width::<F, 16>(avx.avx2, t, q, idx, shadow)
+fn shade_avx512(avx: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
+    shade_width::<16>(avx.avx2, t, q, idx, shadow)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_width<F: Features, const L: usize>(
-    avx: Avx2,
-    t: &Transport,
-    q: &mut PathQueue,
-    idx: &[u32],
-    shadow: &mut ShadowQueue,
-) {
-    if whole_vertices::<F>(t) {
-        shade_groups::<F, true, L>(avx, t, q, idx, shadow)
+fn shade_width<const L: usize>(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
+    if whole_vertices(t) {
+        shade_groups::<true, L>(avx, t, q, idx, shadow)
     } else {
-        shade_groups::<F, false, L>(avx, t, q, idx, shadow)
+        shade_groups::<false, L>(avx, t, q, idx, shadow)
     }
 }
 
@@ -88,11 +75,11 @@ fn shade_width<F: Features, const L: usize>(
 /// the surface has more than a position and normals to reconstruct. Elsewhere the kernels
 /// reconstruct a group's points in lanes ([`surface_points`]).
 #[inline(always)]
-pub(super) fn whole_vertices<F: Features>(t: &Transport) -> bool {
+pub(super) fn whole_vertices(t: &Transport) -> bool {
     t.materials.textures.any()
         || t.scene.mesh.colors.is_some()
         || t.materials.layers.any_relief
-        || (F::NON_DIFFUSE && t.materials.layers.volumes)
+        || (t.rules.features.non_diffuse && t.materials.layers.volumes)
 }
 
 /// The shading points of a group, one array per component.
@@ -646,7 +633,7 @@ pub(super) fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3
 /// at a time (hence the token). `WHOLE`: gather whole vertices (see `shade_avx2`).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
+fn shade_groups<const WHOLE: bool, const L: usize>(
     avx: Avx2,
     t: &Transport,
     q: &mut PathQueue,
@@ -654,7 +641,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
     shadow: &mut ShadowQueue,
 ) {
     let sees_emission = t.rules.counts_emission();
-    let arrivals = F::NON_DIFFUSE || t.rules.mis;
+    let arrivals = t.rules.features.non_diffuse || t.rules.mis;
     let mut pts = Points::<L>::default();
     let mut rays = Rays::<L>::default();
     let mut surf = Surfaces::<L>::default();
@@ -688,7 +675,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             let ray = q.ray[i];
             let emission = if WHOLE {
                 let v = t.vertex(&ray, &hit);
-                if F::NON_DIFFUSE && t.materials.layers.volumes {
+                if t.rules.features.non_diffuse && t.materials.layers.volumes {
                     q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
                 }
                 g.vertex[j] = v;
@@ -702,7 +689,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             };
             // Most hits find no light: nothing is added (adding the zero cost the camera
             // rays' hits a stalled reload of the emission each).
-            if F::EMISSION && depth == 0 && sees_emission && emission != Vec3::ZERO {
+            if t.rules.features.emission && depth == 0 && sees_emission && emission != Vec3::ZERO {
                 q.radiance[i] += emission;
             }
             if arrivals && depth > 0 {
@@ -711,14 +698,14 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                     q.radiance[i] += q.throughput[i] * found;
                 }
             }
-            if !F::DIRECT && !F::INDIRECT {
+            if !t.rules.features.direct && !t.rules.features.indirect {
                 continue;
             }
             // The lane's stream (`Transport::vertex_sampler`) is hashed for all lanes below.
             keys[j] = q.key[i];
             let albedo = g.vertex[j].albedo;
-            g.direct[j] = F::DIRECT && t.rules.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
-            g.cont[j] = F::INDIRECT && t.rules.diffuse_continues(depth) && albedo != Vec3::ZERO;
+            g.direct[j] = t.rules.features.direct && t.rules.counts_direct(depth) && albedo * FRAC_1_PI != Vec3::ZERO;
+            g.cont[j] = t.rules.features.indirect && t.rules.diffuse_continues(depth) && albedo != Vec3::ZERO;
             g.mis[j] = t.rules.diffuse_mis(depth);
         }
         if !g.direct.iter().chain(&g.cont).any(|&b| b) {
@@ -749,13 +736,13 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
             // no normal of theirs (copying the points back lane by lane was 8% of the stage).
             surface_points(&surf, normals, spheres, &mut pts);
         }
-        if F::DIRECT && g.direct.iter().any(|&d| d) {
+        if t.rules.features.direct && g.direct.iter().any(|&d| d) {
             direct_light(GroupLight { avx, t, q: &*q, g: &g, pts: &pts, rng: &rng }, &mut pending, shadow);
         }
-        if F::INDIRECT && g.cont.iter().any(|&c| c) {
+        if t.rules.features.indirect && g.cont.iter().any(|&c| c) {
             let (ua, ub) = rng8::next_2d_lanes(avx, &rng, 0);
             let (ua, ub) = (unused_half(ua, &g.cont), unused_half(ub, &g.cont));
-            let rr = if F::ROULETTE { rng8::next_f32_lanes(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
+            let rr = if t.rules.features.roulette { rng8::next_f32_lanes(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..g.n {
                 let r = rays.ray(j);
@@ -770,7 +757,7 @@ fn shade_groups<F: Features, const WHOLE: bool, const L: usize>(
                 q.depth[i] = depth + 1;
                 q.alive[i] = true;
                 // As `super::one_path::roulette`.
-                if F::ROULETTE && t.rules.plays_roulette(depth) {
+                if t.rules.features.roulette && t.rules.plays_roulette(depth) {
                     match t.rules.roulette_with(rr[j], q.throughput[i]) {
                         Some(f) => q.throughput[i] *= f,
                         None => q.alive[i] = false,

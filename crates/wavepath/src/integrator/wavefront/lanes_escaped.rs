@@ -14,7 +14,6 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::Features;
 use super::ShadeWidth;
 use super::lanes::{get, put};
 use super::one_path;
@@ -27,37 +26,37 @@ use glam::Vec3;
 
 /// Shades the escaped paths `idx`: `alive` cleared, the environment or the light from
 /// infinity added.
-pub fn shade_escaped<F: Features>(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+pub fn shade_escaped(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
     if t.lights.area_arrivals {
         for &i in idx {
-            one_path::arrive::<F>(t, q, i as usize);
+            one_path::arrive(t, q, i as usize);
         }
         return;
     }
     match width {
         // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        ShadeWidth::Sixteen(avx512) => unsafe { escaped_avx512::<F>(avx512, t, q, idx) },
+        ShadeWidth::Sixteen(avx512) => unsafe { escaped_avx512(avx512, t, q, idx) },
         // SAFETY: as above.
-        ShadeWidth::Eight(avx2) => unsafe { escaped_avx2::<F>(avx2, t, q, idx) },
+        ShadeWidth::Eight(avx2) => unsafe { escaped_avx2(avx2, t, q, idx) },
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn escaped_avx2<F: Features>(_: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
-    escaped_groups::<F, 8>(t, q, idx)
+fn escaped_avx2(_: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+    escaped_groups::<8>(t, q, idx)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-fn escaped_avx512<F: Features>(_: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
-    escaped_groups::<F, 16>(t, q, idx)
+fn escaped_avx512(_: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+    escaped_groups::<16>(t, q, idx)
 }
 
 #[inline(always)]
-fn escaped_groups<F: Features, const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+fn escaped_groups<const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32]) {
     let sees_emission = t.rules.counts_emission();
-    let arrivals = F::NON_DIFFUSE || t.rules.mis;
+    let arrivals = t.rules.features.non_diffuse || t.rules.mis;
     let set = &t.lights.set;
     let map = set.infinite.map.as_deref();
     let has_map = map.is_some();
@@ -90,7 +89,7 @@ fn escaped_groups<F: Features, const L: usize>(t: &Transport, q: &mut PathQueue,
             put(&mut dir, j, d);
             put(&mut n, j, b.n);
             pdf[j] = b.pdf;
-            camera[j] = F::ENVIRONMENT && depth == 0 && sees_emission;
+            camera[j] = t.rules.features.environment && depth == 0 && sees_emission;
             arrives[j] = arrivals && depth > 0;
             counts[j] = t.rules.accumulate || depth == t.rules.max_depth;
             if let Some(m) = map {

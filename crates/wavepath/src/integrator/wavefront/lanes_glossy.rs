@@ -17,7 +17,6 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::Features;
 use super::lanes::{Emitters, LightPoints, Points, Rays, get, put};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
@@ -409,7 +408,7 @@ pub(super) fn takes(t: &Transport) -> bool {
 /// scratch for a light's samples.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
+pub(super) fn leave<M: LaneModel, const L: usize>(
     t: &Transport,
     q: &mut PathQueue,
     g: &ModelGroup<M, L>,
@@ -430,7 +429,7 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
         let r = g.row[j];
         Drawn { stream: rng[r], table: &table[r * dims..(r + 1) * dims], one_d: &t.shaded_numbers.one_d, dim }
     };
-    if F::DIRECT && !M::DELTA {
+    if t.rules.features.direct && !M::DELTA {
         let mut direct = [false; L];
         for j in 0..g.n {
             direct[j] = t.rules.counts_direct(depth[j]);
@@ -444,8 +443,8 @@ pub(super) fn leave<F: Features, M: LaneModel, const L: usize>(
             }
         }
     }
-    if F::INDIRECT {
-        continuation::<F, M, L>(t, q, g, &soa, &depth, table, dims, &numbers);
+    if t.rules.features.indirect {
+        continuation::<M, L>(t, q, g, &soa, &depth, table, dims, &numbers);
     }
 }
 
@@ -691,7 +690,7 @@ fn push_samples<M, const L: usize>(
 /// The continuations ([`Transport::scatter_shaded`] for a glossy or a delta vertex), then Russian roulette one lane at a time.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
+fn continuation<'a, M: LaneModel, const L: usize>(
     t: &Transport,
     q: &mut PathQueue,
     g: &ModelGroup<M, L>,
@@ -750,6 +749,6 @@ fn continuation<'a, F: Features, M: LaneModel, const L: usize>(
         } else {
             Bounce::DIFFUSE
         };
-        one_path::roulette::<F>(t, q, i, depth[j], numbers(j, 0));
+        one_path::roulette(t, q, i, depth[j], numbers(j, 0));
     }
 }

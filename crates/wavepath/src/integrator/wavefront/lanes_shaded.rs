@@ -19,7 +19,6 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::Features;
 use super::ShadeWidth;
 use super::lanes::{self, Points, Rays, Surfaces, get, surface_points};
 use super::lanes_glossy::{self, ModelGroup};
@@ -35,7 +34,7 @@ use glam::{Vec2, Vec3};
 
 /// Shades the paths `idx` (hits on non-Lambertian materials), `L` at a time; `table` is
 /// scratch for the numbers drawn ahead.
-pub fn shade_shaded<F: Features>(
+pub fn shade_shaded(
     width: ShadeWidth,
     t: &Transport,
     q: &mut PathQueue,
@@ -45,15 +44,15 @@ pub fn shade_shaded<F: Features>(
 ) {
     match width {
         // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512::<F>(avx512, t, q, idx, shadow, table) },
+        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512(avx512, t, q, idx, shadow, table) },
         // SAFETY: as above.
-        ShadeWidth::Eight(avx2) => unsafe { shade_avx2::<F>(avx2, t, q, idx, shadow, table) },
+        ShadeWidth::Eight(avx2) => unsafe { shade_avx2(avx2, t, q, idx, shadow, table) },
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn shade_avx2<F: Features>(
+fn shade_avx2(
     avx: Avx2,
     t: &Transport,
     q: &mut PathQueue,
@@ -61,12 +60,12 @@ fn shade_avx2<F: Features>(
     shadow: &mut ShadowQueue,
     table: &mut Vec<[f32; 2]>,
 ) {
-    shade_groups::<F, 8>(avx, t, q, idx, shadow, table)
+    shade_groups::<8>(avx, t, q, idx, shadow, table)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-fn shade_avx512<F: Features>(
+fn shade_avx512(
     avx: Avx512,
     t: &Transport,
     q: &mut PathQueue,
@@ -74,12 +73,12 @@ fn shade_avx512<F: Features>(
     shadow: &mut ShadowQueue,
     table: &mut Vec<[f32; 2]>,
 ) {
-    shade_groups::<F, 16>(avx.avx2, t, q, idx, shadow, table)
+    shade_groups::<16>(avx.avx2, t, q, idx, shadow, table)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn shade_groups<F: Features, const L: usize>(
+fn shade_groups<const L: usize>(
     avx: Avx2,
     t: &Transport,
     q: &mut PathQueue,
@@ -101,7 +100,7 @@ fn shade_groups<F: Features, const L: usize>(
     let mut pending: Vec<Rays<L>> = Vec::new();
     // Where the surfaces need no more than points and normals, the group's vertices are
     // reconstructed in lanes (as the diffuse kernel's), not one lane at a time.
-    let whole = lanes::whole_vertices::<F>(t);
+    let whole = lanes::whole_vertices(t);
     let corner_normals = t.scene.mesh.normals.as_deref();
     let spheres = !t.scene.spheres.is_empty();
     let mut surf = Surfaces::<L>::default();
@@ -117,12 +116,13 @@ fn shade_groups<F: Features, const L: usize>(
         for (j, &pi) in chunk.iter().enumerate() {
             let i = pi as usize;
             let arrival =
-                if whole { one_path::arrive_as::<F, true>(t, q, i) } else { one_path::arrive_as::<F, false>(t, q, i) };
+                if whole { one_path::arrive_as::<true>(t, q, i) } else { one_path::arrive_as::<false>(t, q, i) };
             let Some(a) = arrival else { continue };
             let depth = q.depth[i];
             (keys[j], bounces[j]) = (q.key[i], depth + 1);
-            lights |=
-                F::DIRECT && t.rules.counts_direct(depth) && t.materials.models[a.material].kind() == Kind::Glossy;
+            lights |= t.rules.features.direct
+                && t.rules.counts_direct(depth)
+                && t.materials.models[a.material].kind() == Kind::Glossy;
             first.get_or_insert(j);
             if whole {
                 vertex[j] = Some(a.vertex);
@@ -195,25 +195,25 @@ fn shade_groups<F: Features, const L: usize>(
             }
             let numbers =
                 Drawn { stream: rng[j], table: &table[j * dims..j * dims + drawn], one_d: &layout.one_d, dim: 0 };
-            one_path::leave::<F>(t, q, pi as usize, v, numbers, shadow);
+            one_path::leave(t, q, pi as usize, v, numbers, shadow);
         }
         if pbr.n > 0 {
-            lanes_glossy::leave::<F, Pbr, L>(t, q, &pbr, table, dims, &rng, &mut pending, shadow);
+            lanes_glossy::leave::<Pbr, L>(t, q, &pbr, table, dims, &rng, &mut pending, shadow);
         }
         if phong.n > 0 {
-            lanes_glossy::leave::<F, Glossy, L>(t, q, &phong, table, dims, &rng, &mut pending, shadow);
+            lanes_glossy::leave::<Glossy, L>(t, q, &phong, table, dims, &rng, &mut pending, shadow);
         }
         if conductor.n > 0 {
-            lanes_glossy::leave::<F, Microfacet, L>(t, q, &conductor, table, dims, &rng, &mut pending, shadow);
+            lanes_glossy::leave::<Microfacet, L>(t, q, &conductor, table, dims, &rng, &mut pending, shadow);
         }
         if mirror.n > 0 {
-            lanes_glossy::leave::<F, Mirror, L>(t, q, &mirror, table, dims, &rng, &mut pending, shadow);
+            lanes_glossy::leave::<Mirror, L>(t, q, &mirror, table, dims, &rng, &mut pending, shadow);
         }
         if glass.n > 0 {
-            lanes_glossy::leave::<F, Dielectric, L>(t, q, &glass, table, dims, &rng, &mut pending, shadow);
+            lanes_glossy::leave::<Dielectric, L>(t, q, &glass, table, dims, &rng, &mut pending, shadow);
         }
         if layered.n > 0 {
-            lanes_glossy::leave::<F, Layered, L>(t, q, &layered, table, dims, &rng, &mut pending, shadow);
+            lanes_glossy::leave::<Layered, L>(t, q, &layered, table, dims, &rng, &mut pending, shadow);
         }
     }
 }

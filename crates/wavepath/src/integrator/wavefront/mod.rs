@@ -13,8 +13,9 @@
 //! There is no barrier per stage and no allocation per wave. Stage times are summed over threads (thread-seconds: on a loaded
 //! machine they include time the thread waited for a core).
 //!
-//! The kernels are specialised once per render for the [`Effects`] the scene needs (the
-//! [`Features`] type parameter): a stage that is off does not run and reports no time.
+//! The stages run the parts the [`Effects`] of the scene call for (the transport's
+//! [`Features`](crate::integrator::rules::Features)): a stage that is off does not run and
+//! reports no time.
 //! Results do not depend on the thread count: every random number comes from (seed, pixel,
 //! sample, depth), every sum runs in slot order.
 
@@ -50,70 +51,6 @@ use std::time::Instant;
 pub const WAVE_PATHS: usize = 4096;
 /// Batch size of the adaptive bookkeeping when `--all-effects` forces it on without `-a`.
 const FORCED_ADAPTIVE_BATCH: u32 = 8;
-
-/// Which optional parts a kernel contains; one zero-sized type per combination, so each
-/// combination is compiled separately and an off part costs nothing.
-pub trait Features {
-    /// Emission seen by camera rays.
-    const EMISSION: bool;
-    /// The environment seen by camera rays that miss.
-    const ENVIRONMENT: bool;
-    /// Direct-light rays and the shadow stage.
-    const DIRECT: bool;
-    /// Continuation rays and the bounce (compact) stage.
-    const INDIRECT: bool;
-    /// Russian roulette (played in shade, where the vertex stream is at hand).
-    const ROULETTE: bool;
-    /// Materials other than Lambertian: shading goes through the BSDF models, and a path's
-    /// ray can find light (after a mirror, glass or glossy bounce).
-    const NON_DIFFUSE: bool;
-}
-
-/// The [`Features`] with these flags (in the order of its constants).
-pub struct Kernel<
-    const EMISSION: bool,
-    const ENVIRONMENT: bool,
-    const DIRECT: bool,
-    const INDIRECT: bool,
-    const ROULETTE: bool,
-    const NON_DIFFUSE: bool,
->;
-
-impl<
-    const EMISSION: bool,
-    const ENVIRONMENT: bool,
-    const DIRECT: bool,
-    const INDIRECT: bool,
-    const ROULETTE: bool,
-    const NON_DIFFUSE: bool,
-> Features for Kernel<EMISSION, ENVIRONMENT, DIRECT, INDIRECT, ROULETTE, NON_DIFFUSE>
-{
-    const EMISSION: bool = EMISSION;
-    const ENVIRONMENT: bool = ENVIRONMENT;
-    const DIRECT: bool = DIRECT;
-    const INDIRECT: bool = INDIRECT;
-    const ROULETTE: bool = ROULETTE;
-    const NON_DIFFUSE: bool = NON_DIFFUSE;
-}
-
-/// `$run::<Kernel<..>>($arg, ..)` for the kernel whose flags are the run-time values
-/// `$flag, ..`: a tree of `if`s with one monomorphised call per combination at its leaves,
-/// so the choice is made once per render and the kernels themselves test no flag.
-macro_rules! with_kernel {
-    ($run:ident($($arg:expr),*), [$($flag:expr),* $(,)?]) => {
-        with_kernel!(@pick $run($($arg),*), [], [$($flag),*])
-    };
-    (@pick $run:ident($($arg:expr),*), [$($bit:tt),*], []) => {
-        $run::<Kernel<$($bit),*>>($($arg),*)
-    };
-    (@pick $run:ident($($arg:expr),*), [$($bit:tt),*], [$head:expr $(, $rest:expr)*]) => {
-        if $head {
-            with_kernel!(@pick $run($($arg),*), [$($bit,)* true], [$($rest),*])
-        } else {
-            with_kernel!(@pick $run($($arg),*), [$($bit,)* false], [$($rest),*])
-        }
-    };
-}
 
 /// How many paths the shading lanes hold: eight in 256-bit registers, sixteen in 512-bit ones.
 #[derive(Clone, Copy, Debug)]
@@ -208,18 +145,10 @@ impl WaveWorkers {
 /// earlier renders' included.
 pub fn render_wavefront_into(job: &RenderJob, workers: &WaveWorkers, acc: &mut Accumulator) -> Option<RenderStats> {
     debug_assert_eq!((acc.width, acc.height), (job.settings.image.width, job.settings.image.height));
-    let e = job.effects;
-    with_kernel!(
-        render_frames(job, &workers.0, acc),
-        [e.emission, e.environment, e.direct, e.indirect, e.russian_roulette, e.non_diffuse]
-    )
+    render_frames(job, &workers.0, acc)
 }
 
-fn render_frames<F: Features>(
-    job: &RenderJob,
-    workers: &Workers<WaveQueues>,
-    acc: &mut Accumulator,
-) -> Option<RenderStats> {
+fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accumulator) -> Option<RenderStats> {
     let start = Instant::now();
     let s = job.settings;
     let w = s.image.width;
@@ -250,7 +179,7 @@ fn render_frames<F: Features>(
                 return WaveStats::default();
             }
             let wave = Wave { pixels, base: n, batch };
-            let st = run_wave::<F>(job, &wave, queues, window);
+            let st = run_wave(job, &wave, queues, window);
             (job.progress)(wave.len() as u64);
             st
         });
@@ -306,7 +235,7 @@ struct Window<'a> {
 
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
 /// then each pixel's samples, summed in slot order, into the image's sums.
-fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> WaveStats {
+fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> WaveStats {
     let (t, accel, s) = (&job.transport, job.accel, job.settings);
     let mut st = WaveStats::default();
     let n = wave.len();
@@ -324,14 +253,14 @@ fn run_wave<F: Features>(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: 
         }
         first = false;
         clock = lap(clock, &mut st.stages.traverse);
-        shade::shade::<F>(t, job.lanes, &mut q.paths, &mut q.shadow, &mut q.kinds);
+        shade::shade(t, job.lanes, &mut q.paths, &mut q.shadow, &mut q.kinds);
         clock = lap(clock, &mut st.stages.shade);
-        if F::DIRECT {
+        if t.rules.features.direct {
             shadow::shadow(t, accel, &q.shadow, &mut q.occluded, &mut q.paths.radiance, &mut st.counters);
             st.shadow += q.shadow.len() as u64;
             clock = lap(clock, &mut st.stages.shadow);
         }
-        if F::INDIRECT {
+        if t.rules.features.indirect {
             compact::compact(t, &mut q.paths, &mut q.slot_radiance);
             clock = lap(clock, &mut st.stages.compact);
         } else {

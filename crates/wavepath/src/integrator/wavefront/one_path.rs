@@ -5,7 +5,6 @@
 //! runs [`arrive_as`] per lane, draws the group's numbers in lanes and then runs [`leave`] per
 //! lane with them, so both make the same rays, bit for bit.
 
-use super::Features;
 use super::lanes::{NO_VERTEX, emission_of};
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
 use crate::geometry::Hit;
@@ -16,8 +15,8 @@ use glam::Vec3;
 /// Path `i` arrives: `alive` cleared, emission and the light its ray found added; the vertex
 /// to leave from, `None` when the path ends here (escaped, or nothing is sent on).
 #[inline(always)]
-pub fn arrive<F: Features>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Vertex> {
-    arrive_as::<F, true>(t, q, i).map(|a| a.vertex)
+pub fn arrive(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Vertex> {
+    arrive_as::<true>(t, q, i).map(|a| a.vertex)
 }
 
 /// What a path that goes on from its hit leaves for the lanes: the hit, its material and the
@@ -34,22 +33,22 @@ pub struct Arrival {
 /// vertices in lanes (surfaces with no textures, colours, relief or volumes:
 /// [`super::lanes::whole_vertices`] false; the emission is then the vertex's).
 #[inline(always)]
-pub fn arrive_as<F: Features, const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Arrival> {
+pub fn arrive_as<const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Arrival> {
     let sees_emission = t.rules.counts_emission();
     let depth = q.depth[i];
     q.alive[i] = false;
     let Some(hit) = q.hit[i] else {
-        if F::ENVIRONMENT && depth == 0 && sees_emission {
+        if t.rules.features.environment && depth == 0 && sees_emission {
             q.radiance[i] += q.throughput[i] * t.lights.set.background_toward(q.ray[i].dir);
         }
-        if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
+        if (t.rules.features.non_diffuse || t.rules.mis) && depth > 0 {
             q.radiance[i] += q.throughput[i] * t.arrival(q.bounce[i], &q.ray[i], None, Vec3::ZERO, depth);
         }
         return None;
     };
     let (material, emission, vertex) = if WHOLE {
         let v = t.vertex(&q.ray[i], &hit);
-        if F::NON_DIFFUSE && t.materials.layers.volumes {
+        if t.rules.features.non_diffuse && t.materials.layers.volumes {
             q.throughput[i] *= t.materials.layers.absorbed(&v, hit.t);
         }
         (v.material as usize, v.emission, v)
@@ -57,42 +56,35 @@ pub fn arrive_as<F: Features, const WHOLE: bool>(t: &Transport, q: &mut PathQueu
         let m = t.materials.material_of(hit.prim);
         (m, emission_of(t, m, &q.ray[i], &hit), NO_VERTEX)
     };
-    if F::EMISSION && depth == 0 && sees_emission {
+    if t.rules.features.emission && depth == 0 && sees_emission {
         q.radiance[i] += emission;
     }
-    if (F::NON_DIFFUSE || t.rules.mis) && depth > 0 {
+    if (t.rules.features.non_diffuse || t.rules.mis) && depth > 0 {
         q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, emission, depth);
     }
-    (F::DIRECT || F::INDIRECT).then_some(Arrival { hit, material, emission, vertex })
+    (t.rules.features.direct || t.rules.features.indirect).then_some(Arrival { hit, material, emission, vertex })
 }
 
 /// Path `i` leaves vertex `v` (of its current depth) with the numbers `rng`: its shadow rays
 /// (throughput applied) and its continuation after Russian roulette.
 #[inline(always)]
-pub fn leave<F: Features>(
-    t: &Transport,
-    q: &mut PathQueue,
-    i: usize,
-    v: &Vertex,
-    rng: impl Numbers,
-    shadow: &mut ShadowQueue,
-) {
+pub fn leave(t: &Transport, q: &mut PathQueue, i: usize, v: &Vertex, rng: impl Numbers, shadow: &mut ShadowQueue) {
     let depth = q.depth[i];
     let tp = q.throughput[i];
     let push = |shadow: &mut ShadowQueue, d: crate::integrator::DirectRay| {
         shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
     };
-    let next = if F::NON_DIFFUSE {
+    let next = if t.rules.features.non_diffuse {
         let sh = t.shading(v, q.ray[i].dir);
-        if F::DIRECT && t.rules.counts_direct(depth) {
+        if t.rules.features.direct && t.rules.counts_direct(depth) {
             t.direct_rays_shaded(v, &sh, depth, rng, |d| push(shadow, d));
         }
-        if F::INDIRECT { t.scatter_shaded(v, &sh, depth, rng) } else { None }
+        if t.rules.features.indirect { t.scatter_shaded(v, &sh, depth, rng) } else { None }
     } else {
-        if F::DIRECT && t.rules.counts_direct(depth) {
+        if t.rules.features.direct && t.rules.counts_direct(depth) {
             t.direct_rays(v, depth, rng, |d| push(shadow, d));
         }
-        if F::INDIRECT { t.scatter(v, depth, rng) } else { None }
+        if t.rules.features.indirect { t.scatter(v, depth, rng) } else { None }
     };
     if let Some((ray, w, bounce)) = next {
         q.ray[i] = ray;
@@ -100,7 +92,7 @@ pub fn leave<F: Features>(
         q.depth[i] = depth + 1;
         q.alive[i] = true;
         q.bounce[i] = bounce;
-        roulette::<F>(t, q, i, depth, rng);
+        roulette(t, q, i, depth, rng);
     }
 }
 
@@ -108,8 +100,8 @@ pub fn leave<F: Features>(
 /// hand (the bounce stage would have to derive them again), applied after the BSDF weight as
 /// [`Transport::continuation`] does; the shadow rays already took the throughput before it.
 #[inline(always)]
-pub fn roulette<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: impl Numbers) {
-    if F::ROULETTE {
+pub fn roulette(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: impl Numbers) {
+    if t.rules.features.roulette {
         match t.rules.roulette(depth, rng, q.throughput[i]) {
             Some(f) => q.throughput[i] *= f,
             None => q.alive[i] = false,

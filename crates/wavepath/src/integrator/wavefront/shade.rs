@@ -1,6 +1,5 @@
 //! Stage 3: at every hit, emission, the direct-light rays and the continuation ray.
 
-use super::Features;
 use super::Lanes;
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
@@ -17,15 +16,15 @@ use crate::integrator::Transport;
 /// (their random numbers drawn in lanes), the escaped paths by [`super::lanes_escaped`].
 /// Each path's shadow rays stay in the order it made them, so its radiance is the same bits
 /// whatever the grouping.
-pub fn shade<F: Features>(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
+pub fn shade(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
     let Some(width) = lanes.shade else {
-        return shade_scalar::<F>(t, q, shadow);
+        return shade_scalar(t, q, shadow);
     };
     shadow.clear();
-    kinds.sort::<F>(t, q);
-    super::lanes_escaped::shade_escaped::<F>(width, t, q, &kinds.escaped);
-    super::lanes_shaded::shade_shaded::<F>(width, t, q, &kinds.shaded, shadow, &mut kinds.numbers);
-    super::lanes::shade_diffuse::<F>(width, t, q, &kinds.diffuse, shadow);
+    kinds.sort(t, q);
+    super::lanes_escaped::shade_escaped(width, t, q, &kinds.escaped);
+    super::lanes_shaded::shade_shaded(width, t, q, &kinds.shaded, shadow, &mut kinds.numbers);
+    super::lanes::shade_diffuse(width, t, q, &kinds.diffuse, shadow);
 }
 
 /// A wave's paths by what shades them, as index lists into the path queue.
@@ -42,14 +41,14 @@ pub struct Kinds {
 }
 
 impl Kinds {
-    fn sort<F: Features>(&mut self, t: &Transport, q: &PathQueue) {
+    fn sort(&mut self, t: &Transport, q: &PathQueue) {
         self.diffuse.clear();
         self.shaded.clear();
         self.escaped.clear();
         for (i, hit) in q.hit.iter().enumerate() {
             let list = match hit {
                 None => &mut self.escaped,
-                Some(h) if !F::NON_DIFFUSE || t.materials.lambertian[t.materials.material_of(h.prim)] => {
+                Some(h) if !t.rules.features.non_diffuse || t.materials.lambertian[t.materials.material_of(h.prim)] => {
                     &mut self.diffuse
                 }
                 Some(_) => &mut self.shaded,
@@ -60,19 +59,19 @@ impl Kinds {
 }
 
 /// [`shade`] one path at a time (any features; the reference for the lane kernel).
-pub fn shade_scalar<F: Features>(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
+pub fn shade_scalar(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
     shadow.clear();
     for i in 0..q.len() {
-        shade_path::<F>(t, q, i, shadow);
+        shade_path(t, q, i, shadow);
     }
 }
 
 /// Shades path `i` (see [`shade`]) from its vertex's own stream.
 #[inline]
-pub fn shade_path<F: Features>(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut ShadowQueue) {
-    if let Some(v) = one_path::arrive::<F>(t, q, i) {
+pub fn shade_path(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut ShadowQueue) {
+    if let Some(v) = one_path::arrive(t, q, i) {
         let rng = t.streams.vertex_sampler(q.key[i], q.depth[i]);
-        one_path::leave::<F>(t, q, i, &v, rng, shadow);
+        one_path::leave(t, q, i, &v, rng, shadow);
     }
 }
 
@@ -82,12 +81,25 @@ mod tests {
     use crate::accel::{BruteForce, TraceCounters};
     use crate::cpu::{Avx2, Avx512};
     use crate::geometry::Ray;
+    use crate::integrator::rules::Features;
     use crate::integrator::wavefront::generate::{Wave, generate};
-    use crate::integrator::wavefront::{Kernel, compact, traverse};
     use crate::integrator::wavefront::{Lanes, ShadeWidth};
+    use crate::integrator::wavefront::{compact, traverse};
     use crate::scene::{Bsdf, Layers, Light, Scene, Sphere};
     use crate::settings::{RouletteKind, Settings, Shading};
     use glam::Vec3;
+
+    /// The kernel parts, in the order of [`Features`]' fields.
+    fn parts(
+        emission: bool,
+        environment: bool,
+        direct: bool,
+        indirect: bool,
+        roulette: bool,
+        non_diffuse: bool,
+    ) -> Features {
+        Features { emission, environment, direct, indirect, roulette, non_diffuse }
+    }
 
     /// Each path's shadow rays (in the order they were made) and weights, by owner.
     fn by_owner(s: &ShadowQueue, n: usize) -> Vec<Vec<(Ray, Vec3)>> {
@@ -100,28 +112,21 @@ mod tests {
 
     /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
     /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
-    fn compare<F: crate::integrator::wavefront::Features>(scene: &Scene, s: &Settings, avx: Avx2) -> usize {
-        compare_counts::<F>(scene, s, avx).0
+    fn compare(parts: Features, scene: &Scene, s: &Settings, avx: Avx2) -> usize {
+        compare_counts(parts, scene, s, avx).0
     }
 
     /// [`compare`], with the paths that escaped after a bounce.
-    fn compare_counts<F: crate::integrator::wavefront::Features>(
-        scene: &Scene,
-        s: &Settings,
-        avx: Avx2,
-    ) -> (usize, usize) {
+    fn compare_counts(parts: Features, scene: &Scene, s: &Settings, avx: Avx2) -> (usize, usize) {
         let mut widths = vec![ShadeWidth::Eight(avx)];
         widths.extend(Avx512::new().map(ShadeWidth::Sixteen));
-        let counts: Vec<_> = widths.into_iter().map(|w| compare_width::<F>(scene, s, w)).collect();
+        let counts: Vec<_> = widths.into_iter().map(|w| compare_width(parts, scene, s, w)).collect();
         (counts.iter().map(|c| c.0).min().unwrap_or(0), counts.iter().map(|c| c.1).min().unwrap_or(0))
     }
 
-    fn compare_width<F: crate::integrator::wavefront::Features>(
-        scene: &Scene,
-        s: &Settings,
-        width: ShadeWidth,
-    ) -> (usize, usize) {
-        let t = Transport::new(scene, s, &crate::effects::Effects::of(scene, s));
+    fn compare_width(parts: Features, scene: &Scene, s: &Settings, width: ShadeWidth) -> (usize, usize) {
+        let mut t = Transport::new(scene, s, &crate::effects::Effects::of(scene, s));
+        t.rules.features = parts;
         let lanes = Lanes { camera: None, shade: Some(width) };
         let mut kinds = Kinds::default();
         let accel = BruteForce::new(scene);
@@ -136,8 +141,8 @@ mod tests {
             traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
             escaped += (0..q.len()).filter(|&i| q.hit[i].is_none() && q.depth[i] > 0).count();
             let mut qs = q.clone();
-            shade::<F>(&t, lanes, &mut q, &mut sl, &mut kinds);
-            shade_scalar::<F>(&t, &mut qs, &mut ss);
+            shade(&t, lanes, &mut q, &mut sl, &mut kinds);
+            shade_scalar(&t, &mut qs, &mut ss);
             assert_eq!(q.ray, qs.ray);
             assert_eq!(q.throughput, qs.throughput);
             assert_eq!(q.radiance, qs.radiance);
@@ -186,7 +191,7 @@ mod tests {
     /// and without corner normals, with spheres and without any.
     #[test]
     fn lanes_match_the_scalar_kernel() {
-        type K = Kernel<true, false, true, true, true, false>;
+        let diffuse = parts(true, false, true, true, true, false);
         let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
         for (with_normals, with_spheres, rr_throughput) in
             [(false, true, false), (true, true, false), (true, false, false), (true, true, true)]
@@ -199,7 +204,7 @@ mod tests {
             if with_normals {
                 tilted_normals(&mut scene);
             }
-            let shadow_rays = compare::<K>(&scene, &settings(3, rr_throughput), avx);
+            let shadow_rays = compare(diffuse, &scene, &settings(3, rr_throughput), avx);
             assert!(shadow_rays > 1000, "{shadow_rays}");
         }
     }
@@ -210,8 +215,8 @@ mod tests {
     /// glass and mirror spheres among Lambertian walls (the kinds sorted apart).
     #[test]
     fn lanes_match_the_scalar_kernel_for_every_light_and_vertex() {
-        type K = Kernel<true, false, true, true, true, false>;
-        type N = Kernel<true, false, true, true, true, true>;
+        let diffuse = parts(true, false, true, true, true, false);
+        let shaded = parts(true, false, true, true, true, true);
         let Some(avx) = Avx2::new() else { return };
         let mut s = settings(2, false);
         let scene = emissive_box();
@@ -219,10 +224,10 @@ mod tests {
             Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s)).rules.mis,
             "the emissive box should turn MIS on"
         );
-        assert!(compare::<K>(&scene, &s, avx) > 500);
+        assert!(compare(diffuse, &scene, &s, avx) > 500);
         for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
             s.sampling.sampler = sampler;
-            assert!(compare::<K>(&scene, &s, avx) > 500);
+            assert!(compare(diffuse, &scene, &s, avx) > 500);
         }
         s.sampling.sampler = crate::sampling::SamplerKind::Independent;
 
@@ -233,29 +238,29 @@ mod tests {
             attenuation: [1.0, 0.0, 0.0],
         });
         tilted_normals(&mut point);
-        assert!(compare::<K>(&point, &s, avx) > 500);
+        assert!(compare(diffuse, &point, &s, avx) > 500);
         // Spot lights (with and without a falloff exponent, a cone that leaves some walls out)
         // and a directional light, under MIS (the emissive box) and without.
         for mut scene in [crate::load::default_scene(), emissive_box()] {
             scene.lights.extend(delta_lights());
             tilted_normals(&mut scene);
-            assert!(compare::<K>(&scene, &s, avx) > 500);
+            assert!(compare(diffuse, &scene, &s, avx) > 500);
         }
 
         let mut colours = emissive_box();
         let n = colours.mesh.positions.len();
         colours.mesh.colors = Some((0..n).map(|i| Vec3::new(0.5 + 0.1 * (i % 5) as f32, 0.7, 0.9)).collect());
-        assert!(compare::<K>(&colours, &s, avx) > 500);
+        assert!(compare(diffuse, &colours, &s, avx) > 500);
 
         // Hemisphere probes in lanes, with corner normals and with every sampler.
         let mut hemisphere = s.clone();
         hemisphere.paths.hemisphere = true;
-        assert!(compare::<K>(&crate::load::default_scene(), &hemisphere, avx) > 500);
+        assert!(compare(diffuse, &crate::load::default_scene(), &hemisphere, avx) > 500);
         let mut tilted = crate::load::default_scene();
         tilted_normals(&mut tilted);
         for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
             hemisphere.sampling.sampler = sampler;
-            assert!(compare::<K>(&tilted, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+            assert!(compare(diffuse, &tilted, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
         }
 
         let mut mixed = emissive_box();
@@ -266,7 +271,7 @@ mod tests {
         mixed.materials.push(mirror);
         mixed.spheres[1].material = 5;
         assert!(Transport::new(&mixed, &s, &crate::effects::Effects::of(&mixed, &s)).materials.non_diffuse);
-        assert!(compare::<N>(&mixed, &s, avx) > 500);
+        assert!(compare(shaded, &mixed, &s, avx) > 500);
     }
 
     /// The shaded kinds' kernel (numbers drawn in lanes) against the one-path kernel: walls of
@@ -336,7 +341,7 @@ mod tests {
     /// roulette), light sampling and hemisphere sampling; `check` is what the transport
     /// must be for the lanes to be reached.
     fn compare_every_sampler(scene: &Scene, avx: Avx2, check: impl Fn(&Transport)) {
-        type N = Kernel<true, false, true, true, true, true>;
+        let shaded = parts(true, false, true, true, true, true);
         for (sampler, rr_throughput) in [
             (crate::sampling::SamplerKind::Independent, false),
             (crate::sampling::SamplerKind::Sobol, true),
@@ -345,10 +350,10 @@ mod tests {
             let mut s = settings(2, rr_throughput);
             s.sampling.sampler = sampler;
             check(&Transport::new(scene, &s, &crate::effects::Effects::of(scene, &s)));
-            assert!(compare::<N>(scene, &s, avx) > 500, "{sampler:?}");
+            assert!(compare(shaded, scene, &s, avx) > 500, "{sampler:?}");
             let mut hemisphere = s.clone();
             hemisphere.paths.hemisphere = true;
-            assert!(compare::<N>(scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+            assert!(compare(shaded, scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
         }
     }
 
@@ -454,7 +459,7 @@ mod tests {
     /// vertices and without, with every sampler.
     #[test]
     fn infinite_and_punctual_lights_in_lanes_match_the_scalar_kernel() {
-        type N = Kernel<true, true, true, true, true, true>;
+        let shaded = parts(true, true, true, true, true, true);
         let Some(avx) = Avx2::new() else { return };
         let sky = Light::Hemisphere { radiance: Vec3::new(1.0, 0.9, 0.8) };
         let cases: Vec<(&str, Vec<Light>, crate::scene::Environment)> = vec![
@@ -499,7 +504,7 @@ mod tests {
                 assert_eq!(t.rules.mis, mis);
                 assert!(t.lights.infinite.is_some());
                 assert!(t.materials.non_diffuse && t.shaded_numbers.complete);
-                let (shadow_rays, escaped) = compare_counts::<N>(&scene, &s, avx);
+                let (shadow_rays, escaped) = compare_counts(shaded, &scene, &s, avx);
                 assert!(shadow_rays > 500, "{name} {sampler:?}: {shadow_rays}");
                 assert!(escaped > 100, "{name} {sampler:?}: {escaped} paths escaped after a bounce");
             }
