@@ -318,5 +318,5 @@ pub struct TraceArgs {
 
 /// `--isa`: one of the instruction-set names.
 pub fn parse_isa(s: &str) -> Result<Isa, String> {
-    Isa::parse(s).ok_or_else(|| format!("unknown instruction set '{s}' (scalar, sse, avx2, avx512)"))
+    Isa::parse(s).ok_or_else(|| format!("unknown instruction set '{s}' (scalar, portable, sse, avx2, avx512)"))
 }

@@ -173,6 +173,7 @@ fn no_mis_turns_off_mis_where_emissive_triangles_light_the_scene() {
 /// The instruction set the BVH runs for a request, from the CPU's own feature flags: AVX2
 /// (with FMA, BMI1, POPCNT) for avx2 and avx512 (its kernels stop at AVX2), SSE4.1 for sse,
 /// and the best of those below a request the CPU lacks.
+#[cfg(target_arch = "x86_64")]
 fn effective_isa(request: &str) -> &'static str {
     let avx2 = std::arch::is_x86_feature_detected!("avx2")
         && std::arch::is_x86_feature_detected!("fma")
@@ -197,7 +198,7 @@ fn every_isa_renders_the_same_image_and_the_log_names_it() {
     let base = ["-r", "32", "24", "-s", "2", "-m", "3", "-l", "2"];
     let scalar = render(&dir, "scalar", &with(&base, &["--isa", "scalar"]));
     assert!(scalar.sum() > 0.0, "a black image");
-    for isa in ["scalar", "sse", "avx2", "avx512"] {
+    for isa in ["scalar", "portable", "sse", "avx2", "avx512"] {
         let r = render(&dir, isa, &with(&base, &["--isa", isa]));
         let want = format!("Built bvh8 {}, sah build", effective_isa(isa));
         assert!(r.log.contains(&want), "--isa {isa}: the log lacks '{want}':\n{}", r.log);

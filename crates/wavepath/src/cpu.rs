@@ -9,7 +9,11 @@
 /// The widest instruction set the kernels may use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Isa {
+    /// Every kernel on its one-path-at-a-time reference.
     Scalar,
+    /// Shading in lanes of plain code (what every CPU runs: NEON on aarch64 through the
+    /// compiler), the BVH's kernels scalar.
+    Portable,
     Sse,
     Avx2,
     /// What the CPU has ([`Isa::detect`]) resolves to at most this. Only the shading lanes
@@ -29,6 +33,7 @@ impl Isa {
     pub fn parse(s: &str) -> Option<Isa> {
         match s.trim().to_ascii_lowercase().as_str() {
             "scalar" => Some(Isa::Scalar),
+            "portable" => Some(Isa::Portable),
             "sse" | "sse4" | "sse4.1" => Some(Isa::Sse),
             "avx2" => Some(Isa::Avx2),
             "avx512" => Some(Isa::Avx512),
@@ -42,14 +47,22 @@ impl Isa {
             Isa::Avx512 if Avx512::new().is_some() => Isa::Avx512,
             Isa::Avx512 | Isa::Avx2 if Avx2::new().is_some() => Isa::Avx2,
             Isa::Avx512 | Isa::Avx2 | Isa::Sse if Sse::new().is_some() => Isa::Sse,
-            _ => Isa::Scalar,
+            Isa::Scalar => Isa::Scalar,
+            _ => Isa::Portable,
         }
     }
 
-    /// [`effective`](Self::effective) for kernels whose widest version is AVX2 (the BVH's).
+    /// Whether shading runs paths in lanes (portable ones at least): every set but scalar.
+    pub fn shades_in_lanes(self) -> bool {
+        self.effective() != Isa::Scalar
+    }
+
+    /// [`effective`](Self::effective) for kernels whose widest version is AVX2 and that have
+    /// no portable lanes (the BVH's).
     pub fn at_most_avx2(self) -> Isa {
         match self.effective() {
             Isa::Avx512 => Isa::Avx2,
+            Isa::Portable => Isa::Scalar,
             isa => isa,
         }
     }
@@ -57,6 +70,7 @@ impl Isa {
     pub fn name(self) -> &'static str {
         match self {
             Isa::Scalar => "scalar",
+            Isa::Portable => "portable",
             Isa::Sse => "sse",
             Isa::Avx2 => "avx2",
             Isa::Avx512 => "avx512",
@@ -66,7 +80,7 @@ impl Isa {
     /// The SSE4.1 token, if this request allows it and the CPU has it.
     pub fn sse(self) -> Option<Sse> {
         match self.effective() {
-            Isa::Scalar => None,
+            Isa::Scalar | Isa::Portable => None,
             _ => Sse::new(),
         }
     }

@@ -21,6 +21,7 @@ pub struct ShearedRay {
     pub sy: f32,
     pub sz: f32,
     /// `org` in the order `kx`, `ky`, `kz` (the SIMD filter broadcasts these at every leaf).
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // for the x86 kernels
     pub org_k: [f32; 3],
 }
 

@@ -14,11 +14,49 @@ use std::arch::x86_64::*;
 /// Streams per call.
 pub const LANES: usize = 8;
 
+/// How eight 64-bit hashes are computed: with AVX2's products where the token proves the CPU
+/// has them, or in a plain loop that the compiler vectorises for whatever the target has
+/// (NEON on aarch64). Both give the bits of [`splitmix64`], so a lane kernel's numbers are
+/// the scalar streams' on every CPU. Kernels build the value where their width is chosen,
+/// so the match below is decided at compile time inside each kernel.
+#[derive(Clone, Copy, Debug)]
+pub enum Hasher {
+    Portable,
+    Avx2(Avx2),
+}
+
+impl Hasher {
+    /// `splitmix64` of each input.
+    #[inline(always)]
+    pub fn splitmix64_x8(self, z: &[u64; LANES]) -> [u64; LANES] {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Hasher::Avx2(avx) => splitmix64_avx2(avx, z),
+            _ => z.map(splitmix64),
+        }
+    }
+
+    /// The two 24-bit halves of each input's hash as numbers in [0, 1), as
+    /// [`Sampler::next_2d`] takes them.
+    #[inline(always)]
+    fn unit_pairs_x8(self, z: &[u64; LANES]) -> ([f32; LANES], [f32; LANES]) {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Hasher::Avx2(avx) => unit_pairs_avx2(avx, z),
+            _ => {
+                let h = z.map(splitmix64);
+                // Exact: the integers are below 2^24 and the scale a power of two (as `unit_f32`).
+                (h.map(|h| (h >> 40) as f32 * unit_f32(1)), h.map(|h| ((h >> 16) & 0xFF_FFFF) as f32 * unit_f32(1)))
+            }
+        }
+    }
+}
+
 /// `splitmix64` of each input.
 /// The token proves the CPU has AVX2.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn splitmix64_x8(_: Avx2, z: &[u64; LANES]) -> [u64; LANES] {
+fn splitmix64_avx2(_: Avx2, z: &[u64; LANES]) -> [u64; LANES] {
     let mut out = [0u64; LANES];
     // SAFETY: the token proves AVX2; loads and stores are unaligned ones of four u64
     // inside the arrays `z` and `out`.
@@ -34,22 +72,19 @@ pub fn splitmix64_x8(_: Avx2, z: &[u64; LANES]) -> [u64; LANES] {
 /// [`Sampler::for_vertex`] of eight paths: the streams whose keys are `splitmix64` of the
 /// [`Sampler::vertex_input`]s `inputs`.
 /// The token proves the CPU has AVX2.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn for_vertex_x8(avx: Avx2, inputs: &[u64; LANES]) -> [Sampler; LANES] {
-    let keys = splitmix64_x8(avx, inputs);
+pub fn for_vertex_x8(h: Hasher, inputs: &[u64; LANES]) -> [Sampler; LANES] {
+    let keys = h.splitmix64_x8(inputs);
     keys.map(Sampler::from_vertex_hash)
 }
 
 /// [`Sampler::next_2d`] of each stream at dimension `dim` (the stream's own dimension is
 /// ignored): `(a, b)` per lane. Hashed streams are hashed together; streams that follow a
 /// pattern are drawn one by one.
-/// The token proves the CPU has AVX2.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn next_2d_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+pub fn next_2d_x8(h: Hasher, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
     if let Some(index) = sobol_indices(s) {
-        let seeds = sobol_seeds(avx, s, dim);
+        let seeds = sobol_seeds(h, s, dim);
         let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
         for j in 0..LANES {
             (a[j], b[j]) = sobol_2d(index[j], seeds[j]);
@@ -67,6 +102,13 @@ pub fn next_2d_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [
     for j in 0..LANES {
         z[j] = s[j].dim_input(dim);
     }
+    h.unit_pairs_x8(&z)
+}
+
+/// [`Hasher::unit_pairs_x8`] with AVX2's products.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn unit_pairs_avx2(_: Avx2, z: &[u64; LANES]) -> ([f32; LANES], [f32; LANES]) {
     let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
     // SAFETY: the token proves AVX2; loads and stores are unaligned ones of four u64
     // or eight f32 inside the arrays `z`, `a` and `b`.
@@ -88,12 +130,10 @@ pub fn next_2d_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [
 }
 
 /// [`Sampler::next_f32`] of each stream at dimension `dim`.
-/// The token proves the CPU has AVX2.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
+pub fn next_f32_x8(h: Hasher, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
     if let Some(index) = sobol_indices(s) {
-        let seeds = sobol_seeds(avx, s, dim);
+        let seeds = sobol_seeds(h, s, dim);
         let mut a = [0f32; LANES];
         for j in 0..LANES {
             a[j] = sobol_1d(index[j], seeds[j]);
@@ -103,7 +143,7 @@ pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
     if s.iter().any(Sampler::patterned) {
         return s.map(|r| r.at(dim).next_f32());
     }
-    next_2d_x8(avx, s, dim).0
+    next_2d_x8(h, s, dim).0
 }
 
 /// [`Pattern::vertex`] of `L` paths (a multiple of eight): the streams of vertex `bounces[j]`
@@ -111,9 +151,8 @@ pub fn next_f32_x8(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
 /// loops, which the AVX-512 kernels compile to 64-bit vector products; eight with the AVX2
 /// forms). One lane at a time in a kernel's gather, each lane's hash was a chain of dependent
 /// 64-bit products.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn vertex_lanes<const L: usize>(avx: Avx2, pattern: Pattern, keys: &[u64; L], bounces: &[u32; L]) -> [Sampler; L] {
+pub fn vertex_lanes<const L: usize>(h: Hasher, pattern: Pattern, keys: &[u64; L], bounces: &[u32; L]) -> [Sampler; L] {
     let mut inputs = [0u64; L];
     for j in 0..L {
         inputs[j] = pattern.hash_input(keys[j], bounces[j]);
@@ -126,7 +165,7 @@ pub fn vertex_lanes<const L: usize>(avx: Avx2, pattern: Pattern, keys: &[u64; L]
     } else {
         for c in (0..L).step_by(LANES) {
             let part: &[u64; LANES] = inputs[c..c + LANES].try_into().expect("groups of eight");
-            hashes[c..c + LANES].copy_from_slice(&splitmix64_x8(avx, part));
+            hashes[c..c + LANES].copy_from_slice(&h.splitmix64_x8(part));
         }
     }
     let mut out = [Sampler::default(); L];
@@ -137,9 +176,8 @@ pub fn vertex_lanes<const L: usize>(avx: Avx2, pattern: Pattern, keys: &[u64; L]
 }
 
 /// [`next_2d_x8`] for `L` streams.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn next_2d_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
+pub fn next_2d_lanes<const L: usize>(h: Hasher, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
     let (mut a, mut b) = ([0.0; L], [0.0; L]);
     if L > LANES
         && let Some((index, seeds)) = sobol_wide(s, dim)
@@ -151,7 +189,7 @@ pub fn next_2d_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> (
     }
     for c in (0..L).step_by(LANES) {
         let part: &[Sampler; LANES] = s[c..c + LANES].try_into().expect("groups of eight");
-        let (pa, pb) = next_2d_x8(avx, part, dim);
+        let (pa, pb) = next_2d_x8(h, part, dim);
         a[c..c + LANES].copy_from_slice(&pa);
         b[c..c + LANES].copy_from_slice(&pb);
     }
@@ -159,9 +197,8 @@ pub fn next_2d_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> (
 }
 
 /// [`next_f32_x8`] for `L` streams.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub fn next_f32_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> [f32; L] {
+pub fn next_f32_lanes<const L: usize>(h: Hasher, s: &[Sampler; L], dim: u32) -> [f32; L] {
     let mut a = [0.0; L];
     if L > LANES
         && let Some((index, seeds)) = sobol_wide(s, dim)
@@ -173,7 +210,7 @@ pub fn next_f32_lanes<const L: usize>(avx: Avx2, s: &[Sampler; L], dim: u32) -> 
     }
     for c in (0..L).step_by(LANES) {
         let part: &[Sampler; LANES] = s[c..c + LANES].try_into().expect("groups of eight");
-        a[c..c + LANES].copy_from_slice(&next_f32_x8(avx, part, dim));
+        a[c..c + LANES].copy_from_slice(&next_f32_x8(h, part, dim));
     }
     a
 }
@@ -207,14 +244,13 @@ fn sobol_indices<const N: usize>(s: &[Sampler; N]) -> Option<[u32; N]> {
 /// The scramble seeds of dimension `dim` of eight Sobol streams: the top half of the
 /// dimension's hash, as [`Sampler::next_2d`] takes it. The sequence's own hashing and
 /// scrambling then run as plain loops over the lanes (32-bit products, which AVX2 has).
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
-fn sobol_seeds(avx: Avx2, s: &[Sampler; LANES], dim: u32) -> [u32; LANES] {
+fn sobol_seeds(h: Hasher, s: &[Sampler; LANES], dim: u32) -> [u32; LANES] {
     let mut z = [0u64; LANES];
     for j in 0..LANES {
         z[j] = s[j].dim_input(dim);
     }
-    splitmix64_x8(avx, &z).map(|h| (h >> 32) as u32)
+    h.splitmix64_x8(&z).map(|h| (h >> 32) as u32)
 }
 
 /// The low 64 bits of `a * c` in each 64-bit lane.
@@ -255,23 +291,31 @@ unsafe fn pack_low_dwords(x: __m256i, y: __m256i) -> __m256i {
     }
 }
 
-#[cfg(all(test, target_arch = "x86_64"))]
+#[cfg(test)]
 mod tests {
     use super::*;
     use crate::sampling::splitmix64;
 
     type Pairs = ([f32; LANES], [f32; LANES]);
 
-    fn run(avx: Avx2, keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
+    /// Runs `f` with every hasher this CPU has: the portable one, and AVX2's inside an AVX2
+    /// context where the CPU has it.
+    fn each_hasher(mut f: impl FnMut(Hasher)) {
+        f(Hasher::Portable);
+        if let Some(avx) = Avx2::new() {
+            crate::cpu::with_avx2(avx, |avx| f(Hasher::Avx2(avx)));
+        }
+    }
+
+    fn run(h: Hasher, keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
         let s = keys.map(|k| Sampler::for_vertex(k, 3));
-        (splitmix64_x8(avx, keys), next_2d_x8(avx, &s, dim), next_f32_x8(avx, &s, dim))
+        (h.splitmix64_x8(keys), next_2d_x8(h, &s, dim), next_f32_x8(h, &s, dim))
     }
 
     /// Eight lanes give the scalar streams' numbers, bit for bit, for keys with high, low,
     /// zero and all-ones halves (the 32 x 32-bit products and their carries).
     #[test]
     fn lanes_are_the_scalar_streams() {
-        let Some(avx) = Avx2::new() else { return };
         let mut state = 0x0123_4567_89AB_CDEFu64;
         let mut groups = vec![[0, u64::MAX, 1, 1 << 32, (1 << 32) - 1, u64::MAX << 32, 0x8000_0000_0000_0000, 42]];
         for _ in 0..5000 {
@@ -284,15 +328,17 @@ mod tests {
         }
         for (n, keys) in groups.iter().enumerate() {
             let dim = n as u32 % 11;
-            let (h, (a, b), f) = crate::cpu::with_avx2(avx, |avx| run(avx, keys, dim));
-            for j in 0..LANES {
-                assert_eq!(h[j], splitmix64(keys[j]), "{:#x}", keys[j]);
-                let (mut s2, mut s1) =
-                    (Sampler::for_vertex(keys[j], 3).at(dim), Sampler::for_vertex(keys[j], 3).at(dim));
-                let (wa, wb) = s2.next_2d();
-                assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "{:#x}", keys[j]);
-                assert_eq!(f[j].to_bits(), s1.next_f32().to_bits(), "{:#x}", keys[j]);
-            }
+            each_hasher(|hasher| {
+                let (h, (a, b), f) = run(hasher, keys, dim);
+                for j in 0..LANES {
+                    assert_eq!(h[j], splitmix64(keys[j]), "{:#x}", keys[j]);
+                    let (mut s2, mut s1) =
+                        (Sampler::for_vertex(keys[j], 3).at(dim), Sampler::for_vertex(keys[j], 3).at(dim));
+                    let (wa, wb) = s2.next_2d();
+                    assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "{:#x}", keys[j]);
+                    assert_eq!(f[j].to_bits(), s1.next_f32().to_bits(), "{:#x}", keys[j]);
+                }
+            });
         }
     }
 
@@ -325,14 +371,9 @@ mod tests {
     /// indices inside the sequence and past it (hashed numbers) mixed or not.
     #[test]
     fn sobol_lanes_are_the_scalar_streams() {
-        let Some(avx) = Avx2::new() else { return };
         for (n, s) in sobol_groups::<LANES>(64, 4, 3) {
             let dim = n % 9;
-            assert_scalar(
-                &s,
-                dim,
-                crate::cpu::with_avx2(avx, |avx| (next_2d_x8(avx, &s, dim), next_f32_x8(avx, &s, dim))),
-            );
+            each_hasher(|h| assert_scalar(&s, dim, (next_2d_x8(h, &s, dim), next_f32_x8(h, &s, dim))));
         }
     }
 
@@ -341,18 +382,19 @@ mod tests {
     /// and bounces from the camera ray's on.
     #[test]
     fn vertex_lanes_are_the_patterns_streams() {
-        let Some(avx) = Avx2::new() else { return };
-        fn check<const N: usize>(avx: Avx2, pattern: Pattern, keys: &[u64; N], bounces: &[u32; N]) {
-            let got = crate::cpu::with_avx2(avx, |avx| vertex_lanes(avx, pattern, keys, bounces));
-            for j in 0..N {
-                assert_eq!(got[j], pattern.vertex(keys[j], bounces[j]), "{pattern:?} lane {j}");
-            }
+        fn check<const N: usize>(pattern: Pattern, keys: &[u64; N], bounces: &[u32; N]) {
+            each_hasher(|h| {
+                let got = vertex_lanes(h, pattern, keys, bounces);
+                for j in 0..N {
+                    assert_eq!(got[j], pattern.vertex(keys[j], bounces[j]), "{pattern:?} lane {j} {h:?}");
+                }
+            });
         }
         let mut state = 0x2545_F491_4F6C_DD1Du64;
         let fixed = [0, u64::MAX, 1, 1 << 32, (1 << 32) - 1, u64::MAX << 32, 0x8000_0000_0000_0000, 42];
         for kind in crate::sampling::SamplerKind::ALL {
             let pattern = Pattern::new(kind, 64);
-            check::<LANES>(avx, pattern, &fixed, &[0, 1, 2, 3, 4, 5, 6, u32::MAX]);
+            check::<LANES>(pattern, &fixed, &[0, 1, 2, 3, 4, 5, 6, u32::MAX]);
             for n in 0..500u32 {
                 let mut keys = [0u64; 16];
                 for k in keys.iter_mut() {
@@ -360,9 +402,9 @@ mod tests {
                     *k = state;
                 }
                 let bounces: [u32; 16] = std::array::from_fn(|j| (n + j as u32) % 7);
-                check::<16>(avx, pattern, &keys, &bounces);
+                check::<16>(pattern, &keys, &bounces);
                 let (k8, b8) = (keys[..LANES].try_into().unwrap(), bounces[..LANES].try_into().unwrap());
-                check::<LANES>(avx, pattern, k8, b8);
+                check::<LANES>(pattern, k8, b8);
             }
         }
     }
@@ -371,14 +413,9 @@ mod tests {
     /// leaves the sequence): each lane's numbers are its scalar stream's.
     #[test]
     fn sixteen_sobol_lanes_are_the_scalar_streams() {
-        let Some(avx) = Avx2::new() else { return };
         for (n, s) in sobol_groups::<16>(256, 3, 11) {
             let dim = n % 13;
-            assert_scalar(
-                &s,
-                dim,
-                crate::cpu::with_avx2(avx, |avx| (next_2d_lanes(avx, &s, dim), next_f32_lanes(avx, &s, dim))),
-            );
+            each_hasher(|h| assert_scalar(&s, dim, (next_2d_lanes(h, &s, dim), next_f32_lanes(h, &s, dim))));
         }
     }
 }

@@ -52,7 +52,7 @@ fn every_instruction_set_renders_the_scalar_image() {
         // Each path the CPU runs, once: a request this CPU cannot honour falls back to one
         // already compared.
         let mut ran = vec![Isa::Scalar];
-        for isa in [Isa::Sse, Isa::Avx2, Isa::Avx512] {
+        for isa in [Isa::Portable, Isa::Sse, Isa::Avx2, Isa::Avx512] {
             if ran.contains(&isa.effective()) {
                 eprintln!("{name}: {} runs as {}, compared already", isa.name(), isa.effective().name());
                 continue;
@@ -113,4 +113,9 @@ fn simd_paths_run_where_the_cpu_has_them() {
     }
     assert_eq!(Isa::Scalar.effective(), Isa::Scalar);
     assert!(Isa::Scalar.sse().is_none() && Isa::Scalar.avx2().is_none());
+    // The portable lanes run on every CPU, and are what a CPU without the x86 sets shades with.
+    assert_eq!(Isa::Portable.effective(), Isa::Portable);
+    assert!(Isa::Portable.shades_in_lanes() && !Isa::Scalar.shades_in_lanes());
+    #[cfg(not(target_arch = "x86_64"))]
+    assert_eq!(Isa::default().effective(), Isa::Portable);
 }

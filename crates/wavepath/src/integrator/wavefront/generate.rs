@@ -1,8 +1,9 @@
 //! Stage 1: camera rays for every (pixel, sample) slot of a wave.
 
+use super::lane_width::{LaneKernel, ShadeWidth};
 use super::queues::PathQueue;
-use crate::cpu::Avx2;
 use crate::integrator::Transport;
+use crate::sampling::rng8::Hasher;
 use crate::sampling::{Sampler, SamplerKind, rng8};
 use glam::Vec3;
 
@@ -30,12 +31,12 @@ impl Wave<'_> {
 /// Fills the path queue with the wave's camera rays, in slot order. A pixel's samples are
 /// consecutive slots, so the pixel's coordinates and the pixel part of the path key
 /// ([`Sampler::pixel_key`], two of the key's three hashes) are computed once per pixel.
-/// With `lanes` (a pinhole camera and AVX2: `super::Lanes`), the rays of eight samples are set
+/// With `lanes` (a pinhole camera: `super::Lanes`; eight lanes at every width), the rays of eight samples are set
 /// up lane-parallel: the keys and jitters hashed or drawn eight at a time (independent
 /// numbers, or a pattern's: Sobol, stratified), the directions' normalisations together.
 pub fn generate(
     t: &Transport,
-    lanes: Option<Avx2>,
+    lanes: Option<ShadeWidth>,
     q: &mut PathQueue,
     wave: &Wave,
     width: usize,
@@ -48,10 +49,8 @@ pub fn generate(
     q.key.reserve(n);
     // Eight lanes hold eight samples of one pixel: with fewer per pixel (a viewer's or a
     // part's small batches) most lanes would be wasted, and the one-by-one loop is cheaper.
-    #[cfg(target_arch = "x86_64")]
-    if let Some(avx) = lanes.filter(|_| wave.batch as usize >= L) {
-        // SAFETY: the token proves the CPU has AVX2 and FMA.
-        unsafe { pinhole_lanes(avx, t, q, wave, width, height, spp) };
+    if let Some(w) = lanes.filter(|_| wave.batch as usize >= L) {
+        w.dispatch(Pinhole { t, q: &mut *q, wave, width, height, spp });
         q.start_camera_paths(n);
         return;
     }
@@ -74,9 +73,26 @@ const L: usize = 8;
 /// The pinhole camera's rays of the wave, eight samples of a pixel at a time; the same rays
 /// as [`Transport::camera_ray_keyed`] (the same functions, per lane, and the streams'
 /// numbers as `rng8` draws them for the shading kernels).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+/// [`pinhole_lanes`]' arguments, run at the chosen width's instructions (eight lanes at any).
+struct Pinhole<'a, 's, 'w> {
+    t: &'a Transport<'s>,
+    q: &'a mut PathQueue,
+    wave: &'a Wave<'w>,
+    width: usize,
+    height: usize,
+    spp: u32,
+}
+
+impl LaneKernel for Pinhole<'_, '_, '_> {
+    #[inline(always)]
+    fn run<const W: usize>(self, h: Hasher) {
+        let Pinhole { t, q, wave, width, height, spp } = self;
+        pinhole_lanes(h, t, q, wave, width, height, spp)
+    }
+}
+
+#[inline(always)]
+fn pinhole_lanes(h: Hasher, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
     let pattern = t.streams.pattern;
     let hashed = pattern.kind == SamplerKind::Independent;
     for &pixel in wave.pixels {
@@ -93,15 +109,15 @@ fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width
                 for (j, input) in inputs.iter_mut().enumerate() {
                     *input = Sampler::sample_input(pixel_key, (sample + j as u32) as u64);
                 }
-                let keys = rng8::splitmix64_x8(avx, &inputs);
+                let keys = h.splitmix64_x8(&inputs);
                 let jitter = if spp <= 1 {
                     ([0.5f32; L], [0.5f32; L])
                 } else {
                     for j in 0..L {
                         inputs[j] = Sampler::vertex_input(keys[j], 0);
                     }
-                    let streams = rng8::for_vertex_x8(avx, &inputs);
-                    rng8::next_2d_x8(avx, &streams, 0)
+                    let streams = rng8::for_vertex_x8(h, &inputs);
+                    rng8::next_2d_x8(h, &streams, 0)
                 };
                 (keys, jitter)
             } else {
@@ -113,7 +129,7 @@ fn pinhole_lanes(avx: Avx2, t: &Transport, q: &mut PathQueue, wave: &Wave, width
                     keys[j] = pattern.sample_key(pixel_key, (sample + j as u32) as u64);
                     streams[j] = pattern.vertex(keys[j], 0);
                 }
-                let jitter = if spp <= 1 { ([0.5f32; L], [0.5f32; L]) } else { rng8::next_2d_x8(avx, &streams, 0) };
+                let jitter = if spp <= 1 { ([0.5f32; L], [0.5f32; L]) } else { rng8::next_2d_x8(h, &streams, 0) };
                 (keys, jitter)
             };
             let mut rays = [crate::geometry::Ray::new(Vec3::ZERO, Vec3::ZERO); L];
@@ -158,7 +174,7 @@ mod tests {
             let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
             let pixels: Vec<u32> = (0..(w * h) as u32).step_by(3).collect();
             let wave = Wave { pixels: &pixels, base: 2, batch };
-            for lanes in [None, crate::cpu::Avx2::new()] {
+            for lanes in std::iter::once(None).chain(ShadeWidth::all().into_iter().map(Some)) {
                 let mut q = PathQueue::default();
                 generate(&t, lanes, &mut q, &wave, w, h, spp);
                 assert_eq!(q.len(), wave.len());

@@ -20,15 +20,15 @@
 // lane, the shape the compiler vectorises.
 #![allow(clippy::needless_range_loop)]
 
-use super::ShadeWidth;
+use super::lane_width::{LaneKernel, ShadeWidth};
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
-use crate::cpu::{Avx2, Avx512};
 use crate::geometry::offset::offset_origin;
 use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, ShadingPoint, area_ray, cosine_ray, mis_weighted, triangle_ray};
 use crate::integrator::light_ray::{LightPoint, diffuse_light_ray};
 use crate::integrator::{DIM_DIRECT, DIM_ROULETTE, Transport, Vertex, orient};
 use crate::lights::{EmissiveTriangles, Emitter, SampledLight, Sky};
+use crate::sampling::rng8::Hasher;
 use crate::sampling::{Frame, Sampler, SamplerKind, rng8, warp};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::{Vec2, Vec3};
@@ -37,37 +37,26 @@ use std::f32::consts::FRAC_1_PI;
 /// [`super::shade::shade`] for the Lambertian hits listed in `idx` (paths that hit, whose
 /// material is Lambertian), eight or sixteen at a time.
 pub fn shade_diffuse(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
-    match width {
-        // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512(avx512, t, q, idx, shadow) },
-        // SAFETY: as above.
-        ShadeWidth::Eight(avx2) => unsafe { shade_avx2(avx2, t, q, idx, shadow) },
-    }
+    width.dispatch(Diffuse { t, q, idx, shadow })
 }
 
-/// The kernel compiled with exactly the features it uses: run through `cpu::with_avx2` (which
-/// also enables BMI1 and POPCNT, for the BVH) it compiled to 4.7% more instructions
-/// (callgrind, CBspheres_lambertian 128x96, shade stage).
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn shade_avx2(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
-    shade_width::<8>(avx, t, q, idx, shadow)
+/// [`shade_diffuse`]'s arguments, run at the chosen width.
+struct Diffuse<'a, 's> {
+    t: &'a Transport<'s>,
+    q: &'a mut PathQueue,
+    idx: &'a [u32],
+    shadow: &'a mut ShadowQueue,
 }
 
-/// Sixteen paths per group: the lane-parallel loops fill 512-bit registers.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-fn shade_avx512(avx: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
-    shade_width::<16>(avx.avx2, t, q, idx, shadow)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn shade_width<const L: usize>(avx: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32], shadow: &mut ShadowQueue) {
-    if whole_vertices(t) {
-        shade_groups::<true, L>(avx, t, q, idx, shadow)
-    } else {
-        shade_groups::<false, L>(avx, t, q, idx, shadow)
+impl LaneKernel for Diffuse<'_, '_> {
+    #[inline(always)]
+    fn run<const L: usize>(self, h: Hasher) {
+        let Diffuse { t, q, idx, shadow } = self;
+        if whole_vertices(t) {
+            shade_groups::<true, L>(h, t, q, idx, shadow)
+        } else {
+            shade_groups::<false, L>(h, t, q, idx, shadow)
+        }
     }
 }
 
@@ -315,7 +304,7 @@ fn cosine_rays<const L: usize>(pts: &Points<L>, ua: &[f32; L], ub: &[f32; L], ou
 /// probes): the transport, the paths, and the group's vertices, shading points and streams.
 #[derive(Clone, Copy)]
 struct GroupLight<'a, 's, const L: usize> {
-    avx: Avx2,
+    h: Hasher,
     t: &'a Transport<'s>,
     q: &'a PathQueue,
     g: &'a Group<L>,
@@ -326,7 +315,6 @@ struct GroupLight<'a, 's, const L: usize> {
 /// The samples of emissive-triangle light `li` (`e`) of a group, from dimension `dim` on: the
 /// triangle and its point picked one lane at a time, the rest lane-parallel
 /// ([`triangle_ray`]); pushed path-major as the area lights' are.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn emissive_rays<const L: usize>(
     gl: GroupLight<'_, '_, L>,
@@ -336,7 +324,7 @@ fn emissive_rays<const L: usize>(
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
-    let GroupLight { avx, t, q, g, pts, rng } = gl;
+    let GroupLight { h, t, q, g, pts, rng } = gl;
     let ns = t.lights.set.samples_for(li, t.rules.light_samples);
     let margin = t.lights.shadow_margins[li];
     let mut inv = [[0.0; L]; 3];
@@ -347,8 +335,8 @@ fn emissive_rays<const L: usize>(
         pending.resize_with(ns as usize, Rays::default);
     }
     for p in pending.iter_mut().take(ns as usize) {
-        let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
-        let uc = rng8::next_f32_lanes(avx, rng, dim + 1);
+        let (ua, ub) = rng8::next_2d_lanes(h, rng, dim);
+        let uc = rng8::next_f32_lanes(h, rng, dim + 1);
         dim += 2;
         // The picks first (independent searches), then each picked triangle's fields into
         // lanes, then the points of all lanes at once: picking, reading and sampling one lane
@@ -630,11 +618,10 @@ pub(super) fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3
 }
 
 /// The Lambertian paths `idx`, eight at a time; the random numbers are drawn eight streams
-/// at a time (hence the token). `WHOLE`: gather whole vertices (see `shade_avx2`).
-#[cfg(target_arch = "x86_64")]
+/// at a time (with `h`). `WHOLE`: gather whole vertices (see [`whole_vertices`]).
 #[inline(always)]
 fn shade_groups<const WHOLE: bool, const L: usize>(
-    avx: Avx2,
+    h: Hasher,
     t: &Transport,
     q: &mut PathQueue,
     idx: &[u32],
@@ -715,7 +702,7 @@ fn shade_groups<const WHOLE: bool, const L: usize>(
         for j in 0..L {
             bounces[j] = g.depth[j] + 1;
         }
-        let mut rng = rng8::vertex_lanes(avx, t.streams.pattern, &keys, &bounces);
+        let mut rng = rng8::vertex_lanes(h, t.streams.pattern, &keys, &bounces);
         if !hashed {
             // Lanes that draw nothing take an active lane's stream, so that `rng8` sees
             // streams of one pattern (Sobol's are drawn for all lanes at once).
@@ -737,12 +724,12 @@ fn shade_groups<const WHOLE: bool, const L: usize>(
             surface_points(&surf, normals, spheres, &mut pts);
         }
         if t.rules.features.direct && g.direct.iter().any(|&d| d) {
-            direct_light(GroupLight { avx, t, q: &*q, g: &g, pts: &pts, rng: &rng }, &mut pending, shadow);
+            direct_light(GroupLight { h, t, q: &*q, g: &g, pts: &pts, rng: &rng }, &mut pending, shadow);
         }
         if t.rules.features.indirect && g.cont.iter().any(|&c| c) {
-            let (ua, ub) = rng8::next_2d_lanes(avx, &rng, 0);
+            let (ua, ub) = rng8::next_2d_lanes(h, &rng, 0);
             let (ua, ub) = (unused_half(ua, &g.cont), unused_half(ub, &g.cont));
-            let rr = if t.rules.features.roulette { rng8::next_f32_lanes(avx, &rng, DIM_ROULETTE) } else { [0.0; L] };
+            let rr = if t.rules.features.roulette { rng8::next_f32_lanes(h, &rng, DIM_ROULETTE) } else { [0.0; L] };
             cosine_rays(&pts, &ua, &ub, &mut rays);
             for j in 0..g.n {
                 let r = rays.ray(j);
@@ -772,10 +759,9 @@ fn shade_groups<const WHOLE: bool, const L: usize>(
 /// by light: each light's rays sample-major (lane-parallel), pushed path-major, so the rays
 /// of one point sit together in the queue, where the shadow stage traces them as one packet,
 /// and each path still adds its own in the order the one-path code makes them.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn direct_light<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Rays<L>>, shadow: &mut ShadowQueue) {
-    let GroupLight { avx, t, q, g, pts, rng } = gl;
+    let GroupLight { h, t, q, g, pts, rng } = gl;
     if t.rules.hemisphere {
         hemisphere_probes(gl, pending, shadow);
         return;
@@ -801,7 +787,7 @@ fn direct_light<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Ray
             pending.resize_with(ns as usize, Rays::default);
         }
         for p in pending.iter_mut().take(ns as usize) {
-            let (ua, ub) = rng8::next_2d_lanes(avx, rng, dim);
+            let (ua, ub) = rng8::next_2d_lanes(h, rng, dim);
             let (ua, ub) = (unused_half(ua, &g.direct), unused_half(ub, &g.direct));
             dim += 1;
             // Into a local first (see `emissive_rays`).
@@ -819,10 +805,9 @@ fn direct_light<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Ray
 /// Hemisphere sampling's probes of a group (`Transport::direct_rays` under `-H`): uniform
 /// directions weighted by the Lambertian value and cosine, in lanes; the sine and cosine of
 /// each probe's azimuth one lane at a time. Pushed path-major.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Rays<L>>, shadow: &mut ShadowQueue) {
-    let GroupLight { avx, t, q, g, pts, rng } = gl;
+    let GroupLight { h, t, q, g, pts, rng } = gl;
     let n = t.rules.direct_per_vertex as usize;
     let mut scale = [[0.0; L]; 3];
     for j in 0..L {
@@ -832,7 +817,7 @@ fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Ve
         pending.resize_with(n, Rays::default);
     }
     for (k, p) in pending.iter_mut().take(n).enumerate() {
-        let (z, b) = rng8::next_2d_lanes(avx, rng, DIM_DIRECT + k as u32);
+        let (z, b) = rng8::next_2d_lanes(h, rng, DIM_DIRECT + k as u32);
         let (mut sin, mut cos) = ([0.0f32; L], [1.0f32; L]);
         for j in 0..g.n {
             if g.direct[j] {
@@ -863,7 +848,6 @@ fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Ve
 /// other light one lane at a time (`SampledLight::sample_pdf`: the map's table, a
 /// normalisation); then the MIS weights and shadow rays of all lanes ([`diffuse_light_ray`]).
 /// Pushed path-major.
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn light_rays<const L: usize>(
     gl: GroupLight<'_, '_, L>,
@@ -873,7 +857,7 @@ fn light_rays<const L: usize>(
     pending: &mut Vec<Rays<L>>,
     shadow: &mut ShadowQueue,
 ) {
-    let GroupLight { avx, t, q, g, pts, rng } = gl;
+    let GroupLight { h, t, q, g, pts, rng } = gl;
     let ns = t.lights.set.samples_for(li, t.rules.light_samples);
     let margin = t.lights.shadow_margins[li];
     let sky = match light {
@@ -892,7 +876,7 @@ fn light_rays<const L: usize>(
         pending.resize_with(ns as usize, Rays::default);
     }
     for p in pending.iter_mut().take(ns as usize) {
-        let (ua, ub) = if delta.is_none() { rng8::next_2d_lanes(avx, rng, dim) } else { ([0.5; L], [0.5; L]) };
+        let (ua, ub) = if delta.is_none() { rng8::next_2d_lanes(h, rng, dim) } else { ([0.5; L], [0.5; L]) };
         dim += 1;
         let ls = match (sky, delta) {
             (_, Some(ls)) => ls,

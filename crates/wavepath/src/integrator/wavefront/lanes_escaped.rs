@@ -14,14 +14,14 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::ShadeWidth;
+use super::lane_width::{LaneKernel, ShadeWidth};
 use super::lanes::{get, put};
 use super::one_path;
 use super::queues::PathQueue;
-use crate::cpu::{Avx2, Avx512};
 use crate::integrator::Transport;
 use crate::integrator::light_ray::found_at_infinity;
 use crate::lights::{LightSet, SampledLight};
+use crate::sampling::rng8::Hasher;
 use glam::Vec3;
 
 /// Shades the escaped paths `idx`: `alive` cleared, the environment or the light from
@@ -33,24 +33,21 @@ pub fn shade_escaped(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &
         }
         return;
     }
-    match width {
-        // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        ShadeWidth::Sixteen(avx512) => unsafe { escaped_avx512(avx512, t, q, idx) },
-        // SAFETY: as above.
-        ShadeWidth::Eight(avx2) => unsafe { escaped_avx2(avx2, t, q, idx) },
+    width.dispatch(Escaped { t, q, idx })
+}
+
+/// [`shade_escaped`]'s arguments, run at the chosen width.
+struct Escaped<'a, 's> {
+    t: &'a Transport<'s>,
+    q: &'a mut PathQueue,
+    idx: &'a [u32],
+}
+
+impl LaneKernel for Escaped<'_, '_> {
+    #[inline(always)]
+    fn run<const L: usize>(self, _: Hasher) {
+        escaped_groups::<L>(self.t, self.q, self.idx)
     }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn escaped_avx2(_: Avx2, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
-    escaped_groups::<8>(t, q, idx)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-fn escaped_avx512(_: Avx512, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
-    escaped_groups::<16>(t, q, idx)
 }
 
 #[inline(always)]

@@ -19,16 +19,16 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::ShadeWidth;
+use super::lane_width::{LaneKernel, ShadeWidth};
 use super::lanes::{self, Points, Rays, Surfaces, get, surface_points};
 use super::lanes_glossy::{self, ModelGroup};
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
 use crate::bsdf::{Dielectric, Glossy, Kind, Layered, Microfacet, Mirror, Model, Pbr, to_local};
-use crate::cpu::{Avx2, Avx512};
 use crate::geometry::Hit;
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::sampling::numbers::Drawn;
+use crate::sampling::rng8::Hasher;
 use crate::sampling::{Frame, SamplerKind, rng8};
 use glam::{Vec2, Vec3};
 
@@ -42,44 +42,28 @@ pub fn shade_shaded(
     shadow: &mut ShadowQueue,
     table: &mut Vec<[f32; 2]>,
 ) {
-    match width {
-        // SAFETY: the tokens prove the CPU has the instruction sets the kernels enable.
-        ShadeWidth::Sixteen(avx512) => unsafe { shade_avx512(avx512, t, q, idx, shadow, table) },
-        // SAFETY: as above.
-        ShadeWidth::Eight(avx2) => unsafe { shade_avx2(avx2, t, q, idx, shadow, table) },
+    width.dispatch(Shaded { t, q, idx, shadow, table })
+}
+
+/// [`shade_shaded`]'s arguments, run at the chosen width.
+struct Shaded<'a, 's> {
+    t: &'a Transport<'s>,
+    q: &'a mut PathQueue,
+    idx: &'a [u32],
+    shadow: &'a mut ShadowQueue,
+    table: &'a mut Vec<[f32; 2]>,
+}
+
+impl LaneKernel for Shaded<'_, '_> {
+    #[inline(always)]
+    fn run<const L: usize>(self, h: Hasher) {
+        shade_groups::<L>(h, self.t, self.q, self.idx, self.shadow, self.table)
     }
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2,fma")]
-fn shade_avx2(
-    avx: Avx2,
-    t: &Transport,
-    q: &mut PathQueue,
-    idx: &[u32],
-    shadow: &mut ShadowQueue,
-    table: &mut Vec<[f32; 2]>,
-) {
-    shade_groups::<8>(avx, t, q, idx, shadow, table)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
-fn shade_avx512(
-    avx: Avx512,
-    t: &Transport,
-    q: &mut PathQueue,
-    idx: &[u32],
-    shadow: &mut ShadowQueue,
-    table: &mut Vec<[f32; 2]>,
-) {
-    shade_groups::<16>(avx.avx2, t, q, idx, shadow, table)
-}
-
-#[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn shade_groups<const L: usize>(
-    avx: Avx2,
+    h: Hasher,
     t: &Transport,
     q: &mut PathQueue,
     idx: &[u32],
@@ -140,7 +124,7 @@ fn shade_groups<const L: usize>(
                 }
             }
         }
-        let mut rng = rng8::vertex_lanes(avx, t.streams.pattern, &keys, &bounces);
+        let mut rng = rng8::vertex_lanes(h, t.streams.pattern, &keys, &bounces);
         if !hashed {
             // Lanes without a vertex take an active lane's stream, so that the numbers are
             // drawn for streams of one pattern (Sobol's for all lanes at once).
@@ -153,12 +137,12 @@ fn shade_groups<const L: usize>(
         let drawn = if lights { dims } else { dims.min(DIM_DIRECT as usize) };
         for d in 0..drawn {
             if layout.one_d[d] {
-                let a = rng8::next_f32_lanes(avx, &rng, d as u32);
+                let a = rng8::next_f32_lanes(h, &rng, d as u32);
                 for j in 0..L {
                     table[j * dims + d][0] = a[j];
                 }
             } else {
-                let (a, b) = rng8::next_2d_lanes(avx, &rng, d as u32);
+                let (a, b) = rng8::next_2d_lanes(h, &rng, d as u32);
                 for j in 0..L {
                     table[j * dims + d] = [a[j], b[j]];
                 }

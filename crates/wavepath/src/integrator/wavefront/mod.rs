@@ -22,6 +22,7 @@
 pub mod compact;
 pub mod generate;
 mod handout;
+mod lane_width;
 pub mod lanes;
 mod lanes_escaped;
 mod lanes_glossy;
@@ -33,7 +34,7 @@ pub mod shadow;
 pub mod traverse;
 
 use crate::accel::{Intersector, TraceCounters};
-use crate::cpu::{Avx2, Avx512, Isa};
+use crate::cpu::Isa;
 use crate::effects::Effects;
 use crate::film::{Accumulator, PixelSums};
 use crate::integrator::Transport;
@@ -42,6 +43,7 @@ use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
 use glam::Vec3;
 use handout::Workers;
+pub use lane_width::ShadeWidth;
 use queues::{PathQueue, ShadowQueue};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -52,31 +54,24 @@ pub const WAVE_PATHS: usize = 4096;
 /// Batch size of the adaptive bookkeeping when `--all-effects` forces it on without `-a`.
 const FORCED_ADAPTIVE_BATCH: u32 = 8;
 
-/// How many paths the shading lanes hold: eight in 256-bit registers, sixteen in 512-bit ones.
-#[derive(Clone, Copy, Debug)]
-pub enum ShadeWidth {
-    Eight(Avx2),
-    Sixteen(Avx512),
-}
-
 /// Which stages run paths in lanes, decided once per render beside the kernel: the token
 /// when the stage's lane kernel runs, `None` when its one-path-at-a-time kernel does.
 #[derive(Clone, Copy, Debug)]
 pub struct Lanes {
-    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers).
-    pub camera: Option<Avx2>,
+    /// Camera rays, eight samples at a time: a pinhole camera (a lens draws more numbers),
+    /// at most AVX2's width (eight lanes fill its registers).
+    pub camera: Option<ShadeWidth>,
     /// Shading of the Lambertian hits, eight or sixteen paths at a time ([`lanes`]).
     pub shade: Option<ShadeWidth>,
 }
 
 impl Lanes {
-    /// The lane kernels this render runs: those its scene allows, where the settings'
-    /// instruction set and the CPU have AVX2.
+    /// The lane kernels this render runs: those its scene allows, at the widest width the
+    /// settings' instruction set and the CPU allow (none under `--isa scalar`).
     pub fn of(t: &Transport, isa: Isa) -> Lanes {
-        let avx2 = isa.avx2();
         Lanes {
-            camera: avx2.filter(|_| t.camera.pinhole()),
-            shade: isa.avx512().map(ShadeWidth::Sixteen).or(avx2.map(ShadeWidth::Eight)),
+            camera: (isa.shades_in_lanes() && t.camera.pinhole()).then(|| ShadeWidth::best(isa.at_most_avx2())),
+            shade: isa.shades_in_lanes().then(|| ShadeWidth::best(isa)),
         }
     }
 }

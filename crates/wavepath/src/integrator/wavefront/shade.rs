@@ -79,7 +79,6 @@ pub fn shade_path(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut Shado
 mod tests {
     use super::*;
     use crate::accel::{BruteForce, TraceCounters};
-    use crate::cpu::{Avx2, Avx512};
     use crate::geometry::Ray;
     use crate::integrator::rules::Features;
     use crate::integrator::wavefront::generate::{Wave, generate};
@@ -112,14 +111,13 @@ mod tests {
 
     /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
     /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
-    fn compare(parts: Features, scene: &Scene, s: &Settings, avx: Avx2) -> usize {
-        compare_counts(parts, scene, s, avx).0
+    fn compare(parts: Features, scene: &Scene, s: &Settings) -> usize {
+        compare_counts(parts, scene, s).0
     }
 
     /// [`compare`], with the paths that escaped after a bounce.
-    fn compare_counts(parts: Features, scene: &Scene, s: &Settings, avx: Avx2) -> (usize, usize) {
-        let mut widths = vec![ShadeWidth::Eight(avx)];
-        widths.extend(Avx512::new().map(ShadeWidth::Sixteen));
+    fn compare_counts(parts: Features, scene: &Scene, s: &Settings) -> (usize, usize) {
+        let widths = ShadeWidth::all();
         let counts: Vec<_> = widths.into_iter().map(|w| compare_width(parts, scene, s, w)).collect();
         (counts.iter().map(|c| c.0).min().unwrap_or(0), counts.iter().map(|c| c.1).min().unwrap_or(0))
     }
@@ -192,7 +190,6 @@ mod tests {
     #[test]
     fn lanes_match_the_scalar_kernel() {
         let diffuse = parts(true, false, true, true, true, false);
-        let Some(avx) = Avx2::new() else { return }; // nothing to compare on this CPU
         for (with_normals, with_spheres, rr_throughput) in
             [(false, true, false), (true, true, false), (true, false, false), (true, true, true)]
         {
@@ -204,7 +201,7 @@ mod tests {
             if with_normals {
                 tilted_normals(&mut scene);
             }
-            let shadow_rays = compare(diffuse, &scene, &settings(3, rr_throughput), avx);
+            let shadow_rays = compare(diffuse, &scene, &settings(3, rr_throughput));
             assert!(shadow_rays > 1000, "{shadow_rays}");
         }
     }
@@ -217,17 +214,16 @@ mod tests {
     fn lanes_match_the_scalar_kernel_for_every_light_and_vertex() {
         let diffuse = parts(true, false, true, true, true, false);
         let shaded = parts(true, false, true, true, true, true);
-        let Some(avx) = Avx2::new() else { return };
         let mut s = settings(2, false);
         let scene = emissive_box();
         assert!(
             Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s)).rules.mis,
             "the emissive box should turn MIS on"
         );
-        assert!(compare(diffuse, &scene, &s, avx) > 500);
+        assert!(compare(diffuse, &scene, &s) > 500);
         for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
             s.sampling.sampler = sampler;
-            assert!(compare(diffuse, &scene, &s, avx) > 500);
+            assert!(compare(diffuse, &scene, &s) > 500);
         }
         s.sampling.sampler = crate::sampling::SamplerKind::Independent;
 
@@ -238,29 +234,29 @@ mod tests {
             attenuation: [1.0, 0.0, 0.0],
         });
         tilted_normals(&mut point);
-        assert!(compare(diffuse, &point, &s, avx) > 500);
+        assert!(compare(diffuse, &point, &s) > 500);
         // Spot lights (with and without a falloff exponent, a cone that leaves some walls out)
         // and a directional light, under MIS (the emissive box) and without.
         for mut scene in [crate::load::default_scene(), emissive_box()] {
             scene.lights.extend(delta_lights());
             tilted_normals(&mut scene);
-            assert!(compare(diffuse, &scene, &s, avx) > 500);
+            assert!(compare(diffuse, &scene, &s) > 500);
         }
 
         let mut colours = emissive_box();
         let n = colours.mesh.positions.len();
         colours.mesh.colors = Some((0..n).map(|i| Vec3::new(0.5 + 0.1 * (i % 5) as f32, 0.7, 0.9)).collect());
-        assert!(compare(diffuse, &colours, &s, avx) > 500);
+        assert!(compare(diffuse, &colours, &s) > 500);
 
         // Hemisphere probes in lanes, with corner normals and with every sampler.
         let mut hemisphere = s.clone();
         hemisphere.paths.hemisphere = true;
-        assert!(compare(diffuse, &crate::load::default_scene(), &hemisphere, avx) > 500);
+        assert!(compare(diffuse, &crate::load::default_scene(), &hemisphere) > 500);
         let mut tilted = crate::load::default_scene();
         tilted_normals(&mut tilted);
         for sampler in [crate::sampling::SamplerKind::Sobol, crate::sampling::SamplerKind::Stratified] {
             hemisphere.sampling.sampler = sampler;
-            assert!(compare(diffuse, &tilted, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+            assert!(compare(diffuse, &tilted, &hemisphere) > 500, "{sampler:?} hemisphere");
         }
 
         let mut mixed = emissive_box();
@@ -271,7 +267,7 @@ mod tests {
         mixed.materials.push(mirror);
         mixed.spheres[1].material = 5;
         assert!(Transport::new(&mixed, &s, &crate::effects::Effects::of(&mixed, &s)).materials.non_diffuse);
-        assert!(compare(shaded, &mixed, &s, avx) > 500);
+        assert!(compare(shaded, &mixed, &s) > 500);
     }
 
     /// The shaded kinds' kernel (numbers drawn in lanes) against the one-path kernel: walls of
@@ -281,7 +277,6 @@ mod tests {
     /// point light, with every sampler, both roulettes, and hemisphere sampling.
     #[test]
     fn shaded_kinds_in_lanes_match_the_scalar_kernel() {
-        let Some(avx) = Avx2::new() else { return };
         let mut scene = emissive_box();
         scene.materials[0].bsdf =
             Bsdf::MetallicRoughness { base: Vec3::new(0.8, 0.6, 0.4), metallic: 0.3, roughness: 0.4 };
@@ -308,7 +303,7 @@ mod tests {
         scene.spheres.push(Sphere { center: Vec3::new(-0.5, 1.0, 0.4), radius: 0.2, material: 6 });
         scene.spheres.push(Sphere { center: Vec3::new(0.5, 1.0, -0.4), radius: 0.2, material: 7 });
         tilted_normals(&mut scene);
-        compare_every_sampler(&scene, avx, |t| {
+        compare_every_sampler(&scene, |t| {
             assert!(t.rules.mis && t.materials.non_diffuse);
             assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
             assert!(t.shaded_numbers.complete, "the glossy lanes read the table alone");
@@ -340,7 +335,7 @@ mod tests {
     /// [`compare`] of the shaded kinds' kernel with every sampler (Sobol with the throughput
     /// roulette), light sampling and hemisphere sampling; `check` is what the transport
     /// must be for the lanes to be reached.
-    fn compare_every_sampler(scene: &Scene, avx: Avx2, check: impl Fn(&Transport)) {
+    fn compare_every_sampler(scene: &Scene, check: impl Fn(&Transport)) {
         let shaded = parts(true, false, true, true, true, true);
         for (sampler, rr_throughput) in [
             (crate::sampling::SamplerKind::Independent, false),
@@ -350,10 +345,10 @@ mod tests {
             let mut s = settings(2, rr_throughput);
             s.sampling.sampler = sampler;
             check(&Transport::new(scene, &s, &crate::effects::Effects::of(scene, &s)));
-            assert!(compare(shaded, scene, &s, avx) > 500, "{sampler:?}");
+            assert!(compare(shaded, scene, &s) > 500, "{sampler:?}");
             let mut hemisphere = s.clone();
             hemisphere.paths.hemisphere = true;
-            assert!(compare(shaded, scene, &hemisphere, avx) > 500, "{sampler:?} hemisphere");
+            assert!(compare(shaded, scene, &hemisphere) > 500, "{sampler:?} hemisphere");
         }
     }
 
@@ -364,7 +359,6 @@ mod tests {
     /// group; every sampler, both roulettes, hemisphere sampling.
     #[test]
     fn layered_model_in_lanes_matches_the_scalar_kernel() {
-        let Some(avx) = Avx2::new() else { return };
         let mut scene = emissive_box();
         let layered = |base: Vec3, metallic: f32, roughness: f32, l: Layers| {
             let mut m = scene.materials[0].clone();
@@ -419,7 +413,7 @@ mod tests {
         scene.spheres[1].material = 6;
         scene.spheres.push(Sphere { center: Vec3::new(0.4, 1.0, -0.3), radius: 0.25, material: 5 });
         tilted_normals(&mut scene);
-        compare_every_sampler(&scene, avx, |t| {
+        compare_every_sampler(&scene, |t| {
             assert!(t.rules.mis && t.shaded_numbers.complete);
             assert!(t.materials.models.iter().filter(|m| matches!(m, crate::bsdf::Model::Layered(_))).count() == 5);
         });
@@ -460,7 +454,6 @@ mod tests {
     #[test]
     fn infinite_and_punctual_lights_in_lanes_match_the_scalar_kernel() {
         let shaded = parts(true, true, true, true, true, true);
-        let Some(avx) = Avx2::new() else { return };
         let sky = Light::Hemisphere { radiance: Vec3::new(1.0, 0.9, 0.8) };
         let cases: Vec<(&str, Vec<Light>, crate::scene::Environment)> = vec![
             ("sky", vec![sky.clone()], crate::scene::Environment::None),
@@ -504,7 +497,7 @@ mod tests {
                 assert_eq!(t.rules.mis, mis);
                 assert!(t.lights.infinite.is_some());
                 assert!(t.materials.non_diffuse && t.shaded_numbers.complete);
-                let (shadow_rays, escaped) = compare_counts(shaded, &scene, &s, avx);
+                let (shadow_rays, escaped) = compare_counts(shaded, &scene, &s);
                 assert!(shadow_rays > 500, "{name} {sampler:?}: {shadow_rays}");
                 assert!(escaped > 100, "{name} {sampler:?}: {escaped} paths escaped after a bounce");
             }

@@ -15,7 +15,9 @@ mod x86;
 
 pub use cut::Cut;
 pub use packet::{PACKET, PacketBoxRays, PacketShear, TriRays};
-pub use ray::{BoxRay, EXIT_SCALE, Frustum, PLANES, PREFETCH_BYTES, RootBox, TIE_SCALE, far, near};
+pub use ray::{BoxRay, EXIT_SCALE, Frustum, RootBox, TIE_SCALE, far, near};
+#[cfg(target_arch = "x86_64")]
+pub use ray::{PLANES, PREFETCH_BYTES};
 pub use scalar::Scalar;
 
 use crate::accel::bvh::tree::{Node8, Tri4, WIDTH};

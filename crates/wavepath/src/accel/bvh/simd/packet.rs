@@ -29,6 +29,7 @@ pub struct TriRays {
 
 impl TriRays {
     /// Nothing settled yet: the rays (or triangles) `unsure` for the scalar test.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // for the x86 kernels
     #[inline(always)]
     pub fn undecided(unsure: u32) -> TriRays {
         TriRays { exact: 0, unsure, t: [0.0; PACKET], u: [0.0; PACKET], v: [0.0; PACKET] }

@@ -186,6 +186,7 @@ pub struct Frustum {
     pub tmin: f32,
     pub octant: u32,
     /// [`BoxRay::planes`] of the octant.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))] // for the x86 kernels
     pub planes: [u8; 6],
 }
 
