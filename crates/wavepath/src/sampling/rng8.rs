@@ -7,6 +7,7 @@
 use super::pattern::{sobol_1d, sobol_2d};
 use super::splitmix::{splitmix64, unit_f32};
 use super::{Pattern, Sampler};
+#[cfg(target_arch = "x86_64")]
 use crate::cpu::Avx2;
 #[cfg(target_arch = "x86_64")]
 use std::arch::x86_64::*;
@@ -15,40 +16,45 @@ use std::arch::x86_64::*;
 pub const LANES: usize = 8;
 
 /// How eight 64-bit hashes are computed: with AVX2's products where the token proves the CPU
-/// has them, or in a plain loop that the compiler vectorises for whatever the target has
-/// (NEON on aarch64). Both give the bits of [`splitmix64`], so a lane kernel's numbers are
-/// the scalar streams' on every CPU. Kernels build the value where their width is chosen,
-/// so the match below is decided at compile time inside each kernel.
-#[derive(Clone, Copy, Debug)]
-pub enum Hasher {
-    Portable,
-    Avx2(Avx2),
-}
-
-impl Hasher {
+/// has them ([`Avx2`]), or in a plain loop that the compiler vectorises for whatever the
+/// target has ([`Portable`]; NEON on aarch64). Both give the bits of [`splitmix64`], so a
+/// lane kernel's numbers are the scalar streams' on every CPU. A type, not a value: each
+/// kernel is compiled for its hasher, with nothing to decide at run time.
+pub trait Hasher: Copy {
     /// `splitmix64` of each input.
-    #[inline(always)]
-    pub fn splitmix64_x8(self, z: &[u64; LANES]) -> [u64; LANES] {
-        match self {
-            #[cfg(target_arch = "x86_64")]
-            Hasher::Avx2(avx) => splitmix64_avx2(avx, z),
-            _ => z.map(splitmix64),
-        }
-    }
+    fn splitmix64_x8(self, z: &[u64; LANES]) -> [u64; LANES];
 
     /// The two 24-bit halves of each input's hash as numbers in [0, 1), as
     /// [`Sampler::next_2d`] takes them.
     #[inline(always)]
     fn unit_pairs_x8(self, z: &[u64; LANES]) -> ([f32; LANES], [f32; LANES]) {
-        match self {
-            #[cfg(target_arch = "x86_64")]
-            Hasher::Avx2(avx) => unit_pairs_avx2(avx, z),
-            _ => {
-                let h = z.map(splitmix64);
-                // Exact: the integers are below 2^24 and the scale a power of two (as `unit_f32`).
-                (h.map(|h| (h >> 40) as f32 * unit_f32(1)), h.map(|h| ((h >> 16) & 0xFF_FFFF) as f32 * unit_f32(1)))
-            }
-        }
+        let h = self.splitmix64_x8(z);
+        // Exact: the integers are below 2^24 and the scale a power of two (as `unit_f32`).
+        (h.map(|h| (h >> 40) as f32 * unit_f32(1)), h.map(|h| ((h >> 16) & 0xFF_FFFF) as f32 * unit_f32(1)))
+    }
+}
+
+/// The hasher of plain code, for every CPU.
+#[derive(Clone, Copy, Debug)]
+pub struct Portable;
+
+impl Hasher for Portable {
+    #[inline(always)]
+    fn splitmix64_x8(self, z: &[u64; LANES]) -> [u64; LANES] {
+        z.map(splitmix64)
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+impl Hasher for Avx2 {
+    #[inline(always)]
+    fn splitmix64_x8(self, z: &[u64; LANES]) -> [u64; LANES] {
+        splitmix64_avx2(self, z)
+    }
+
+    #[inline(always)]
+    fn unit_pairs_x8(self, z: &[u64; LANES]) -> ([f32; LANES], [f32; LANES]) {
+        unit_pairs_avx2(self, z)
     }
 }
 
@@ -73,7 +79,7 @@ fn splitmix64_avx2(_: Avx2, z: &[u64; LANES]) -> [u64; LANES] {
 /// [`Sampler::vertex_input`]s `inputs`.
 /// The token proves the CPU has AVX2.
 #[inline(always)]
-pub fn for_vertex_x8(h: Hasher, inputs: &[u64; LANES]) -> [Sampler; LANES] {
+pub fn for_vertex_x8<H: Hasher>(h: H, inputs: &[u64; LANES]) -> [Sampler; LANES] {
     let keys = h.splitmix64_x8(inputs);
     keys.map(Sampler::from_vertex_hash)
 }
@@ -82,7 +88,7 @@ pub fn for_vertex_x8(h: Hasher, inputs: &[u64; LANES]) -> [Sampler; LANES] {
 /// ignored): `(a, b)` per lane. Hashed streams are hashed together; streams that follow a
 /// pattern are drawn one by one.
 #[inline(always)]
-pub fn next_2d_x8(h: Hasher, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
+pub fn next_2d_x8<H: Hasher>(h: H, s: &[Sampler; LANES], dim: u32) -> ([f32; LANES], [f32; LANES]) {
     if let Some(index) = sobol_indices(s) {
         let seeds = sobol_seeds(h, s, dim);
         let (mut a, mut b) = ([0f32; LANES], [0f32; LANES]);
@@ -131,7 +137,7 @@ fn unit_pairs_avx2(_: Avx2, z: &[u64; LANES]) -> ([f32; LANES], [f32; LANES]) {
 
 /// [`Sampler::next_f32`] of each stream at dimension `dim`.
 #[inline(always)]
-pub fn next_f32_x8(h: Hasher, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
+pub fn next_f32_x8<H: Hasher>(h: H, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
     if let Some(index) = sobol_indices(s) {
         let seeds = sobol_seeds(h, s, dim);
         let mut a = [0f32; LANES];
@@ -152,7 +158,12 @@ pub fn next_f32_x8(h: Hasher, s: &[Sampler; LANES], dim: u32) -> [f32; LANES] {
 /// forms). One lane at a time in a kernel's gather, each lane's hash was a chain of dependent
 /// 64-bit products.
 #[inline(always)]
-pub fn vertex_lanes<const L: usize>(h: Hasher, pattern: Pattern, keys: &[u64; L], bounces: &[u32; L]) -> [Sampler; L] {
+pub fn vertex_lanes<H: Hasher, const L: usize>(
+    h: H,
+    pattern: Pattern,
+    keys: &[u64; L],
+    bounces: &[u32; L],
+) -> [Sampler; L] {
     let mut inputs = [0u64; L];
     for j in 0..L {
         inputs[j] = pattern.hash_input(keys[j], bounces[j]);
@@ -177,7 +188,7 @@ pub fn vertex_lanes<const L: usize>(h: Hasher, pattern: Pattern, keys: &[u64; L]
 
 /// [`next_2d_x8`] for `L` streams.
 #[inline(always)]
-pub fn next_2d_lanes<const L: usize>(h: Hasher, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
+pub fn next_2d_lanes<H: Hasher, const L: usize>(h: H, s: &[Sampler; L], dim: u32) -> ([f32; L], [f32; L]) {
     let (mut a, mut b) = ([0.0; L], [0.0; L]);
     if L > LANES
         && let Some((index, seeds)) = sobol_wide(s, dim)
@@ -198,7 +209,7 @@ pub fn next_2d_lanes<const L: usize>(h: Hasher, s: &[Sampler; L], dim: u32) -> (
 
 /// [`next_f32_x8`] for `L` streams.
 #[inline(always)]
-pub fn next_f32_lanes<const L: usize>(h: Hasher, s: &[Sampler; L], dim: u32) -> [f32; L] {
+pub fn next_f32_lanes<H: Hasher, const L: usize>(h: H, s: &[Sampler; L], dim: u32) -> [f32; L] {
     let mut a = [0.0; L];
     if L > LANES
         && let Some((index, seeds)) = sobol_wide(s, dim)
@@ -245,7 +256,7 @@ fn sobol_indices<const N: usize>(s: &[Sampler; N]) -> Option<[u32; N]> {
 /// dimension's hash, as [`Sampler::next_2d`] takes it. The sequence's own hashing and
 /// scrambling then run as plain loops over the lanes (32-bit products, which AVX2 has).
 #[inline(always)]
-fn sobol_seeds(h: Hasher, s: &[Sampler; LANES], dim: u32) -> [u32; LANES] {
+fn sobol_seeds<H: Hasher>(h: H, s: &[Sampler; LANES], dim: u32) -> [u32; LANES] {
     let mut z = [0u64; LANES];
     for j in 0..LANES {
         z[j] = s[j].dim_input(dim);
@@ -298,16 +309,19 @@ mod tests {
 
     type Pairs = ([f32; LANES], [f32; LANES]);
 
-    /// Runs `f` with every hasher this CPU has: the portable one, and AVX2's inside an AVX2
-    /// context where the CPU has it.
-    fn each_hasher(mut f: impl FnMut(Hasher)) {
-        f(Hasher::Portable);
-        if let Some(avx) = Avx2::new() {
-            crate::cpu::with_avx2(avx, |avx| f(Hasher::Avx2(avx)));
-        }
+    /// Runs `$f` (a generic function's name) with every hasher this CPU has, then the
+    /// arguments: the portable one, and AVX2's inside an AVX2 context where the CPU has it.
+    macro_rules! each_hasher {
+        ($f:ident($($arg:expr),*)) => {{
+            $f(Portable, $($arg),*);
+            #[cfg(target_arch = "x86_64")]
+            if let Some(avx) = Avx2::new() {
+                crate::cpu::with_avx2(avx, |avx| $f(avx, $($arg),*));
+            }
+        }};
     }
 
-    fn run(h: Hasher, keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
+    fn run<H: Hasher>(h: H, keys: &[u64; LANES], dim: u32) -> ([u64; LANES], Pairs, [f32; LANES]) {
         let s = keys.map(|k| Sampler::for_vertex(k, 3));
         (h.splitmix64_x8(keys), next_2d_x8(h, &s, dim), next_f32_x8(h, &s, dim))
     }
@@ -328,7 +342,7 @@ mod tests {
         }
         for (n, keys) in groups.iter().enumerate() {
             let dim = n as u32 % 11;
-            each_hasher(|hasher| {
+            fn check<H: Hasher>(hasher: H, keys: &[u64; LANES], dim: u32) {
                 let (h, (a, b), f) = run(hasher, keys, dim);
                 for j in 0..LANES {
                     assert_eq!(h[j], splitmix64(keys[j]), "{:#x}", keys[j]);
@@ -338,7 +352,8 @@ mod tests {
                     assert_eq!((a[j].to_bits(), b[j].to_bits()), (wa.to_bits(), wb.to_bits()), "{:#x}", keys[j]);
                     assert_eq!(f[j].to_bits(), s1.next_f32().to_bits(), "{:#x}", keys[j]);
                 }
-            });
+            }
+            each_hasher!(check(keys, dim));
         }
     }
 
@@ -373,7 +388,10 @@ mod tests {
     fn sobol_lanes_are_the_scalar_streams() {
         for (n, s) in sobol_groups::<LANES>(64, 4, 3) {
             let dim = n % 9;
-            each_hasher(|h| assert_scalar(&s, dim, (next_2d_x8(h, &s, dim), next_f32_x8(h, &s, dim))));
+            fn check<H: Hasher>(h: H, s: &[Sampler; LANES], dim: u32) {
+                assert_scalar(s, dim, (next_2d_x8(h, s, dim), next_f32_x8(h, s, dim)));
+            }
+            each_hasher!(check(&s, dim));
         }
     }
 
@@ -382,13 +400,19 @@ mod tests {
     /// and bounces from the camera ray's on.
     #[test]
     fn vertex_lanes_are_the_patterns_streams() {
+        fn check_with<H: Hasher + std::fmt::Debug, const N: usize>(
+            h: H,
+            p: Pattern,
+            keys: &[u64; N],
+            bounces: &[u32; N],
+        ) {
+            let got = vertex_lanes(h, p, keys, bounces);
+            for j in 0..N {
+                assert_eq!(got[j], p.vertex(keys[j], bounces[j]), "{p:?} lane {j} {h:?}");
+            }
+        }
         fn check<const N: usize>(pattern: Pattern, keys: &[u64; N], bounces: &[u32; N]) {
-            each_hasher(|h| {
-                let got = vertex_lanes(h, pattern, keys, bounces);
-                for j in 0..N {
-                    assert_eq!(got[j], pattern.vertex(keys[j], bounces[j]), "{pattern:?} lane {j} {h:?}");
-                }
-            });
+            each_hasher!(check_with(pattern, keys, bounces));
         }
         let mut state = 0x2545_F491_4F6C_DD1Du64;
         let fixed = [0, u64::MAX, 1, 1 << 32, (1 << 32) - 1, u64::MAX << 32, 0x8000_0000_0000_0000, 42];
@@ -415,7 +439,10 @@ mod tests {
     fn sixteen_sobol_lanes_are_the_scalar_streams() {
         for (n, s) in sobol_groups::<16>(256, 3, 11) {
             let dim = n % 13;
-            each_hasher(|h| assert_scalar(&s, dim, (next_2d_lanes(h, &s, dim), next_f32_lanes(h, &s, dim))));
+            fn check<H: Hasher>(h: H, s: &[Sampler; 16], dim: u32) {
+                assert_scalar(s, dim, (next_2d_lanes(h, s, dim), next_f32_lanes(h, s, dim)));
+            }
+            each_hasher!(check(&s, dim));
         }
     }
 }

@@ -85,14 +85,22 @@ struct Pinhole<'a, 's, 'w> {
 
 impl LaneKernel for Pinhole<'_, '_, '_> {
     #[inline(always)]
-    fn run<const W: usize>(self, h: Hasher) {
+    fn run<H: Hasher, const W: usize>(self, h: H) {
         let Pinhole { t, q, wave, width, height, spp } = self;
         pinhole_lanes(h, t, q, wave, width, height, spp)
     }
 }
 
 #[inline(always)]
-fn pinhole_lanes(h: Hasher, t: &Transport, q: &mut PathQueue, wave: &Wave, width: usize, height: usize, spp: u32) {
+fn pinhole_lanes<H: Hasher>(
+    h: H,
+    t: &Transport,
+    q: &mut PathQueue,
+    wave: &Wave,
+    width: usize,
+    height: usize,
+    spp: u32,
+) {
     let pattern = t.streams.pattern;
     let hashed = pattern.kind == SamplerKind::Independent;
     for &pixel in wave.pixels {

@@ -6,7 +6,7 @@
 
 #[cfg(target_arch = "x86_64")]
 use crate::cpu::{Avx2, Avx512};
-use crate::sampling::rng8::Hasher;
+use crate::sampling::rng8::{Hasher, Portable};
 
 /// How many paths a shading group holds, and what its code is compiled for.
 #[derive(Clone, Copy, Debug)]
@@ -24,7 +24,7 @@ pub enum ShadeWidth {
 
 /// A shading kernel over groups of `L` paths, drawing its random numbers with `h`.
 pub trait LaneKernel {
-    fn run<const L: usize>(self, h: Hasher);
+    fn run<H: Hasher, const L: usize>(self, h: H);
 }
 
 impl ShadeWidth {
@@ -56,7 +56,7 @@ impl ShadeWidth {
     #[inline]
     pub fn dispatch(self, k: impl LaneKernel) {
         match self {
-            ShadeWidth::Portable => k.run::<8>(Hasher::Portable),
+            ShadeWidth::Portable => k.run::<Portable, 8>(Portable),
             // SAFETY: the token proves the CPU has the instruction sets `eight` enables.
             #[cfg(target_arch = "x86_64")]
             ShadeWidth::Eight(avx2) => unsafe { eight(avx2, k) },
@@ -73,12 +73,12 @@ impl ShadeWidth {
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
 fn eight<K: LaneKernel>(avx: Avx2, k: K) {
-    k.run::<8>(Hasher::Avx2(avx))
+    k.run::<Avx2, 8>(avx)
 }
 
 /// Sixteen paths per group: the lane-parallel loops fill 512-bit registers.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f,avx512vl,avx512dq,avx512bw,avx2,fma")]
 fn sixteen<K: LaneKernel>(avx: Avx512, k: K) {
-    k.run::<16>(Hasher::Avx2(avx.avx2))
+    k.run::<Avx2, 16>(avx.avx2)
 }

@@ -50,12 +50,12 @@ struct Diffuse<'a, 's> {
 
 impl LaneKernel for Diffuse<'_, '_> {
     #[inline(always)]
-    fn run<const L: usize>(self, h: Hasher) {
+    fn run<H: Hasher, const L: usize>(self, h: H) {
         let Diffuse { t, q, idx, shadow } = self;
         if whole_vertices(t) {
-            shade_groups::<true, L>(h, t, q, idx, shadow)
+            shade_groups::<H, true, L>(h, t, q, idx, shadow)
         } else {
-            shade_groups::<false, L>(h, t, q, idx, shadow)
+            shade_groups::<H, false, L>(h, t, q, idx, shadow)
         }
     }
 }
@@ -303,8 +303,8 @@ fn cosine_rays<const L: usize>(pts: &Points<L>, ua: &[f32; L], ub: &[f32; L], ou
 /// What a group's direct-light functions read (light samples of every kind, hemisphere
 /// probes): the transport, the paths, and the group's vertices, shading points and streams.
 #[derive(Clone, Copy)]
-struct GroupLight<'a, 's, const L: usize> {
-    h: Hasher,
+struct GroupLight<'a, 's, H, const L: usize> {
+    h: H,
     t: &'a Transport<'s>,
     q: &'a PathQueue,
     g: &'a Group<L>,
@@ -316,8 +316,8 @@ struct GroupLight<'a, 's, const L: usize> {
 /// triangle and its point picked one lane at a time, the rest lane-parallel
 /// ([`triangle_ray`]); pushed path-major as the area lights' are.
 #[inline(always)]
-fn emissive_rays<const L: usize>(
-    gl: GroupLight<'_, '_, L>,
+fn emissive_rays<H: Hasher, const L: usize>(
+    gl: GroupLight<'_, '_, H, L>,
     e: &EmissiveTriangles,
     li: usize,
     mut dim: u32,
@@ -620,8 +620,8 @@ pub(super) fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3
 /// The Lambertian paths `idx`, eight at a time; the random numbers are drawn eight streams
 /// at a time (with `h`). `WHOLE`: gather whole vertices (see [`whole_vertices`]).
 #[inline(always)]
-fn shade_groups<const WHOLE: bool, const L: usize>(
-    h: Hasher,
+fn shade_groups<H: Hasher, const WHOLE: bool, const L: usize>(
+    h: H,
     t: &Transport,
     q: &mut PathQueue,
     idx: &[u32],
@@ -760,7 +760,11 @@ fn shade_groups<const WHOLE: bool, const L: usize>(
 /// of one point sit together in the queue, where the shadow stage traces them as one packet,
 /// and each path still adds its own in the order the one-path code makes them.
 #[inline(always)]
-fn direct_light<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Rays<L>>, shadow: &mut ShadowQueue) {
+fn direct_light<H: Hasher, const L: usize>(
+    gl: GroupLight<'_, '_, H, L>,
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
     let GroupLight { h, t, q, g, pts, rng } = gl;
     if t.rules.hemisphere {
         hemisphere_probes(gl, pending, shadow);
@@ -806,7 +810,11 @@ fn direct_light<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Ray
 /// directions weighted by the Lambertian value and cosine, in lanes; the sine and cosine of
 /// each probe's azimuth one lane at a time. Pushed path-major.
 #[inline(always)]
-fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Vec<Rays<L>>, shadow: &mut ShadowQueue) {
+fn hemisphere_probes<H: Hasher, const L: usize>(
+    gl: GroupLight<'_, '_, H, L>,
+    pending: &mut Vec<Rays<L>>,
+    shadow: &mut ShadowQueue,
+) {
     let GroupLight { h, t, q, g, pts, rng } = gl;
     let n = t.rules.direct_per_vertex as usize;
     let mut scale = [[0.0; L]; 3];
@@ -849,8 +857,8 @@ fn hemisphere_probes<const L: usize>(gl: GroupLight<'_, '_, L>, pending: &mut Ve
 /// normalisation); then the MIS weights and shadow rays of all lanes ([`diffuse_light_ray`]).
 /// Pushed path-major.
 #[inline(always)]
-fn light_rays<const L: usize>(
-    gl: GroupLight<'_, '_, L>,
+fn light_rays<H: Hasher, const L: usize>(
+    gl: GroupLight<'_, '_, H, L>,
     light: &SampledLight,
     li: usize,
     mut dim: u32,

@@ -45,7 +45,7 @@ struct Escaped<'a, 's> {
 
 impl LaneKernel for Escaped<'_, '_> {
     #[inline(always)]
-    fn run<const L: usize>(self, _: Hasher) {
+    fn run<H: Hasher, const L: usize>(self, _: H) {
         escaped_groups::<L>(self.t, self.q, self.idx)
     }
 }

@@ -56,14 +56,14 @@ struct Shaded<'a, 's> {
 
 impl LaneKernel for Shaded<'_, '_> {
     #[inline(always)]
-    fn run<const L: usize>(self, h: Hasher) {
-        shade_groups::<L>(h, self.t, self.q, self.idx, self.shadow, self.table)
+    fn run<H: Hasher, const L: usize>(self, h: H) {
+        shade_groups::<H, L>(h, self.t, self.q, self.idx, self.shadow, self.table)
     }
 }
 
 #[inline(always)]
-fn shade_groups<const L: usize>(
-    h: Hasher,
+fn shade_groups<H: Hasher, const L: usize>(
+    h: H,
     t: &Transport,
     q: &mut PathQueue,
     idx: &[u32],
