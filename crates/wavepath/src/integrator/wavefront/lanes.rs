@@ -21,6 +21,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::lane_width::{LaneKernel, ShadeWidth};
+use super::one_path::{NO_VERTEX, emission_of};
 use super::queues::{PathQueue, ShadowQueue, ShadowSlots};
 use crate::geometry::offset::offset_origin;
 use crate::geometry::{Hit, Ray};
@@ -31,7 +32,7 @@ use crate::lights::{EmissiveTriangles, Emitter, SampledLight, Sky};
 use crate::sampling::rng8::Hasher;
 use crate::sampling::{Frame, Sampler, SamplerKind, rng8, warp};
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
-use glam::{Vec2, Vec3};
+use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
 /// [`super::shade::shade`] for the Lambertian hits listed in `idx` (paths that hit, whose
@@ -571,21 +572,6 @@ fn push_samples<const L: usize>(
     shadow.commit(w);
 }
 
-/// A vertex with nothing in it, for lanes a group leaves empty.
-pub(super) const NO_VERTEX: Vertex = Vertex {
-    p: Vec3::ZERO,
-    p_error: Vec3::ZERO,
-    ng: Vec3::Z,
-    ns: Vec3::Z,
-    albedo: Vec3::ZERO,
-    emission: Vec3::ZERO,
-    metal_rough: Vec2::ZERO,
-    material: 0,
-    front: true,
-    uv: Vec2::ZERO,
-    bumped: false,
-};
-
 /// What a lane's gather leaves for the lane-parallel part.
 struct Group<const L: usize> {
     /// Path index of each lane.
@@ -602,19 +588,6 @@ struct Group<const L: usize> {
     /// The lane's light samples are weighted by MIS (`Transport::diffuse_mis`).
     mis: [bool; L],
     depth: [u32; L],
-}
-
-/// The emission of a hit on material `m` seen from `ray` (as `Transport::vertex` computes it
-/// where the material has no emission texture).
-#[inline(always)]
-pub(super) fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
-    let e = t.materials.emission[m];
-    if e == Vec3::ZERO || t.materials.two_sided_emission[m] {
-        e
-    } else {
-        // One-sided emitters are rare: the whole vertex says which side was hit.
-        t.vertex(ray, hit).emission
-    }
 }
 
 /// The Lambertian paths `idx`, eight at a time; the random numbers are drawn eight streams
@@ -736,20 +709,9 @@ fn shade_groups<H: Hasher, const WHOLE: bool, const L: usize>(
                 if !(g.cont[j] && g.vertex[j].consistent(r.dir)) {
                     continue;
                 }
-                let i = g.path[j];
                 let depth = g.depth[j];
-                q.ray[i] = r;
-                q.bounce[i] = t.diffuse_bounce(&pts.get(j), &r, depth);
-                q.throughput[i] *= g.vertex[j].albedo;
-                q.depth[i] = depth + 1;
-                q.alive[i] = true;
-                // As `super::one_path::roulette`.
-                if t.rules.features.roulette && t.rules.plays_roulette(depth) {
-                    match t.rules.roulette_with(rr[j], q.throughput[i]) {
-                        Some(f) => q.throughput[i] *= f,
-                        None => q.alive[i] = false,
-                    }
-                }
+                let bounce = t.diffuse_bounce(&pts.get(j), &r, depth);
+                super::one_path::go_on(t, q, g.path[j], depth, r, g.vertex[j].albedo, bounce, || rr[j]);
             }
         }
     }

@@ -29,7 +29,7 @@ use crate::integrator::area::ShadingPoint;
 use crate::integrator::light_ray::{LightPoint, glossy_light_ray};
 use crate::integrator::{DIM_DIRECT, Transport, Vertex};
 use crate::lights::{EmissiveTriangles, SampledLight, area_to_solid_angle_lanes};
-use crate::sampling::numbers::Drawn;
+use crate::sampling::numbers::{Drawn, Numbers};
 use crate::sampling::{Frame, Sampler, warp};
 use glam::Vec3;
 
@@ -325,7 +325,7 @@ pub(super) struct ModelGroup<M, const L: usize> {
 
 impl<M: LaneModel, const L: usize> ModelGroup<M, L> {
     pub fn new() -> Self {
-        ModelGroup { n: 0, path: [0; L], row: [0; L], vertex: [super::lanes::NO_VERTEX; L], model: [M::NONE; L] }
+        ModelGroup { n: 0, path: [0; L], row: [0; L], vertex: [one_path::NO_VERTEX; L], model: [M::NONE; L] }
     }
 
     /// Adds path `path` (row `row` of the group's numbers) at vertex `v` with model `m`;
@@ -737,18 +737,14 @@ fn continuation<'a, M: LaneModel, const L: usize>(
         if !rays.valid[j] {
             continue;
         }
-        let i = g.path[j];
-        q.ray[i] = rays.ray(j);
-        q.throughput[i] *= get(&weight, j);
-        q.depth[i] = depth[j] + 1;
-        q.alive[i] = true;
-        q.bounce[i] = if M::DELTA || delta[j] {
+        let bounce = if M::DELTA || delta[j] {
             Bounce::DELTA
         } else if mis {
             Bounce { n: g.vertex[j].ns, pdf: pdf[j] }
         } else {
             Bounce::DIFFUSE
         };
-        one_path::roulette(t, q, i, depth[j], numbers(j, 0));
+        let u = || numbers(j, 0).at(crate::integrator::DIM_ROULETTE).next_f32();
+        one_path::go_on(t, q, g.path[j], depth[j], rays.ray(j), get(&weight, j), bounce, u);
     }
 }

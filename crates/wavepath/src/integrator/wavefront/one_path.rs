@@ -5,12 +5,11 @@
 //! runs [`arrive_as`] per lane, draws the group's numbers in lanes and then runs [`leave`] per
 //! lane with them, so both make the same rays, bit for bit.
 
-use super::lanes::{NO_VERTEX, emission_of};
 use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
-use crate::geometry::Hit;
-use crate::integrator::{Transport, Vertex};
+use crate::geometry::{Hit, Ray};
+use crate::integrator::{Bounce, DIM_ROULETTE, Transport, Vertex};
 use crate::sampling::Numbers;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 
 /// Path `i` arrives: `alive` cleared, emission and the light its ray found added; the vertex
 /// to leave from, `None` when the path ends here (escaped, or nothing is sent on).
@@ -28,7 +27,7 @@ pub struct Arrival {
     pub vertex: Vertex,
 }
 
-/// [`arrive`]; without `WHOLE` the vertex is left out ([`super::lanes::NO_VERTEX`]) and the
+/// [`arrive`]; without `WHOLE` the vertex is left out ([`NO_VERTEX`]) and the
 /// hit's material and emission are found without it, for kernels that reconstruct a group's
 /// vertices in lanes (surfaces with no textures, colours, relief or volumes:
 /// [`super::lanes::whole_vertices`] false; the emission is then the vertex's).
@@ -87,24 +86,65 @@ pub fn leave(t: &Transport, q: &mut PathQueue, i: usize, v: &Vertex, rng: impl N
         if t.rules.features.indirect { t.scatter(v, depth, rng) } else { None }
     };
     if let Some((ray, w, bounce)) = next {
-        q.ray[i] = ray;
-        q.throughput[i] *= w;
-        q.depth[i] = depth + 1;
-        q.alive[i] = true;
-        q.bounce[i] = bounce;
-        roulette(t, q, i, depth, rng);
+        go_on(t, q, i, depth, ray, w, bounce, || rng.at(DIM_ROULETTE).next_f32());
     }
 }
 
-/// Russian roulette for path `i`'s new continuation, here where the vertex's numbers are at
-/// hand (the bounce stage would have to derive them again), applied after the BSDF weight as
-/// [`Transport::continuation`] does; the shadow rays already took the throughput before it.
+/// Path `i` goes on from its vertex of `depth` along `ray`, its throughput times `weight`,
+/// and plays Russian roulette with the number `u` gives (asked for only where roulette is
+/// played): the one continuation every kernel, one path or lanes, ends a vertex with.
+/// Roulette is played here, where the vertex's numbers are at hand (the bounce stage would
+/// have to derive them again), after the BSDF weight as [`Transport::continuation`] does; the
+/// shadow rays already took the throughput before it.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-pub fn roulette(t: &Transport, q: &mut PathQueue, i: usize, depth: u32, rng: impl Numbers) {
-    if t.rules.features.roulette {
-        match t.rules.roulette(depth, rng, q.throughput[i]) {
+pub fn go_on(
+    t: &Transport,
+    q: &mut PathQueue,
+    i: usize,
+    depth: u32,
+    ray: Ray,
+    weight: Vec3,
+    bounce: Bounce,
+    u: impl FnOnce() -> f32,
+) {
+    q.ray[i] = ray;
+    q.throughput[i] *= weight;
+    q.depth[i] = depth + 1;
+    q.alive[i] = true;
+    q.bounce[i] = bounce;
+    if t.rules.features.roulette && t.rules.plays_roulette(depth) {
+        match t.rules.roulette_with(u(), q.throughput[i]) {
             Some(f) => q.throughput[i] *= f,
             None => q.alive[i] = false,
         }
+    }
+}
+
+/// A vertex with nothing in it, for lanes a group leaves empty.
+pub const NO_VERTEX: Vertex = Vertex {
+    p: Vec3::ZERO,
+    p_error: Vec3::ZERO,
+    ng: Vec3::Z,
+    ns: Vec3::Z,
+    albedo: Vec3::ZERO,
+    emission: Vec3::ZERO,
+    metal_rough: Vec2::ZERO,
+    material: 0,
+    front: true,
+    uv: Vec2::ZERO,
+    bumped: false,
+};
+
+/// The emission of a hit on material `m` seen from `ray` (as `Transport::vertex` computes it
+/// where the material has no emission texture).
+#[inline(always)]
+pub fn emission_of(t: &Transport, m: usize, ray: &Ray, hit: &Hit) -> Vec3 {
+    let e = t.materials.emission[m];
+    if e == Vec3::ZERO || t.materials.two_sided_emission[m] {
+        e
+    } else {
+        // One-sided emitters are rare: the whole vertex says which side was hit.
+        t.vertex(ray, hit).emission
     }
 }
