@@ -90,7 +90,7 @@ pub use effects::{Effect, Effects};
 pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
 pub use integrator::plan::{Extent, RenderPlan};
 pub use render::{
-    Canvas, INTERRUPTED, RenderOutput, render, render_plan, render_plan_sums, render_sums, render_until,
+    Canvas, Interrupted, RenderOutput, render, render_plan, render_plan_sums, render_sums, render_until,
     render_with_progress, with_threads,
 };
 pub use stats::{RenderStats, StageTimes, roulette_json, to_json as stats_json};
