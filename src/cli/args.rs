@@ -1,9 +1,11 @@
 //! Command-line syntax: the CS184 flags plus wavepath's own.
 
-use super::choices::{BvhBuild, Camera, Fov, Integrator, Leaves, Roulette, Sampler, Shading, Split, Tonemap};
+use super::choices::{Split, named};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
-use wavepath::Isa;
+use wavepath::{
+    BvhBuild, CameraMode, FovRule, IntegratorKind, Isa, LeafLayout, RouletteKind, SamplerKind, Shading, Tonemap,
+};
 
 #[derive(Parser, Debug)]
 #[command(
@@ -83,7 +85,7 @@ pub struct MergeArgs {
     #[arg(short = 'f', value_name = "FILE", required = true)]
     pub output: PathBuf,
     /// PNG transfer curve.
-    #[arg(long, value_enum, default_value_t = Tonemap::Cs184)]
+    #[arg(long, value_parser = named::<Tonemap>(), default_value = "cs184")]
     pub tonemap: Tonemap,
     /// Write the merged statistics (JSON) to FILE.
     #[arg(long, value_name = "FILE")]
@@ -98,8 +100,8 @@ pub struct InfoArgs {
     #[arg(long)]
     pub json: bool,
     /// COLLADA camera framing.
-    #[arg(long, value_enum, default_value_t = Camera::Cs184)]
-    pub camera: Camera,
+    #[arg(long, value_parser = named::<CameraMode>(), default_value = "cs184")]
+    pub camera: CameraMode,
     /// Environment map (as `render -e`): loaded, its size and effects reported.
     #[arg(short = 'e', value_name = "FILE")]
     pub envmap: Option<PathBuf>,
@@ -133,7 +135,7 @@ pub struct RenderArgs {
     /// Also writes <out>_rate.png, each pixel's samples (written only with -a).
     #[arg(short = 'a', num_args = 2, value_names = ["B", "T"])]
     pub adaptive: Option<Vec<f64>>,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default, or 0: all cores).
     #[arg(short = 't', value_name = "N")]
     pub threads: Option<i64>,
     /// Output resolution in pixels.
@@ -162,7 +164,7 @@ pub struct RenderArgs {
     #[arg(short = 'H')]
     pub hemisphere: bool,
     /// What pixels show; default: global when -m > 1, else direct.
-    #[arg(long, value_enum)]
+    #[arg(long, value_parser = named::<Shading>())]
     pub shading: Option<Shading>,
     /// Russian roulette continue probability, in (0, 1].
     #[arg(long = "rr", value_name = "P", default_value_t = 0.65)]
@@ -170,8 +172,8 @@ pub struct RenderArgs {
     /// Russian roulette: fixed (continue with --rr, as the seed) or throughput (continue with
     /// the path's throughput, its largest component, as pbrt-v4 and Mitsuba). Default: fixed
     /// for .dae files and the embedded scene (the seed's pictures), throughput for other files.
-    #[arg(long, value_enum)]
-    pub roulette: Option<Roulette>,
+    #[arg(long, value_parser = named::<RouletteKind>())]
+    pub roulette: Option<RouletteKind>,
     /// First depth whose continuation plays Russian roulette (1: from the second bounce, the
     /// seed's rule). Default: 1 with fixed roulette, 5 with throughput roulette (Mitsuba's).
     #[arg(long, value_name = "D")]
@@ -180,41 +182,41 @@ pub struct RenderArgs {
     /// stratified (jittered strata of -s samples) or sobol (Owen-scrambled Sobol points).
     /// Default: independent for .dae files and the embedded scene (the seed's pictures),
     /// sobol for other files.
-    #[arg(long, value_enum)]
-    pub sampler: Option<Sampler>,
+    #[arg(long, value_parser = named::<SamplerKind>())]
+    pub sampler: Option<SamplerKind>,
     /// Brute-force intersection (every ray against every primitive).
     #[arg(long)]
     pub no_bvh: bool,
     /// How the BVH is built: sah (binned surface area heuristic, the tree rays traverse
     /// fastest) or fast (Morton order: about a third less build time on large meshes, rays
     /// 6-12% slower; for large meshes rendered briefly). Same image either way.
-    #[arg(long, value_enum, default_value = "sah")]
+    #[arg(long, value_parser = named::<BvhBuild>(), default_value = "sah")]
     pub bvh_build: BvhBuild,
     /// How the BVH's leaves hold their triangles: corners (three cache lines a leaf), packed
     /// (each distinct vertex once: two thirds of the memory, a gather per leaf test) or auto
     /// (packed from 16 million primitives). Same image either way.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub bvh_leaves: Leaves,
+    #[arg(long, value_parser = named::<LeafLayout>(), default_value = "auto")]
+    pub bvh_leaves: LeafLayout,
     /// Widest SIMD instruction set the kernels may use: scalar, sse, avx2, avx512 (capped by
     /// what the CPU has; every choice gives the same image). avx512 shades sixteen paths per
     /// group; the BVH's kernels stop at avx2.
-    #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx512")]
+    #[arg(long, value_name = "ISA", value_parser = named::<Isa>(), default_value = "avx512")]
     pub isa: Isa,
     /// Base seed of all random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// PNG transfer curve.
-    #[arg(long, value_enum, default_value_t = Tonemap::Cs184)]
+    #[arg(long, value_parser = named::<Tonemap>(), default_value = "cs184")]
     pub tonemap: Tonemap,
     /// Light-transport implementation.
-    #[arg(long, value_enum, default_value_t = Integrator::Wavefront)]
-    pub integrator: Integrator,
+    #[arg(long, value_parser = named::<IntegratorKind>(), default_value = "wavefront")]
+    pub integrator: IntegratorKind,
     /// COLLADA camera framing: cs184 (the reference renderer's placement) or the file's camera.
-    #[arg(long, value_enum, default_value_t = Camera::Cs184)]
-    pub camera: Camera,
+    #[arg(long, value_parser = named::<CameraMode>(), default_value = "cs184")]
+    pub camera: CameraMode,
     /// How a COLLADA camera's field of view follows -r (other files keep theirs).
-    #[arg(long, value_enum, default_value_t = Fov::Cs184)]
-    pub fov: Fov,
+    #[arg(long, value_parser = named::<FovRule>(), default_value = "cs184")]
+    pub fov: FovRule,
     /// The CS184 course renderer's area-light pdf, dist / (area cos) instead of
     /// dist^2 / (area cos): every light-sampled area-light estimate is multiplied by the
     /// distance to the light point. Wrong, but it is what renderers built on the course
@@ -306,17 +308,12 @@ pub struct TraceArgs {
     pub variant: String,
     /// Widest SIMD instruction set of the box tests: scalar, sse, avx2 (avx512 runs avx2: the
     /// BVH's kernels stop there).
-    #[arg(long, value_name = "ISA", value_parser = parse_isa, default_value = "avx2")]
+    #[arg(long, value_name = "ISA", value_parser = named::<Isa>(), default_value = "avx2")]
     pub isa: Isa,
     /// How the BVH is built: sah or fast (Morton order).
-    #[arg(long, value_enum, default_value = "sah")]
+    #[arg(long, value_parser = named::<BvhBuild>(), default_value = "sah")]
     pub bvh_build: BvhBuild,
     /// How the BVH's leaves hold their triangles: corners, packed or auto.
-    #[arg(long, value_enum, default_value = "auto")]
-    pub bvh_leaves: Leaves,
-}
-
-/// `--isa`: one of the instruction-set names.
-pub fn parse_isa(s: &str) -> Result<Isa, String> {
-    Isa::parse(s).ok_or_else(|| format!("unknown instruction set '{s}' (scalar, portable, sse, avx2, avx512)"))
+    #[arg(long, value_parser = named::<LeafLayout>(), default_value = "auto")]
+    pub bvh_leaves: LeafLayout,
 }

@@ -1,6 +1,40 @@
-//! The command line's names for the library's choices. clap lives on the binary side, so
-//! each library enum gets a twin here that clap can list and parse (with each value's help),
-//! and turns into the library's value.
+//! The command line's choices. The engine's settings are parsed by the engine's own names
+//! ([`named`]: clap lists and parses them through `wavepath::Choice`, so a name means the
+//! same here as in Python and the viewer); the applications' own choices get a clap twin.
+
+use clap::builder::{PossibleValue, TypedValueParser};
+use std::marker::PhantomData;
+use wavepath::Choice;
+
+/// The clap parser of an engine setting chosen by name: the engine's names (with their help
+/// lines) in `--help`, the engine's message for an unknown one under the flag's name.
+pub fn named<T: Choice + Send + Sync>() -> Named<T> {
+    Named(PhantomData)
+}
+
+/// See [`named`].
+#[derive(Clone, Copy, Debug)]
+pub struct Named<T>(PhantomData<fn() -> T>);
+
+impl<T: Choice + Send + Sync> TypedValueParser for Named<T> {
+    type Value = T;
+
+    fn parse_ref(
+        &self,
+        _cmd: &clap::Command,
+        arg: Option<&clap::Arg>,
+        value: &std::ffi::OsStr,
+    ) -> Result<T, clap::Error> {
+        let flag = arg.and_then(|a| a.get_long().map(|l| format!("--{l}")));
+        let flag = flag.unwrap_or_else(|| T::SETTING.to_string());
+        T::from_name(&value.to_string_lossy())
+            .map_err(|e| clap::Error::raw(clap::error::ErrorKind::InvalidValue, format!("{}\n", e.for_option(&flag))))
+    }
+
+    fn possible_values(&self) -> Option<Box<dyn Iterator<Item = PossibleValue> + '_>> {
+        Some(Box::new(T::ALL.iter().map(|v| PossibleValue::new(v.name()).help(v.help()))))
+    }
+}
 
 /// A clap value enum mirroring a library enum variant by variant.
 macro_rules! choice {
@@ -19,82 +53,6 @@ macro_rules! choice {
             }
         }
     };
-}
-
-choice! {
-    /// What a pixel shows.
-    Shading => wavepath::Shading {
-        /// The shading normal as n * 0.5 + 0.5 (the seed's debug mode).
-        Normals,
-        /// Emission plus direct light (depth 1).
-        Direct,
-        /// Full global illumination up to the maximum depth.
-        Global,
-    }
-}
-
-choice! {
-    /// How each pixel's samples spread over the path space.
-    Sampler => wavepath::SamplerKind {
-        /// Independent hashed numbers (the seed's).
-        Independent,
-        /// Jittered strata: one sample per cell of each dimension pair's grid.
-        Stratified,
-        /// Owen-scrambled Sobol points, one scrambled sequence per dimension pair.
-        Sobol,
-    }
-}
-
-choice! {
-    /// How the BVH's tree is built (same hits either way).
-    BvhBuild => wavepath::BvhBuild {
-        /// Binned SAH: the fastest tree to trace.
-        Sah,
-        /// Morton order: a fraction of the build time, slower rays.
-        Fast,
-    }
-}
-
-choice! {
-    /// How the BVH's leaves hold their triangles (same hits either way).
-    Leaves => wavepath::LeafLayout {
-        /// Packed from 16 million primitives, corners below.
-        Auto,
-        /// Triangle corners copied into the leaves: no lookup, 192 bytes a leaf.
-        Corners,
-        /// Each leaf's distinct vertices once, with byte indices: about two thirds.
-        Packed,
-    }
-}
-
-choice! {
-    /// Which light-transport implementation runs.
-    Integrator => wavepath::IntegratorKind {
-        /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
-        Wavefront,
-        /// The simple recursive single-ray reference.
-        Recursive,
-    }
-}
-
-choice! {
-    /// How linear radiance becomes 8-bit PNG values.
-    Tonemap => wavepath::Tonemap {
-        /// The reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1).
-        Cs184,
-        /// Plain sRGB encoding of clamp(L, 0, 1).
-        Srgb,
-    }
-}
-
-choice! {
-    /// Which camera a COLLADA file gets.
-    Camera => wavepath::CameraMode {
-        /// The CS184 reference placement (see COLLADA-CS184.md): the seed's pictures use it.
-        Cs184,
-        /// The file's camera exactly as written.
-        File,
-    }
 }
 
 choice! {
@@ -128,47 +86,5 @@ choice! {
         Sampler,
         /// MIS of light and BSDF samples against light sampling alone (--no-mis).
         Mis,
-    }
-}
-
-/// How a CS184 camera's field of view follows `-r` (a command-line choice only: it picks
-/// between [`Camera::fit_to`] as loaded and [`Camera::whole_frame`] first).
-///
-/// [`Camera::fit_to`]: wavepath::Camera::fit_to
-/// [`Camera::whole_frame`]: wavepath::Camera::whole_frame
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Fov {
-    /// The reference renderer's rule: its 800x600 picture's angle per pixel, so `-r W H` shows
-    /// the centre W x H window of that picture (more than it beyond 800x600).
-    Cs184,
-    /// The whole 800x600 picture at any resolution (its vertical field kept).
-    Frame,
-}
-
-impl Fov {
-    /// Fits `cam` to a `width x height` image by this rule.
-    pub fn apply(self, cam: &mut wavepath::Camera, width: usize, height: usize) {
-        if self == Fov::Frame {
-            cam.whole_frame();
-        }
-        cam.fit_to(width as f32, height as f32);
-    }
-}
-
-/// How Russian roulette decides (a command-line choice: it sets `Roulette::kind`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum Roulette {
-    /// Continue with the fixed probability `--rr` from the second bounce on (the seed's rule).
-    Fixed,
-    /// Continue with the path's throughput (its largest component, at most 1), as pbrt-v4.
-    Throughput,
-}
-
-impl From<Roulette> for wavepath::RouletteKind {
-    fn from(r: Roulette) -> Self {
-        match r {
-            Roulette::Fixed => wavepath::RouletteKind::Fixed,
-            Roulette::Throughput => wavepath::RouletteKind::Throughput,
-        }
     }
 }

@@ -11,7 +11,7 @@ use wavepath::{Environment, Scene};
 
 pub fn run(a: &InfoArgs) -> Result<()> {
     let t0 = Instant::now();
-    let mut scene = super::load_scene(&a.scene, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?;
+    let mut scene = super::load_scene(&a.scene, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?;
     if let Some(e) = &a.envmap {
         scene.set_environment(Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?)));
     }

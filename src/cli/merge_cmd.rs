@@ -9,7 +9,7 @@ pub fn run(a: &MergeArgs) -> Result<()> {
     let merged = wavepath_apps::parts::merge_files(&a.parts)?;
     let m = &merged.parts[0];
     let film = merged.acc.to_film();
-    wavepath::write_image(&film, &a.output, a.tonemap.into())?;
+    wavepath::write_image(&film, &a.output, a.tonemap)?;
     // As `wavepath -a`: the sample-rate image only for adaptive renders.
     if m.adaptive {
         let rate = wavepath::rate_film(film.width, film.height, &merged.acc.samples_taken(), m.spp);

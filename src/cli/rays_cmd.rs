@@ -37,9 +37,9 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
     let reps = args.reps.or(args.reps_pos).unwrap_or(5).max(1);
     let rays = read_rays(&args.rays)?;
     let scene = super::with_spinner("loading", || super::load_scene(&args.mesh, &LoadOptions::default()))?;
-    super::check_build_memory(&scene, args.bvh_leaves.into(), None)?;
+    super::check_build_memory(&scene, args.bvh_leaves, None)?;
     let bvh = super::with_spinner("building the BVH", || {
-        Bvh::build_with(&scene, BvhOptions { build: args.bvh_build.into(), leaves: args.bvh_leaves.into() })
+        Bvh::build_with(&scene, BvhOptions { build: args.bvh_build, leaves: args.bvh_leaves })
     })
     .with_isa(args.isa);
     let info = bvh.info();
@@ -68,7 +68,7 @@ pub fn run_trace(args: &TraceArgs) -> Result<()> {
         write_hits(path, &hits)?;
     }
     let per_ray = |x: u64| x as f64 / counters.rays.max(1) as f64;
-    let tree = match BvhBuild::from(args.bvh_build) {
+    let tree = match args.bvh_build {
         BvhBuild::Sah => "binned SAH, 16 bins x 3 axes, sets of 128k and more binned from a sample of 16k",
         BvhBuild::Fast => "Morton order (LBVH), sets of 16 and fewer cut into leaves of four in curve order",
     };

@@ -1,7 +1,7 @@
 //! `wavepath [FLAGS] [SCENE]`: load, build, render, write.
 
 use super::RenderArgs;
-use super::settings_from_args::settings;
+use super::settings_from_args::{request, settings};
 use anyhow::{Result, bail};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::AtomicBool;
@@ -18,7 +18,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
         Some(p) => super::load_scene_within(
             p,
             &LoadOptions {
-                camera: a.camera.into(),
+                camera: a.camera,
                 two_sided_emission: a.two_sided_emission,
                 subdivide: a.subdivide,
                 ..LoadOptions::default()
@@ -31,13 +31,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     if let Some(c) = &a.camera_file {
         scene.camera = read_camera_file(c)?;
     }
-    a.fov.apply(&mut scene.camera, s.image.width, s.image.height);
-    if let Some(b) = a.lens_radius {
-        scene.camera.lens_radius = b as f32;
-    }
-    if let Some(d) = a.focal_distance {
-        scene.camera.focal_distance = d as f32;
-    }
+    scene.camera = request(a).camera(scene.camera, s);
     if let Some(e) = &a.envmap {
         scene.set_environment(wavepath::Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?)));
     }
@@ -108,7 +102,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         Ok((result, build))
     })??;
     let wavepath::RenderOutput { film, stats, samples } = film;
-    wavepath::write_image(&film, &out, a.tonemap.into())?;
+    wavepath::write_image(&film, &out, a.tonemap)?;
     // The sample-rate image shows where adaptive sampling spent its samples; a fixed-rate
     // render's would be one flat grey nobody asked for.
     if s.sampling.adaptive.is_some() && s.paths.shading != wavepath::Shading::Normals {

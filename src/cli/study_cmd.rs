@@ -1,11 +1,12 @@
 //! `wavepath study SCENE --sweep KIND`: what accuracy costs in time (see [`wavepath_apps::study`]).
 
-use super::choices::{Camera, Sampler, Sweep};
+use super::choices::{Sweep, named};
+use super::settings_from_args::flag;
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
-use wavepath::{CameraMode, LoadOptions, default_scene};
-use wavepath::{Settings, Shading};
+use wavepath::Settings;
+use wavepath::{CameraMode, FovRule, LoadOptions, Request, SamplerKind, default_scene};
 use wavepath_apps::study::StudyConfig;
 
 #[derive(Args, Debug, Clone)]
@@ -30,8 +31,8 @@ pub struct StudyArgs {
     pub sweep: Sweep,
     /// How a COLLADA camera's field of view follows -r; default: the whole 800x600 picture
     /// (a study's small renders would otherwise show the centre of it only).
-    #[arg(long, value_enum, default_value_t = super::choices::Fov::Frame)]
-    pub fov: super::choices::Fov,
+    #[arg(long, value_parser = named::<FovRule>(), default_value = "frame")]
+    pub fov: FovRule,
     /// Resolution of every render (small: a study renders many images).
     #[arg(short = 'r', num_args = 2, value_names = ["W", "H"], default_values_t = [64, 48])]
     pub resolution: Vec<i64>,
@@ -62,16 +63,16 @@ pub struct StudyArgs {
     /// Base seed (the reference uses its own, derived from it).
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Worker threads (default: all cores).
+    /// Worker threads (default, or 0: all cores).
     #[arg(short = 't', value_name = "N")]
     pub threads: Option<i64>,
     /// COLLADA camera framing.
-    #[arg(long, value_enum, default_value_t = Camera::Cs184)]
-    pub camera: Camera,
+    #[arg(long, value_parser = named::<CameraMode>(), default_value = "cs184")]
+    pub camera: CameraMode,
     /// How each pixel's samples spread (the sampler sweep varies it); default as for a
     /// render: independent for .dae files and the embedded scene, sobol for other files.
-    #[arg(long, value_enum)]
-    pub sampler: Option<Sampler>,
+    #[arg(long, value_parser = named::<SamplerKind>())]
+    pub sampler: Option<SamplerKind>,
 }
 
 fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
@@ -81,31 +82,27 @@ fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
     Ok(v)
 }
 
-fn config(a: &StudyArgs) -> Result<StudyConfig> {
-    let w = in_range("-r width", a.resolution[0], 1, 4096)? as usize;
-    let h = in_range("-r height", a.resolution[1], 1, 4096)? as usize;
-    let max_depth = in_range("-m", a.max_depth, 1, 64)? as u32;
-    if !(a.rr.is_finite() && a.rr > 0.0 && a.rr <= 1.0) {
-        bail!("--rr must be in (0, 1], got {}", a.rr);
+/// The render flags a study shares with a render, as the engine's request: checked and
+/// applied as a render's are, on top of the scene's defaults.
+fn request(a: &StudyArgs) -> Request {
+    Request {
+        resolution: Some((a.resolution[0], a.resolution[1])),
+        max_depth: Some(a.max_depth),
+        light_samples: Some(a.light_samples),
+        rr: Some(a.rr),
+        seed: Some(a.seed),
+        threads: a.threads,
+        sampler: a.sampler,
+        fov: Some(a.fov),
+        ..Request::default()
     }
+}
+
+/// The study's own flags around `base` (the settings every render starts from).
+fn config(a: &StudyArgs, base: Settings) -> Result<StudyConfig> {
     if !(a.time_budget.is_finite() && a.time_budget > 0.0) {
         bail!("--time-budget must be a positive number of seconds, got {}", a.time_budget);
     }
-    let mut base = Settings::default();
-    base.image.width = w;
-    base.image.height = h;
-    base.sampling.spp = 1;
-    base.sampling.light_samples = in_range("-l", a.light_samples, 1, 1 << 16)? as u32;
-    base.paths.max_depth = max_depth;
-    base.paths.roulette.continue_prob = a.rr as f32;
-    base.paths.shading = if max_depth > 1 { Shading::Global } else { Shading::Direct };
-    base.sampling.seed = a.seed;
-    // Without --sampler, the scene's dialect decides (in `run`, once it is loaded).
-    base.sampling.sampler = a.sampler.map(Into::into).unwrap_or_default();
-    base.execution.threads = match a.threads {
-        Some(t) => in_range("-t", t, 1, 4096)? as usize,
-        None => 0,
-    };
     Ok(StudyConfig {
         sweep: a.sweep.into(),
         base,
@@ -117,19 +114,19 @@ fn config(a: &StudyArgs) -> Result<StudyConfig> {
 }
 
 pub fn run(a: &StudyArgs) -> Result<()> {
-    let mut cfg = config(a)?;
+    // Every flag is checked before the load, as a render's are.
+    let request = request(a);
+    config(a, request.apply(Settings::default(), flag)?)?;
     let mut scene = match &a.scene {
-        Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera.into(), ..LoadOptions::default() })?,
+        Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
         None => default_scene(),
     };
-    if a.sampler.is_none() {
-        cfg.base.sampling.sampler = Settings::for_scene(&scene).sampling.sampler;
-    }
-    a.fov.apply(&mut scene.camera, cfg.base.image.width, cfg.base.image.height);
+    let cfg = config(a, wavepath_apps::study::base_settings(&scene, &request, flag)?)?;
+    scene.camera = request.camera(scene.camera, &cfg.base);
     let identity = wavepath_apps::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));
-    let camera_label = format!("{:?} {:?}", CameraMode::from(a.camera), a.fov);
+    let camera_label = format!("{:?} {:?}", a.camera, a.fov);
     let command = std::iter::once("wavepath".to_string()).chain(std::env::args().skip(1)).collect::<Vec<_>>().join(" ");
     let log = |m: &str| eprintln!("[wavepath study] {m}");
     let result = wavepath::with_threads(cfg.base.execution.threads, || -> Result<_> {

@@ -21,12 +21,25 @@ use wavepath::Film;
 use wavepath::Intersector;
 use wavepath::Scene;
 use wavepath::Settings;
+use wavepath::{InvalidValue, Names, Request};
+
+/// The settings every render of a study starts from: the scene's defaults
+/// ([`Settings::for_scene`], so a study measures the estimator a render of the scene uses,
+/// roulette and sampler included), then the caller's request (resolution, depth, light
+/// samples...), at one sample per pixel (the ladders set the count). A sweep then changes
+/// only the value it sweeps.
+pub fn base_settings(scene: &Scene, request: &Request, names: Names) -> Result<Settings, InvalidValue> {
+    let mut s = request.apply(Settings::for_scene(scene), names)?;
+    s.sampling.spp = 1;
+    s.sampling.adaptive = None;
+    Ok(s)
+}
 
 /// What a study runs.
 #[derive(Clone, Debug)]
 pub struct StudyConfig {
     pub sweep: SweepKind,
-    /// Resolution, light samples, depth, roulette, seed and threads of every render.
+    /// What every render starts from ([`base_settings`]).
     pub base: Settings,
     /// Largest samples per pixel of a ladder (and the adaptive sweep's maximum).
     pub max_spp: u32,

@@ -58,8 +58,9 @@ pub fn reference_settings(base: &Settings, spp: u32) -> Settings {
 pub fn cache_key(identity: &[u8], camera_label: &str, s: &Settings) -> u64 {
     let mut h = Fnv::default();
     h.write(identity);
+    let r = s.paths.roulette;
     let text = format!(
-        "v1 {} {camera_label} {}x{} spp {} l {} m {} o {} rr {} seed {} shading {:?}",
+        "v2 {} {camera_label} {}x{} spp {} l {} m {} o {} roulette {} {} from {} sampler {} mis {} seed {} shading {:?}",
         env!("CARGO_PKG_VERSION"),
         s.image.width,
         s.image.height,
@@ -67,7 +68,11 @@ pub fn cache_key(identity: &[u8], camera_label: &str, s: &Settings) -> u64 {
         s.sampling.light_samples,
         s.paths.max_depth,
         s.paths.accumulate,
-        s.paths.roulette.continue_prob,
+        r.kind.name(),
+        r.continue_prob,
+        r.start_depth,
+        s.sampling.sampler.name(),
+        s.paths.mis,
         s.sampling.seed,
         s.paths.shading
     );

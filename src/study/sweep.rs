@@ -2,8 +2,8 @@
 //! rendered at a ladder of sample counts (or, for adaptive sampling, of tolerances), so
 //! error against time shows which setting buys the most accuracy per second.
 
-use wavepath::SamplerKind;
 use wavepath::Settings;
+use wavepath::{Roulette, RouletteKind, SamplerKind, Shading};
 
 /// The setting a study varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -97,11 +97,19 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
         SweepKind::Depth => {
             let mut out = Vec::new();
             for m in [1u32, 2, 4, 8, DEEP] {
-                out.push(curve(format!("-m {m}, no roulette"), format!("m{m}"), depth_settings(&b(), m, 1.0)));
+                let s = depth_settings(&b(), m).with(|s| s.paths.roulette = fixed_roulette(base, 1.0));
+                out.push(curve(format!("-m {m}, no roulette"), format!("m{m}"), s));
             }
+            // With roulette: the base's own (the scene's default, or the --rr given).
+            let (label, slug) = match base.paths.roulette.kind {
+                RouletteKind::Fixed => {
+                    let rr = base.paths.roulette.continue_prob;
+                    (format!("--rr {rr}"), format!("rr{rr}"))
+                }
+                kind => (format!("{} roulette", kind.name()), kind.name().to_string()),
+            };
             for m in [4u32, DEEP] {
-                let rr = base.paths.roulette.continue_prob;
-                out.push(curve(format!("-m {m}, --rr {rr}"), format!("m{m}-rr{rr}"), depth_settings(&b(), m, rr)));
+                out.push(curve(format!("-m {m}, {label}"), format!("m{m}-{slug}"), depth_settings(&b(), m)));
             }
             out
         }
@@ -109,7 +117,8 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
             .iter()
             .map(|&rr| {
                 let label = if rr == 1.0 { format!("-m {DEEP}, no roulette") } else { format!("-m {DEEP}, --rr {rr}") };
-                curve(label, format!("rr{rr}"), depth_settings(&b(), DEEP, rr))
+                let s = depth_settings(&b(), DEEP).with(|s| s.paths.roulette = fixed_roulette(base, rr));
+                curve(label, format!("rr{rr}"), s)
             })
             .collect(),
         SweepKind::Sampler => SamplerKind::ALL
@@ -132,13 +141,23 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
     }
 }
 
-fn depth_settings(b: &Settings, m: u32, rr: f32) -> Settings {
-    let shading = if m > 1 { wavepath::Shading::Global } else { wavepath::Shading::Direct };
+/// `b` at depth `m`, showing what a render at that depth shows.
+fn depth_settings(b: &Settings, m: u32) -> Settings {
     b.clone().with(|s| {
         s.paths.max_depth = m;
-        s.paths.roulette.continue_prob = rr;
-        s.paths.shading = shading
+        s.paths.shading = Shading::for_depth(m)
     })
+}
+
+/// Fixed roulette with continue probability `rr` (1: none), the value the roulette sweep
+/// varies: a base of another kind (a scene whose default is throughput roulette) switches
+/// to the fixed rule and its start depth, as `--roulette fixed` does; a fixed base keeps its
+/// start.
+fn fixed_roulette(base: &Settings, rr: f32) -> Roulette {
+    let r = base.paths.roulette;
+    let start_depth =
+        if r.kind == RouletteKind::Fixed { r.start_depth } else { RouletteKind::Fixed.default_start_depth() };
+    Roulette { kind: RouletteKind::Fixed, continue_prob: rr, start_depth }
 }
 
 /// Sample counts of the spp ladder: powers of two up to `cap` (and `cap` itself).
@@ -160,6 +179,26 @@ mod tests {
         assert_eq!(spp_ladder(1), vec![1]);
         assert_eq!(spp_ladder(16), vec![1, 2, 4, 8, 16]);
         assert_eq!(spp_ladder(20), vec![1, 2, 4, 8, 16, 20]);
+    }
+
+    /// A scene whose default is throughput roulette keeps it in every curve but those whose
+    /// swept value is the roulette: the depth sweep's curves without roulette, and the
+    /// roulette sweep's fixed probabilities.
+    #[test]
+    fn curves_change_the_roulette_only_where_they_sweep_it() {
+        let base = Settings::for_dialect(wavepath::Dialect::Standard).with(|s| s.paths.max_depth = 5);
+        assert_eq!(base.paths.roulette.kind, RouletteKind::Throughput);
+        for k in [SweepKind::Spp, SweepKind::LightSamples, SweepKind::Sampling, SweepKind::Adaptive, SweepKind::Mis] {
+            assert!(curves(k, &base).iter().all(|c| c.settings.paths.roulette == base.paths.roulette), "{k:?}");
+        }
+        for c in curves(SweepKind::Depth, &base) {
+            let want = if c.label.contains("no roulette") { fixed_roulette(&base, 1.0) } else { base.paths.roulette };
+            assert_eq!(c.settings.paths.roulette, want, "{}", c.label);
+        }
+        for c in curves(SweepKind::Roulette, &base) {
+            let r = c.settings.paths.roulette;
+            assert_eq!((r.kind, r.start_depth), (RouletteKind::Fixed, 1), "{}", c.label);
+        }
     }
 
     #[test]

@@ -3,8 +3,8 @@
 
 use super::options::ViewOptions;
 use super::session::ViewState;
+use wavepath::RouletteKind;
 use wavepath::format_camera_settings;
-use wavepath::{RouletteKind, Shading};
 
 /// The camera file's name in the command.
 pub const CAMERA_FILE: &str = "view-camera.txt";
@@ -31,12 +31,7 @@ pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
         "-r {} {} -s {} -l {} -m {}",
         s.image.width, s.image.height, s.sampling.spp, s.sampling.light_samples, s.paths.max_depth
     ));
-    let shading = match s.paths.shading {
-        Shading::Normals => "normals",
-        Shading::Direct => "direct",
-        Shading::Global => "global",
-    };
-    args.push(format!("--shading {shading}"));
+    args.push(format!("--shading {}", s.paths.shading.name()));
     if s.paths.roulette.kind == RouletteKind::Throughput {
         args.push(format!("--roulette throughput --rr-depth {}", s.paths.roulette.start_depth));
     } else {

@@ -1,8 +1,10 @@
 //! What a client may ask of the viewer, parsed from `key=value` pairs and checked against
 //! bounds before anything changes: a bad value is a message for a 400, never a panic and
-//! never a render with absurd settings.
+//! never a render with absurd settings. The render settings are checked by the engine
+//! (`wavepath::Field`, `wavepath::Shading`'s names), so a value the command line or Python
+//! refuses is refused here with the same message, under the control's name.
 
-use wavepath::Shading;
+use wavepath::{Field, Shading};
 
 /// One change a client asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,10 +36,49 @@ pub enum Change {
     Resolution(usize, usize),
 }
 
-/// Largest image side a client may ask for.
+/// Largest image side a client may ask for: below the engine's limit, since the viewer
+/// keeps a canvas of the whole image and encodes it several times a second.
 pub const MAX_SIDE: usize = 4096;
-/// Largest samples-per-pixel cap.
-pub const MAX_SPP: u32 = 1 << 16;
+
+/// The viewer's name for each render value it takes (its controls' keys).
+pub fn control(f: Field) -> &'static str {
+    match f {
+        Field::Width | Field::Height => "res",
+        Field::Spp => "spp",
+        Field::LightSamples => "l",
+        Field::MaxDepth => "m",
+        Field::ContinueProb => "rr",
+        Field::LensRadius => "lens",
+        Field::FocalDistance => "focal",
+        _ => "?",
+    }
+}
+
+/// A whole-number render value, checked by the engine.
+fn setting(f: Field, v: &str) -> Result<u32, String> {
+    let key = control(f);
+    let x: i64 = v.trim().parse().map_err(|_| format!("{key}: '{v}' is not a whole number"))?;
+    f.whole(key, x).map_err(|e| e.to_string())
+}
+
+/// A real render value, checked by the engine.
+fn real_setting(f: Field, v: &str) -> Result<f32, String> {
+    let key = control(f);
+    let x: f64 = v.trim().parse().map_err(|_| format!("{key}: '{v}' is not a number"))?;
+    f.number(key, x).map(|x| x as f32).map_err(|e| e.to_string())
+}
+
+/// `WxH`, within the engine's limits and the viewer's own side.
+fn resolution(v: &str) -> Result<(usize, usize), String> {
+    let key = control(Field::Width);
+    let (w, h) = v.split_once('x').ok_or_else(|| format!("{key}: expected WxH, got '{v}'"))?;
+    let whole = |t: &str| t.trim().parse::<i64>().map_err(|_| format!("{key}: '{t}' is not a whole number"));
+    let (w, h) = wavepath::check_resolution(key, whole(w)?, whole(h)?).map_err(|e| e.to_string())?;
+    if w.max(h) > MAX_SIDE {
+        return Err(format!("{key} {w}x{h} is larger than the viewer's {MAX_SIDE}x{MAX_SIDE}"));
+    }
+    Ok((w, h))
+}
 
 fn number(key: &str, v: &str) -> Result<f32, String> {
     let x: f32 = v.trim().parse().map_err(|_| format!("{key}: '{v}' is not a number"))?;
@@ -52,12 +93,6 @@ fn whole(key: &str, v: &str, lo: u32, hi: u32) -> Result<u32, String> {
 fn bounded(key: &str, v: &str, lo: f32, hi: f32) -> Result<f32, String> {
     let x = number(key, v)?;
     if (lo..=hi).contains(&x) { Ok(x) } else { Err(format!("{key}: {x} is outside [{lo}, {hi}]")) }
-}
-
-/// A number in (0, `hi`].
-fn positive(key: &str, v: &str, hi: f32) -> Result<f32, String> {
-    let x = bounded(key, v, 0.0, hi)?;
-    if x > 0.0 { Ok(x) } else { Err(format!("{key}: must be above 0")) }
 }
 
 fn pair(key: &str, v: &str, limit: f32) -> Result<(f32, f32), String> {
@@ -93,28 +128,22 @@ pub fn parse(key: &str, v: &str) -> Result<Change, String> {
             }
             Change::Focus(x, y)
         }
-        "spp" => Change::Spp(whole(key, v, 1, MAX_SPP)?),
-        "l" => Change::LightSamples(whole(key, v, 1, 1024)?),
-        "m" => Change::MaxDepth(whole(key, v, 1, 64)?),
-        "shading" => Change::Shading(match v {
-            "normals" => Shading::Normals,
-            "direct" => Shading::Direct,
-            "global" => Shading::Global,
-            _ => return Err(format!("shading: expected normals, direct or global, got '{v}'")),
-        }),
-        "rr" => Change::Roulette(positive(key, v, 1.0)?),
+        "spp" => Change::Spp(setting(Field::Spp, v)?),
+        "l" => Change::LightSamples(setting(Field::LightSamples, v)?),
+        "m" => Change::MaxDepth(setting(Field::MaxDepth, v)?),
+        "shading" => Change::Shading(v.parse::<Shading>().map_err(|e| e.for_option(key).to_string())?),
+        "rr" => Change::Roulette(real_setting(Field::ContinueProb, v)?),
         "hemisphere" => Change::Hemisphere(flag(key, v)?),
-        "lens" => Change::LensRadius(bounded(key, v, 0.0, 1e6)?),
-        "focal" => Change::FocalDistance(positive(key, v, 1e9)?),
+        "lens" => Change::LensRadius(real_setting(Field::LensRadius, v)?),
+        "focal" => Change::FocalDistance(real_setting(Field::FocalDistance, v)?),
         "env" => Change::Environment(flag(key, v)?),
         "bvh" => Change::BvhDepth(match v {
             "off" | "-1" => None,
             _ => Some(whole(key, v, 0, 32)?),
         }),
         "res" => {
-            let (w, h) = v.split_once('x').ok_or_else(|| format!("res: expected WxH, got '{v}'"))?;
-            let (w, h) = (whole(key, w, 1, MAX_SIDE as u32)?, whole(key, h, 1, MAX_SIDE as u32)?);
-            Change::Resolution(w as usize, h as usize)
+            let (w, h) = resolution(v)?;
+            Change::Resolution(w, h)
         }
         _ => return Err(format!("unknown control '{key}'")),
     })
@@ -160,6 +189,7 @@ mod tests {
             ("rr", "0"),
             ("res", "0x10"),
             ("res", "100000x10"),
+            ("res", "5000x10"),
             ("focal", "-1"),
             ("focus", "2,0.5"),
             ("hemisphere", "maybe"),
@@ -170,5 +200,22 @@ mod tests {
             assert!(e.contains(k.split(' ').next().unwrap()) || e.contains("unknown"), "{k}={v}: {e}");
         }
         assert!(parse_query("").is_err() && parse_query(&"a".repeat(5000)).is_err());
+    }
+
+    /// The render values are checked by the engine: the command line's and Python's message
+    /// under the control's name (tests/it compares them with the binary's).
+    #[test]
+    fn render_values_get_the_engines_messages() {
+        let refused = |k: &str, v: &str| parse(k, v).unwrap_err();
+        assert_eq!(refused("spp", "0"), "spp (samples per pixel) must be between 1 and 1048576, got 0");
+        assert_eq!(refused("res", "0x10"), "res (image width) must be between 1 and 32768, got 0");
+        assert_eq!(refused("res", "10x100000"), "res (image height) must be between 1 and 32768, got 100000");
+        assert_eq!(refused("rr", "1.5"), "rr (continue probability) must be in (0, 1], got 1.5");
+        assert_eq!(refused("shading", "wireframe"), "shading must be normals, direct or global, got 'wireframe'");
+        for (k, v, field) in [("spp", 0, Field::Spp), ("m", -1, Field::MaxDepth), ("l", 0, Field::LightSamples)] {
+            assert_eq!(refused(k, &v.to_string()), field.whole(k, v).unwrap_err().to_string());
+        }
+        // The viewer's own limit, below the engine's.
+        assert_eq!(refused("res", "5000x10"), "res 5000x10 is larger than the viewer's 4096x4096");
     }
 }

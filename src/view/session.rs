@@ -280,7 +280,7 @@ impl Session {
             let stats = match c.render(p, bvh, extent, &|_| {}, &self.interrupt) {
                 Ok(stats) => stats,
                 // A change stopped the band: the next turn starts its generation.
-                Err(_) if self.interrupt.load(Ordering::Relaxed) => continue,
+                Err(e) if e.downcast_ref::<wavepath::Interrupted>().is_some() => continue,
                 Err(_) => {
                     taken = s.sampling.spp;
                     continue;

@@ -172,14 +172,15 @@ fn bad_flags_fail_with_one_line() {
     let cam = dir.join("cam.txt");
     std::fs::write(&cam, "1 2 three").unwrap();
     let cases: Vec<(Vec<String>, &str)> = vec![
-        (vec!["-r", "0", "10"], "-r width"),
-        (vec!["-r", "100000", "100000"], "-r width"),
+        (vec!["-r", "0", "10"], "-r (image width)"),
+        (vec!["-r", "100000", "100000"], "-r (image width)"),
         (vec!["-r", "20000", "20000"], "pixels"),
         (vec!["-s", "-4"], "-s"),
         (vec!["-l", "0"], "-l"),
         (vec!["-m", "-1"], "-m"),
         (vec!["-o", "2"], "-o"),
-        (vec!["-t", "0"], "-t"),
+        (vec!["-t", "-1"], "-t"),
+        (vec!["-t", "5000"], "-t"),
         (vec!["--rr", "0"], "--rr"),
         (vec!["--rr", "1.5"], "--rr"),
         (vec!["-a", "0", "0.05"], "-a"),
@@ -214,6 +215,39 @@ fn bad_flags_fail_with_one_line() {
         assert!(err.contains(needle), "{args:?}: error does not mention {needle}: {err}");
         assert!(!err.contains("panicked"), "{args:?} panicked: {err}");
     }
+}
+
+/// The same bad value gets the same message from the command line and the viewer's
+/// controls, each under its own name for the option: both show the engine's message (the
+/// Python package's tests compare theirs with this binary's too).
+#[test]
+fn a_bad_value_gets_the_same_message_from_the_command_line_and_the_viewer() {
+    let dir = temp_dir("cli-same-message");
+    let out = dir.join("x.png");
+    // (flags, the viewer's control and value, the command line's name for the option)
+    let cases = [
+        (vec!["-r", "0", "10"], "res", "0x10", "-r"),
+        (vec!["-r", "100000", "10"], "res", "100000x10", "-r"),
+        (vec!["-r", "20000", "20000"], "res", "20000x20000", "-r"),
+        (vec!["--rr", "1.5"], "rr", "1.5", "--rr"),
+        (vec!["-s", "0"], "spp", "0", "-s"),
+        (vec!["-m", "-1"], "m", "-1", "-m"),
+        (vec!["-b", "-1"], "lens", "-1", "-b"),
+        (vec!["--shading", "wireframe"], "shading", "wireframe", "--shading"),
+    ];
+    for (flags, key, value, flag) in cases {
+        let o = run_wavepath(flags.iter().copied().chain(["-f", out.to_str().unwrap()]));
+        assert!(!o.status.success(), "{flags:?} succeeded");
+        let line = stderr(&o).trim_end().to_string();
+        let message = line.strip_prefix("error: ").unwrap_or(&line);
+        let message = message.strip_suffix(" (see wavepath --help)").unwrap_or(message);
+        let view = wavepath_apps::view::controls::parse(key, value).unwrap_err();
+        assert_eq!(view.replacen(key, flag, 1), message, "{flags:?} against {key}={value}");
+    }
+    // The engine's own message, under the command line's name.
+    let o = run_wavepath(["-s", "0", "-f", out.to_str().unwrap()]);
+    let engine = wavepath::Field::Spp.whole("-s", 0).unwrap_err();
+    assert_eq!(stderr(&o).trim_end(), format!("error: {engine}"));
 }
 
 #[test]

@@ -5,11 +5,11 @@
 use crate::common::render;
 use crate::common::{self, temp_dir};
 use std::path::PathBuf;
-use wavepath::SamplerKind;
 use wavepath::Scene;
 use wavepath::Settings;
 use wavepath::default_scene;
 use wavepath::{Intersector, build_accel as build};
+use wavepath::{Request, Roulette, RouletteKind, SamplerKind};
 use wavepath_apps::study::{self, StudyConfig, SweepKind, log_log_slope};
 
 const W: usize = 32;
@@ -263,4 +263,65 @@ fn command_writes_csv_plots_and_report() {
     assert!(md.contains("![error vs time](error_vs_time.png)") && md.contains("adaptive_rate.png"));
     let help = common::run_wavepath(["study", "--help"]);
     assert!(help.status.success() && String::from_utf8_lossy(&help.stdout).contains("--sweep"));
+}
+
+/// A study starts from the scene's defaults, as a render does: on an OBJ file (throughput
+/// roulette from depth 5, Sobol points) its renders and its reference use the roulette the
+/// render command uses with the same flags (read back from the command's `--stats`), where
+/// studies used to keep the CS184 rule (fixed roulette from depth 1) for every file.
+#[test]
+fn a_study_of_an_obj_file_uses_the_render_commands_roulette() {
+    let obj = common::repo_root().join("scenes").join("cornell_mesh.obj");
+    let mut scene = wavepath::load(&obj, &wavepath::LoadOptions::default()).unwrap();
+    scene.camera.fit_aspect(W as f32 / H as f32);
+    let names: wavepath::Names = |_| "flag";
+    // What `wavepath study cornell_mesh.obj -r 32 24 -m 5` asks for (its defaults included).
+    let request = Request {
+        resolution: Some((W as i64, H as i64)),
+        max_depth: Some(5),
+        light_samples: Some(1),
+        rr: Some(0.65),
+        seed: Some(0),
+        ..Request::default()
+    };
+    let base = study::base_settings(&scene, &request, names).unwrap();
+
+    // The render command with the same flags: its settings as its stats report them.
+    let dir = temp_dir("study-obj-roulette");
+    let stats = dir.join("stats.json");
+    let o = common::run_wavepath([
+        obj.to_str().unwrap(),
+        "-r",
+        "32",
+        "24",
+        "-m",
+        "5",
+        "--stats",
+        stats.to_str().unwrap(),
+        "-f",
+        dir.join("x.pfm").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let st: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&stats).unwrap()).unwrap();
+    let r = &st["roulette"];
+    let rendered = Roulette {
+        kind: r["kind"].as_str().unwrap().parse::<RouletteKind>().unwrap(),
+        continue_prob: r["continue_prob"].as_f64().unwrap() as f32,
+        start_depth: r["start_depth"].as_u64().unwrap() as u32,
+    };
+    let sampler: SamplerKind = st["sampler"].as_str().unwrap().parse().unwrap();
+    assert_eq!(rendered, Roulette { kind: RouletteKind::Throughput, continue_prob: 0.65, start_depth: 5 });
+    assert_eq!(base.paths.roulette, rendered, "the study's roulette is not the render command's");
+    assert_eq!(base.sampling.sampler, sampler, "the study's sampler is not the render command's");
+    // And the render command's settings are the same request on the same defaults.
+    assert_eq!(request.apply(Settings::for_scene(&scene), names).unwrap().paths, base.paths);
+
+    // Every render the study measures, and its reference, keep it.
+    let (accel, _) = build(&scene, &base);
+    let r = run(&scene, accel.as_ref(), &config(SweepKind::Spp, base, 2, 16, dir.join("cache")));
+    assert!(!r.points.is_empty());
+    for p in &r.points {
+        assert_eq!(p.settings.paths.roulette, rendered);
+    }
+    assert_eq!(r.reference_settings.paths.roulette, rendered);
 }

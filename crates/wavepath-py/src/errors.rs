@@ -20,7 +20,7 @@ pub fn to_py(e: anyhow::Error) -> PyErr {
             _ => PyOSError::new_err(msg),
         };
     }
-    if msg == wavepath::INTERRUPTED {
+    if e.chain().any(|c| c.downcast_ref::<wavepath::Interrupted>().is_some()) {
         return PyKeyboardInterrupt::new_err(msg);
     }
     PyValueError::new_err(msg)

@@ -34,13 +34,9 @@ fn load(
 ) -> PyResult<PyScene> {
     // Options left out keep the library's defaults (`LoadOptions::default()`, the command line's).
     let mut opts = wavepath::LoadOptions::default();
-    match camera {
-        None => {}
-        Some("cs184") => opts.camera = wavepath::CameraMode::Cs184,
-        Some("file") => opts.camera = wavepath::CameraMode::File,
-        Some(other) => {
-            return Err(errors::value_error(format!("camera must be \"cs184\" or \"file\", got \"{other}\"")));
-        }
+    if let Some(name) = camera {
+        opts.camera =
+            name.parse().map_err(|e: wavepath::UnknownName| errors::value_error(e.for_option("camera").to_string()))?;
     }
     opts.smooth_normals = smooth_normals.unwrap_or(opts.smooth_normals);
     opts.two_sided_emission = two_sided_emission.unwrap_or(opts.two_sided_emission);

@@ -1,13 +1,13 @@
-//! `Scene.render`: the command line's settings from keyword arguments, the render on its own
-//! thread without the GIL, and a waiting loop that reports progress and honours Ctrl-C.
+//! `Scene.render`: keyword arguments as the engine's request (the command line's flags
+//! become the same one), the render on its own thread without the GIL, and a waiting loop
+//! that reports progress and honours Ctrl-C.
 
 use crate::errors::{to_py, value_error};
 use pyo3::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 use wavepath::{
-    BuildInfo, Camera, Extent, IntegratorKind, Intersector, Isa, RenderOutput, RenderPlan, RenderStats, RouletteKind,
-    SamplerKind, Scene, Settings, Shading,
+    BuildInfo, Choice, Extent, Field, Intersector, RenderOutput, RenderPlan, RenderStats, Request, Scene, Settings,
 };
 
 /// How often the waiting loop looks at Ctrl-C and calls the progress callback.
@@ -39,150 +39,61 @@ pub struct RenderOptions {
     pub focal_distance: Option<f64>,
 }
 
-/// Largest image side and pixel count, as the command line's `-r`.
-const MAX_SIDE: i64 = 1 << 15;
-const MAX_PIXELS: i64 = 1 << 28;
-
-fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> PyResult<i64> {
-    if v < lo || v > hi {
-        return Err(value_error(format!("{name} must be between {lo} and {hi}, got {v}")));
+/// Python's name for each checked value: the keyword argument's.
+fn keyword(f: Field) -> &'static str {
+    match f {
+        Field::Width | Field::Height => "resolution",
+        Field::Spp => "spp",
+        Field::LightSamples => "light_samples",
+        Field::MaxDepth => "max_depth",
+        Field::Accumulate => "accumulate",
+        Field::AdaptiveBatch | Field::AdaptiveTolerance => "adaptive",
+        Field::Threads => "threads",
+        Field::ContinueProb => "rr",
+        Field::RouletteStart => "rr_depth",
+        Field::CellX | Field::CellY | Field::CellWidth | Field::CellHeight => "cell",
+        Field::LensRadius => "lens_radius",
+        Field::FocalDistance => "focal_distance",
     }
-    Ok(v)
 }
 
-/// The settings of a render: [`Settings::for_scene`], then each option given, with the
-/// command line's ranges and rules (the shading follows the depth: [`Shading::for_depth`]).
-pub fn settings(scene: &Scene, o: &RenderOptions) -> PyResult<Settings> {
-    let mut s = Settings::for_scene(scene);
-    if let Some((w, h)) = o.resolution {
-        let w = in_range("resolution width", w, 1, MAX_SIDE)?;
-        let h = in_range("resolution height", h, 1, MAX_SIDE)?;
-        if w * h > MAX_PIXELS {
-            return Err(value_error(format!(
-                "resolution ({w}, {h}) is {} pixels, more than the limit of {MAX_PIXELS}",
-                w * h
-            )));
-        }
-        s.image.width = w as usize;
-        s.image.height = h as usize;
-    }
-    // Left out, an option keeps the library's default for the scene (as a flag left out does).
-    if let Some(v) = o.spp {
-        s.sampling.spp = in_range("spp (samples per pixel)", v, 1, 1 << 20)? as u32;
-    }
-    if let Some(v) = o.light_samples {
-        s.sampling.light_samples = in_range("light_samples (samples per area light)", v, 1, 1 << 16)? as u32;
-    }
-    if let Some(v) = o.max_depth {
-        s.paths.max_depth = in_range("max_depth (maximum ray depth)", v, 0, 1 << 12)? as u32;
-    }
-    if let Some(v) = o.accumulate {
-        s.paths.accumulate = v;
-    }
-    if let Some((b, t)) = o.adaptive {
-        if !(b.is_finite() && b >= 1.0 && b <= (1u32 << 20) as f64 && b.fract() == 0.0) {
-            return Err(value_error(format!(
-                "adaptive batch size must be a whole number between 1 and {}, got {b}",
-                1u32 << 20
-            )));
-        }
-        if !(t.is_finite() && t > 0.0) {
-            return Err(value_error(format!("adaptive tolerance must be a positive number, got {t}")));
-        }
-        s.sampling.adaptive = Some((b as u32, t as f32));
-    }
-    if let Some(t) = o.threads {
-        s.execution.threads = in_range("threads", t, 0, 4096)? as usize;
-    }
-    let rr = o.rr.unwrap_or(s.paths.roulette.continue_prob as f64);
-    if !(rr.is_finite() && rr > 0.0 && rr <= 1.0) {
-        return Err(value_error(format!("rr must be in (0, 1], got {rr}")));
-    }
-    s.paths.roulette.continue_prob = rr as f32;
-    if let Some(k) = &o.roulette {
-        s.paths.roulette.kind = match k.as_str() {
-            "fixed" => RouletteKind::Fixed,
-            "throughput" => RouletteKind::Throughput,
-            other => return Err(value_error(format!("roulette must be \"fixed\" or \"throughput\", got \"{other}\""))),
-        };
-        s.paths.roulette.start_depth = s.paths.roulette.kind.default_start_depth();
-    }
-    if let Some(d) = o.rr_depth {
-        s.paths.roulette.start_depth = in_range("rr_depth", d, 1, 1 << 16)? as u32;
-    }
-    if let Some(v) = o.hemisphere {
-        s.paths.hemisphere = v;
-    }
-    if let Some(v) = o.mis {
-        s.paths.mis = v;
-    }
-    if let Some(isa) = &o.isa {
-        s.execution.isa = Isa::parse(isa)
-            .ok_or_else(|| value_error(format!("unknown instruction set \"{isa}\" (scalar, sse, avx2, avx512)")))?;
-    }
-    if let Some(v) = o.seed {
-        s.sampling.seed = v;
-    }
-    if let Some(i) = &o.integrator {
-        s.execution.integrator = match i.as_str() {
-            "wavefront" => IntegratorKind::Wavefront,
-            "recursive" => IntegratorKind::Recursive,
-            other => {
-                return Err(value_error(format!("integrator must be \"wavefront\" or \"recursive\", got \"{other}\"")));
-            }
-        };
-    }
-    if let Some(k) = &o.sampler {
-        s.sampling.sampler = match k.as_str() {
-            "independent" => SamplerKind::Independent,
-            "stratified" => SamplerKind::Stratified,
-            "sobol" => SamplerKind::Sobol,
-            other => {
-                return Err(value_error(format!(
-                    "sampler must be \"independent\", \"stratified\" or \"sobol\", got \"{other}\""
-                )));
-            }
-        };
-    }
-    s.paths.shading = match o.shading.as_deref() {
-        None => Shading::for_depth(s.paths.max_depth),
-        Some("normals") => Shading::Normals,
-        Some("direct") => Shading::Direct,
-        Some("global") => Shading::Global,
-        Some(other) => {
-            return Err(value_error(format!("shading must be \"normals\", \"direct\" or \"global\", got \"{other}\"")));
-        }
-    };
-    if let Some(b) = o.lens_radius
-        && !(b.is_finite() && b >= 0.0)
-    {
-        return Err(value_error(format!("lens_radius must be a non-negative number, got {b}")));
-    }
-    if let Some(d) = o.focal_distance
-        && !(d.is_finite() && d > 0.0)
-    {
-        return Err(value_error(format!("focal_distance must be a positive number, got {d}")));
-    }
-    Ok(s)
+/// A setting's name given as a keyword argument, parsed by the engine's names.
+fn choice<T: Choice>(option: &str, name: &Option<String>) -> PyResult<Option<T>> {
+    name.as_deref().map(|n| T::from_name(n).map_err(|e| value_error(e.for_option(option).to_string()))).transpose()
 }
 
-/// The camera of this render: the given one or the scene's, fitted to the image by the
-/// `fov` rule (`"cs184"`, the command line's default, or `"frame"`), with lens overrides.
-pub fn camera(base: Camera, s: &Settings, o: &RenderOptions) -> PyResult<Camera> {
-    let mut cam = base;
-    match o.fov.as_deref() {
-        None | Some("cs184") => {}
-        Some("frame") => cam.whole_frame(),
-        Some(other) => return Err(value_error(format!("fov must be \"cs184\" or \"frame\", got \"{other}\""))),
-    }
-    cam.fit_to(s.image.width as f32, s.image.height as f32);
-    if let Some(b) = o.lens_radius {
-        cam.lens_radius = b as f32;
-    }
-    if let Some(d) = o.focal_distance {
-        cam.focal_distance = d as f32;
-    }
-    Ok(cam)
+/// The keyword arguments as the engine's request, which the command line's flags also
+/// become: the same ranges, messages and rules.
+pub fn request(o: &RenderOptions) -> PyResult<Request> {
+    Ok(Request {
+        resolution: o.resolution,
+        spp: o.spp,
+        light_samples: o.light_samples,
+        max_depth: o.max_depth,
+        accumulate: o.accumulate.map(i64::from),
+        adaptive: o.adaptive,
+        threads: o.threads,
+        sampler: choice("sampler", &o.sampler)?,
+        seed: o.seed,
+        shading: choice("shading", &o.shading)?,
+        integrator: choice("integrator", &o.integrator)?,
+        hemisphere: o.hemisphere,
+        mis: o.mis,
+        roulette: choice("roulette", &o.roulette)?,
+        rr: o.rr,
+        rr_depth: o.rr_depth,
+        isa: choice("isa", &o.isa)?,
+        fov: choice("fov", &o.fov)?,
+        lens_radius: o.lens_radius,
+        focal_distance: o.focal_distance,
+        ..Request::default()
+    })
+}
+
+/// The settings of a render: [`Settings::for_scene`], then each option given (a left-out
+/// option keeps the scene's default, as a flag left out does).
+pub fn settings(scene: &Scene, r: &Request) -> PyResult<Settings> {
+    r.apply(Settings::for_scene(scene), keyword).map_err(|e| value_error(e.to_string()))
 }
 
 /// A finished render and what the command line would print of it.

@@ -303,8 +303,9 @@ impl PyScene {
         // wait); the scene's own is put back whatever happens.
         let mut guard = self.write(py)?;
         *self.rendering.lock().unwrap_or_else(|e| e.into_inner()) = Some(std::thread::current().id());
-        let s: Settings = render::settings(&guard, &o)?;
-        let cam = render::camera(given_camera.unwrap_or(guard.camera), &s, &o)?;
+        let request = render::request(&o)?;
+        let s: Settings = render::settings(&guard, &request)?;
+        let cam = request.camera(given_camera.unwrap_or(guard.camera), &s);
         let saved = std::mem::replace(&mut guard.camera, cam);
         let scene: &Scene = &guard;
         let result = (|| {

@@ -90,13 +90,14 @@ def test_bad_rays_are_value_errors():
     "kwargs,message",
     [
         (dict(spp=0), r"spp \(samples per pixel\) must be between 1 and 1048576, got 0"),
-        (dict(resolution=(0, 10)), "resolution width must be between 1 and 32768, got 0"),
+        (dict(resolution=(0, 10)), r"resolution \(image width\) must be between 1 and 32768, got 0"),
         (dict(resolution=(32768, 32768)), "more than the limit"),
         (dict(max_depth=-1), "max_depth"),
-        (dict(rr=1.5), r"rr must be in \(0, 1\]"),
+        (dict(rr=1.5), r"rr \(continue probability\) must be in \(0, 1\], got 1.5"),
         (dict(sampler="halton"), "sampler must be"),
-        (dict(adaptive=(0, 0.1)), "adaptive batch size"),
-        (dict(lens_radius=-1.0), "lens_radius must be a non-negative number"),
+        (dict(adaptive=(0, 0.1)), r"adaptive \(batch size\)"),
+        (dict(lens_radius=-1.0), r"lens_radius \(lens radius\) must be a non-negative number"),
+        (dict(fov="wide"), "fov must be cs184 or frame, got 'wide'"),
         (dict(camera={"eye": (0, 0, 1), "target": (0, 0, 1)}), "the same point"),
         (dict(progress=3), "progress must be callable"),
     ],
@@ -104,3 +105,29 @@ def test_bad_rays_are_value_errors():
 def test_absurd_render_options_are_value_errors(kwargs, message):
     with pytest.raises(ValueError, match=message):
         wavepath.default_scene().render(**kwargs)
+
+
+@pytest.mark.parametrize(
+    "kwargs,flags,keyword,flag",
+    [
+        (dict(resolution=(0, 10)), ["-r", "0", "10"], "resolution", "-r"),
+        (dict(resolution=(100000, 10)), ["-r", "100000", "10"], "resolution", "-r"),
+        (dict(resolution=(20000, 20000)), ["-r", "20000", "20000"], "resolution", "-r"),
+        (dict(rr=1.5), ["--rr", "1.5"], "rr", "--rr"),
+        (dict(spp=0), ["-s", "0"], "spp", "-s"),
+        (dict(max_depth=-1), ["-m", "-1"], "max_depth", "-m"),
+        (dict(adaptive=(64, -1.0)), ["-a", "64", "-1"], "adaptive", "-a"),
+        (dict(sampler="halton"), ["--sampler", "halton"], "sampler", "--sampler"),
+        (dict(shading="wireframe"), ["--shading", "wireframe"], "shading", "--shading"),
+    ],
+)
+def test_a_bad_value_gets_the_command_lines_message(cli, tmp_path, kwargs, flags, keyword, flag):
+    """The engine checks both front ends' values: the same message, but for the option's name."""
+    p = cli(*flags, "-f", tmp_path / "x.png", check=False)
+    assert p.returncode != 0, p.stderr
+    line = p.stderr.strip()
+    assert "\n" not in line, line
+    message = line.removeprefix("error: ").removesuffix(" (see wavepath --help)")
+    with pytest.raises(ValueError) as raised:
+        wavepath.default_scene().render(**kwargs)
+    assert str(raised.value).replace(keyword, flag, 1) == message

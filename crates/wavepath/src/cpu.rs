@@ -23,22 +23,18 @@ pub enum Isa {
     Avx512,
 }
 
+crate::choice::named!(Isa, "isa", {
+    Scalar => "scalar", "no SIMD: every kernel's reference path";
+    Portable => "portable", "shading in eight lanes of plain code (every CPU), the BVH scalar";
+    Sse => "sse" | "sse4" | "sse4.1", "SSE4.1: four lanes";
+    Avx2 => "avx2", "AVX2: eight lanes";
+    Avx512 => "avx512", "the best the CPU has: sixteen shading lanes with AVX-512";
+});
+
 impl Isa {
     /// The best instruction set this CPU supports.
     pub fn detect() -> Isa {
         Isa::Avx512.effective()
-    }
-
-    /// The instruction set a name asks for.
-    pub fn parse(s: &str) -> Option<Isa> {
-        match s.trim().to_ascii_lowercase().as_str() {
-            "scalar" => Some(Isa::Scalar),
-            "portable" => Some(Isa::Portable),
-            "sse" | "sse4" | "sse4.1" => Some(Isa::Sse),
-            "avx2" => Some(Isa::Avx2),
-            "avx512" => Some(Isa::Avx512),
-            _ => None,
-        }
     }
 
     /// The path that actually runs for this request on this CPU (never one it lacks).
@@ -64,16 +60,6 @@ impl Isa {
             Isa::Avx512 => Isa::Avx2,
             Isa::Portable => Isa::Scalar,
             isa => isa,
-        }
-    }
-
-    pub fn name(self) -> &'static str {
-        match self {
-            Isa::Scalar => "scalar",
-            Isa::Portable => "portable",
-            Isa::Sse => "sse",
-            Isa::Avx2 => "avx2",
-            Isa::Avx512 => "avx512",
         }
     }
 

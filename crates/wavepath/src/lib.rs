@@ -32,6 +32,8 @@
 //! Inside, modules form layers, lowest first: each uses only layers before it
 //! (ARCHITECTURE.md; the layer test in `tests/layers.rs` checks it).
 
+// Below all: settings chosen by name.
+mod choice;
 // 0: run-time CPU features; rays, error bounds, offsets.
 mod cpu;
 mod geometry;
@@ -49,6 +51,7 @@ mod effects;
 mod film;
 mod lights;
 mod load;
+mod request;
 // 4: what a render measured.
 mod stats;
 // 5: light transport: the shared vertex logic, the wavefront stages, the recursive reference.
@@ -67,13 +70,15 @@ mod tests;
 // Scenes: load one, or build one from plain data.
 pub use load::{CameraMode, LoadOptions, default_scene, load, write_ply};
 pub use scene::{
-    Bsdf, Camera, DEFAULT_SKY, EnvMap, Environment, FovFit, Light, Material, MaterialIds, Mesh, Scene, SceneSource,
-    Sphere, Texture, format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
+    Bsdf, Camera, DEFAULT_SKY, EnvMap, Environment, FovFit, FovRule, Light, Material, MaterialIds, Mesh, Scene,
+    SceneSource, Sphere, Texture, format_camera_settings, parse_camera_settings, read_camera_file, subdivide, texture,
 };
 
-// What a render does.
+// What a render does: settings, their names, and a request checked into settings.
+pub use choice::{Choice, UnknownName};
 pub use cpu::Isa;
 pub use cs184::Dialect;
+pub use request::{Field, InvalidValue, MAX_PIXELS, MAX_SIDE, Names, Range, Request, check_resolution};
 pub use sampling::SamplerKind;
 pub use settings::{
     AccelSettings, BvhBuild, BvhOptions, Cell, Cs184Compat, Execution, ImageSettings, IntegratorKind, LeafLayout,
@@ -90,7 +95,7 @@ pub use effects::{Effect, Effects};
 pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
 pub use integrator::plan::{Extent, RenderPlan};
 pub use render::{
-    Canvas, INTERRUPTED, RenderOutput, render, render_plan, render_plan_sums, render_sums, render_until,
+    Canvas, Interrupted, RenderOutput, render, render_plan, render_plan_sums, render_sums, render_until,
     render_with_progress, with_threads,
 };
 pub use stats::{RenderStats, StageTimes, roulette_json, to_json as stats_json};

@@ -14,6 +14,12 @@ pub enum Shading {
     Global,
 }
 
+crate::choice::named!(Shading, "shading", {
+    Normals => "normals", "the shading normal as n * 0.5 + 0.5 (the seed's debug mode)";
+    Direct => "direct", "emission plus direct light (depth 1)";
+    Global => "global", "full global illumination up to the maximum depth";
+});
+
 impl Shading {
     /// What a pixel shows when the caller names no shading: direct light alone at depth 1
     /// (and 0), global illumination beyond. The command line and the Python package both
@@ -32,6 +38,11 @@ pub enum IntegratorKind {
     /// The simple recursive single-ray reference.
     Recursive,
 }
+
+crate::choice::named!(IntegratorKind, "integrator", {
+    Wavefront => "wavefront", "structure-of-arrays queues through generate, traverse, shade, shadow, compact";
+    Recursive => "recursive", "the simple recursive single-ray reference";
+});
 
 /// An image-space rectangle to render (`-p X Y DX DY`), in pixels, bottom-left origin.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -187,15 +198,12 @@ impl RouletteKind {
             RouletteKind::Throughput => 5,
         }
     }
-
-    /// Lowercase name, as `--roulette` spells it.
-    pub fn name(self) -> &'static str {
-        match self {
-            RouletteKind::Fixed => "fixed",
-            RouletteKind::Throughput => "throughput",
-        }
-    }
 }
+
+crate::choice::named!(RouletteKind, "roulette", {
+    Fixed => "fixed", "continue with the fixed probability --rr (the seed's rule)";
+    Throughput => "throughput", "continue with the path's throughput (its largest component, at most 1), as pbrt-v4";
+});
 
 /// How rays find their hits.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -253,6 +261,11 @@ pub enum BvhBuild {
     Fast,
 }
 
+crate::choice::named!(BvhBuild, "bvh build", {
+    Sah => "sah", "binned SAH: the fastest tree to trace";
+    Fast => "fast", "Morton order: a fraction of the build time, slower rays";
+});
+
 /// How BVH leaves hold their triangles: the same hits either way, a trade of memory for
 /// speed.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -266,6 +279,12 @@ pub enum LeafLayout {
     /// thirds of the leaf memory, no lookup outside the leaf.
     Packed,
 }
+
+crate::choice::named!(LeafLayout, "bvh leaves", {
+    Auto => "auto", "packed from 16 million primitives, corners below";
+    Corners => "corners", "triangle corners copied into the leaves: no lookup, 192 bytes a leaf";
+    Packed => "packed", "each leaf's distinct vertices once, with byte indices: about two thirds";
+});
 
 impl Settings {
     /// The defaults for a scene of `dialect`: a CS184 scene keeps the seed's pictures (fixed

@@ -14,6 +14,11 @@ pub enum Tonemap {
     Srgb,
 }
 
+crate::choice::named!(Tonemap, "tonemap", {
+    Cs184 => "cs184", "the reference renderer's transfer: clamp((sqrt(2) L)^(1/2.2), 0, 1)";
+    Srgb => "srgb", "plain sRGB encoding of clamp(L, 0, 1)";
+});
+
 impl Tonemap {
     #[inline]
     pub fn apply(self, l: f32) -> f32 {

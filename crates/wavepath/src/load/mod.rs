@@ -25,6 +25,11 @@ pub enum CameraMode {
     File,
 }
 
+crate::choice::named!(CameraMode, "camera", {
+    Cs184 => "cs184", "the CS184 reference placement (see COLLADA-CS184.md): the seed's pictures use it";
+    File => "file", "the file's camera exactly as written";
+});
+
 /// Choices that change how a file is read.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LoadOptions {

@@ -40,13 +40,24 @@ pub fn render_with_progress(
     render_until(scene, accel, settings, progress, &AtomicBool::new(false))
 }
 
-/// The error of a render that [`render_until`] was told to stop.
-pub const INTERRUPTED: &str = "render interrupted";
+/// The error of a render that [`render_until`] was told to stop, inside the `anyhow::Error`
+/// it returns: a caller tells it from a failure by type (`err.is::<Interrupted>()`), not by
+/// its message, which may change.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Interrupted;
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("render interrupted")
+    }
+}
+
+impl std::error::Error for Interrupted {}
 
 /// As [`render_with_progress`], for callers that may want the render to end early (an
 /// interpreter's Ctrl-C, a closed window): once `stop` is set no new wave (or row, for the
-/// recursive reference) starts, and the render ends with an error that says it was
-/// interrupted, after at most one wave per thread.
+/// recursive reference) starts, and the render ends with the error [`Interrupted`], after at
+/// most one wave per thread.
 pub fn render_until(
     scene: &Scene,
     accel: &dyn Intersector,
@@ -197,7 +208,7 @@ impl Canvas {
                 render_recursive_into(plan.transport(), settings, accel, progress, stop, &mut self.sums)
             }
         };
-        done.ok_or_else(|| anyhow::anyhow!(INTERRUPTED))
+        done.ok_or_else(|| anyhow::Error::new(Interrupted))
     }
 }
 

@@ -27,16 +27,15 @@ pub enum SamplerKind {
 }
 
 impl SamplerKind {
+    /// Every pattern, as an array (tests and sweeps map over it).
     pub const ALL: [SamplerKind; 3] = [SamplerKind::Independent, SamplerKind::Stratified, SamplerKind::Sobol];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            SamplerKind::Independent => "independent",
-            SamplerKind::Stratified => "stratified",
-            SamplerKind::Sobol => "sobol",
-        }
-    }
 }
+
+crate::choice::named!(SamplerKind, "sampler", {
+    Independent => "independent", "independent hashed numbers (the seed's)";
+    Stratified => "stratified", "jittered strata: one sample per cell of each dimension pair's grid";
+    Sobol => "sobol", "Owen-scrambled Sobol points, one scrambled sequence per dimension pair";
+});
 
 /// Sobol points past this index repeat: later samples fall back to independent numbers.
 pub(super) const SOBOL_LENGTH: u32 = 1 << 16;

@@ -53,6 +53,24 @@ impl FovFit {
     }
 }
 
+/// How a CS184 camera's field of view follows the image size: the caller's choice (`--fov`),
+/// where [`FovFit`] is the camera's own rule. Cameras of other rules are not changed by it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FovRule {
+    /// The reference renderer's rule: its 800x600 picture's angle per pixel, so `W x H`
+    /// shows the centre `W x H` window of that picture (more than it beyond 800x600).
+    #[default]
+    Cs184,
+    /// The whole 800x600 picture at any resolution (its vertical field kept): small renders
+    /// show what the reference's picture shows.
+    Frame,
+}
+
+crate::choice::named!(FovRule, "fov", {
+    Cs184 => "cs184", "the reference renderer's rule: -r W H shows the centre W x H window of its 800x600 picture";
+    Frame => "frame", "the whole 800x600 picture at any resolution (its vertical field kept)";
+});
+
 impl Default for Camera {
     fn default() -> Self {
         Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 45.0, 4.0 / 3.0)
@@ -111,6 +129,14 @@ impl Camera {
     pub fn fit_aspect(&mut self, aspect: f32) {
         self.whole_frame();
         self.fit_to(aspect, 1.0);
+    }
+
+    /// [`fit_to`](Self::fit_to) a `width x height` image by `rule`.
+    pub fn fit_by(&mut self, rule: FovRule, width: usize, height: usize) {
+        if rule == FovRule::Frame {
+            self.whole_frame();
+        }
+        self.fit_to(width as f32, height as f32);
     }
 
     /// The CS184 rule turned into "the whole 800x600 picture at any size": the vertical

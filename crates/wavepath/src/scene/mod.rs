@@ -19,7 +19,7 @@ pub mod surface;
 pub mod texture;
 
 pub use alpha::{Alpha, AlphaMode};
-pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit};
+pub use camera::{CS184_FOCAL_DISTANCE, Camera, FovFit, FovRule};
 pub use camera_file::{format_camera_settings, parse_camera_settings, read_camera_file};
 pub use envmap::EnvMap;
 pub use material::{Bsdf, Layers, Material, Relief, ReliefMap, SpecularGlossinessMap, Texture, phong_alpha};

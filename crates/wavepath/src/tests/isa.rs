@@ -90,7 +90,7 @@ fn simd_paths_run_where_the_cpu_has_them() {
             && std::is_x86_feature_detected!("avx512bw");
         if avx2 {
             assert_eq!(Isa::Avx2.effective(), Isa::Avx2);
-            assert!(Isa::parse("avx512").unwrap().avx2().is_some());
+            assert!("avx512".parse::<Isa>().unwrap().avx2().is_some());
             assert!(Isa::Avx2.avx512().is_none());
             assert_eq!(Isa::Avx512.at_most_avx2(), Isa::Avx2);
         } else {

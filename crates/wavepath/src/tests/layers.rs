@@ -8,12 +8,13 @@ use std::path::{Path, PathBuf};
 
 /// Lowest first. A module may use the modules of the layers before its own, none of its own.
 const LAYERS: &[&[&str]] = &[
+    &["choice"],
     &["cpu", "geometry"],
     &["sampling"],
     &["cs184"],
     &["scene"],
     &["settings"],
-    &["accel", "bsdf", "effects", "film", "lights", "load"],
+    &["accel", "bsdf", "effects", "film", "lights", "load", "request"],
     &["stats"],
     &["integrator"],
     &["raysets", "render"],

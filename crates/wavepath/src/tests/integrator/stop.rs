@@ -1,7 +1,7 @@
-//! `render_until`: a set stop flag ends a render early with the interrupted error, for both
+//! `render_until`: a set stop flag ends a render early with the `Interrupted` error, for both
 //! integrators; an unset one changes nothing.
 
-use crate::render::{INTERRUPTED, render_until, render_with_progress};
+use crate::render::{Interrupted, render_until, render_with_progress};
 use crate::settings::{IntegratorKind, Settings};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
@@ -32,7 +32,9 @@ fn a_set_flag_stops_the_render_with_the_interrupted_error() {
             }
         };
         let err = render_until(&scene, accel.as_ref(), &s, &tick, &stop).err().expect("stopped");
-        assert_eq!(err.to_string(), INTERRUPTED, "{integrator:?}");
+        // Recognised by type, as the Python package and the viewer recognise it.
+        assert!(err.is::<Interrupted>(), "{integrator:?}: {err:#}");
+        assert_eq!(err.downcast_ref::<Interrupted>(), Some(&Interrupted), "{integrator:?}");
         assert!(
             done.load(Ordering::Relaxed) < total / 2,
             "{integrator:?}: {} of {total}",
