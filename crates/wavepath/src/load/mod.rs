@@ -74,6 +74,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene> {
         other => bail!("{shown}: unknown scene format '.{other}'; expected .dae, .obj, .ply, .gltf or .glb"),
     };
     scene.name = path.display().to_string();
+    keep_usable_colours(&mut scene, &shown);
     if opts.two_sided_emission {
         scene.materials.iter_mut().for_each(|m| m.two_sided_emission = true);
     }
@@ -94,4 +95,42 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<Scene> {
     }
     scene.validate().map_err(|e| anyhow::anyhow!("{shown}: {e}"))?;
     Ok(scene)
+}
+
+/// Vertex colours no render can use leave the mesh drawn, with a warning, rather than the
+/// file refused: a colour only tints a surface, so the mesh without it is still the file's
+/// shape, whereas a NaN position is a shape nobody can guess and stays an error. A colour
+/// with a NaN or infinite channel (trimesh's `nancolor.obj`, a scanner's unset vertices)
+/// leaves its vertex uncoloured: white, the base colour unchanged, as a part without
+/// colours is in [`crate::scene::Mesh::append`]; vertex by vertex, so that one bad vertex
+/// of a painted scan keeps the rest of its paint. A negative channel (a float colour
+/// rounded below zero) reflects nothing: read as 0. Every loader's colours pass here, so
+/// none has its own rule.
+fn keep_usable_colours(scene: &mut Scene, shown: &std::path::Display) {
+    let Some(colours) = scene.mesh.colors.as_mut() else { return };
+    if crate::scene::first_bad(colours, |c| !c.is_finite() || c.min_element() < 0.0).is_none() {
+        return;
+    }
+    let (mut non_finite, mut negative) = (0usize, 0usize);
+    for c in colours.iter_mut() {
+        if !c.is_finite() {
+            *c = glam::Vec3::ONE;
+            non_finite += 1;
+        } else if c.min_element() < 0.0 {
+            *c = c.max(glam::Vec3::ZERO);
+            negative += 1;
+        }
+    }
+    let n = colours.len();
+    if non_finite > 0 {
+        scene.notes.push(format!(
+            "warning: {shown}: {non_finite} of {n} vertex colours are NaN or infinite; those vertices are left \
+             uncoloured"
+        ));
+    }
+    if negative > 0 {
+        scene
+            .notes
+            .push(format!("warning: {shown}: {negative} of {n} vertex colours have a negative channel; read as 0"));
+    }
 }

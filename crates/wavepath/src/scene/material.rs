@@ -157,6 +157,69 @@ impl Material {
         }
     }
 
+    /// Every image the material looks up through the mesh's texture coordinates, by its
+    /// field's name, with whether it was decoded (one that could not be read is looked up
+    /// nowhere). The one list of a material's maps: whatever depends on some map being read
+    /// (the uvs kept for a render) asks it, and the patterns below name every field, so a map
+    /// added to the material or its layers does not compile until it is listed here.
+    pub fn maps(&self) -> Vec<(&'static str, bool)> {
+        let Material {
+            name: _,
+            bsdf: _,
+            emission: _,
+            albedo_texture,
+            emission_texture,
+            metallic_roughness_texture,
+            two_sided_emission: _,
+            alpha,
+            relief,
+            layers,
+            specular_glossiness_texture,
+        } = self;
+        let mut maps = Vec::new();
+        let mut texture = |name: &'static str, t: Option<&Texture>| {
+            if let Some(t) = t {
+                maps.push((name, t.image.is_some()));
+            }
+        };
+        texture("albedo", albedo_texture.as_ref());
+        texture("emission", emission_texture.as_ref());
+        texture("metallic-roughness", metallic_roughness_texture.as_ref());
+        texture("relief", relief.as_ref().map(|ReliefMap { texture: t, relief: _ }| t));
+        if let Some(sg) = specular_glossiness_texture.as_deref() {
+            let SpecularGlossinessMap { specular, glossiness } = sg;
+            texture("specular", Some(specular));
+            texture("glossiness", Some(glossiness));
+        }
+        if let Some(l) = layers.as_deref() {
+            let Layers {
+                transmission: _,
+                transmission_texture,
+                ior: _,
+                thickness: _,
+                attenuation_color: _,
+                attenuation_distance: _,
+                specular: _,
+                specular_color: _,
+                clearcoat: _,
+                clearcoat_roughness: _,
+                sheen_color: _,
+                sheen_roughness: _,
+            } = l;
+            texture("transmission", transmission_texture.as_ref());
+        }
+        if let Some(a) = &alpha.map {
+            maps.push(("alpha", a.image.is_some()));
+        }
+        maps
+    }
+
+    /// Whether a render of this material reads the mesh's texture coordinates: it has a
+    /// decoded map of any kind.
+    pub fn reads_uvs(&self) -> bool {
+        self.maps().iter().any(|&(_, decoded)| decoded)
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
     }

@@ -161,17 +161,11 @@ impl Scene {
         self.light_by_default_sky();
     }
 
-    /// Frees the mesh's texture coordinates when no material has a texture (or a coverage
-    /// map) to look up (they are read for nothing else): 8 bytes a vertex of a scanned mesh that came with uvs.
+    /// Frees the mesh's texture coordinates when no material has a decoded map of any kind
+    /// to look up through them ([`Material::maps`]), since they are read for nothing else:
+    /// 8 bytes a vertex of a scanned mesh that came with uvs.
     pub fn drop_unused_uvs(&mut self) {
-        let textured = |t: &Option<texture::Texture>| t.as_ref().is_some_and(|t| t.image.is_some());
-        let any = self.materials.iter().any(|m| {
-            textured(&m.albedo_texture)
-                || textured(&m.emission_texture)
-                || textured(&m.metallic_roughness_texture)
-                || m.alpha.map.as_ref().is_some_and(|a| a.image.is_some())
-        });
-        if !any {
+        if !self.materials.iter().any(Material::reads_uvs) {
             self.mesh.uvs = None;
         }
     }

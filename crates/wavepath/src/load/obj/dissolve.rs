@@ -16,6 +16,21 @@
 //! When both `d` and `Tr` are given, `d` wins (some exporters write `Tr` as an opacity, the
 //! opposite of the specification; `d` has one meaning everywhere). The map reads the
 //! image's alpha channel where it has one, else its luminance.
+//!
+//! A material whose keys would make it wholly invisible (opacity 0, with or without a map)
+//! is drawn, with a warning naming the file, the material and the key:
+//!
+//! - `Tr 1` without `d`: read as an opacity of 1. MeshLab's MTL writer puts `Tr 1` on every
+//!   opaque material (trimesh's `fuze.obj` and `capsule.obj` are such files), following the
+//!   exporters that write `Tr` as an opacity; a transparency of exactly 1 is where the two
+//!   readings can be told apart, since only one of them draws anything. Other `Tr` values
+//!   keep the specification's meaning: there the two readings cannot be told apart.
+//! - `d 0`: drawn opaque too. A wholly dissolved material draws nothing at all, which no
+//!   author exports on purpose (an object meant to be absent is deleted or hidden, not
+//!   exported); the files that carry it come from converters that write `d` as a
+//!   transparency (some write `d` and `Tr` both as the transparency, so an opaque object
+//!   comes out as `d 0`). Of the two ways to be wrong, a drawn object with a warning is seen
+//!   and fixed with one edit of the file, while a missing one is a hole easily not noticed.
 use crate::scene::alpha::{AlphaImage, AlphaMap};
 use crate::scene::{Alpha, AlphaMode};
 use std::path::Path;
@@ -64,12 +79,33 @@ impl Dissolve {
         Ok(true)
     }
 
-    /// The alpha of the material these keys were read for (the state is cleared for the
-    /// next one).
-    pub fn take(&mut self) -> Alpha {
+    /// The alpha of the material `name` these keys were read for (the state is cleared for
+    /// the next one); a reading that would draw nothing is replaced as the module says, with
+    /// a line in `notes` (the caller adds the file's name).
+    pub fn take(&mut self, name: &str, notes: &mut Vec<String>) -> Alpha {
         let Dissolve { d, tr, map, illum } = std::mem::take(self);
-        let factor = d.or(tr.map(|t| 1.0 - t)).unwrap_or(1.0);
         let dielectric = matches!(illum, Some(4 | 6 | 7 | 9));
+        // Without a map a dielectric's factor is not read, so it cannot hide the material.
+        let factor_read = map.is_some() || !dielectric;
+        let factor = match (d, tr) {
+            (Some(d), _) if d <= 0.0 && factor_read => {
+                notes.push(format!(
+                    "material '{name}': d 0 would make it wholly invisible; drawn opaque (d read as a \
+                     transparency, as some converters write it)"
+                ));
+                1.0
+            }
+            (Some(d), _) => d,
+            (None, Some(t)) if t >= 1.0 && factor_read => {
+                notes.push(format!(
+                    "material '{name}': Tr 1 without d would make it wholly invisible; read as an opacity \
+                     of 1 (MeshLab's convention), so it is drawn"
+                ));
+                1.0
+            }
+            (None, Some(t)) => 1.0 - t,
+            (None, None) => 1.0,
+        };
         match map {
             Some(map) => Alpha { mode: AlphaMode::Mask { cutoff: Alpha::DEFAULT_CUTOFF }, factor, map: Some(map) },
             None if factor < 1.0 && !dielectric => Alpha { mode: AlphaMode::Blend, factor, map: None },
@@ -79,8 +115,8 @@ impl Dissolve {
 }
 
 /// Decodes `alpha`'s map, if any, from its file; a map that cannot be read is a warning (the
-/// material keeps its factor) in `notes`, as is a material that nothing of would be drawn.
-/// `mtl` is the library, `name` the material (for the messages).
+/// material keeps its factor) in `notes`. `mtl` is the library, `name` the material (for the
+/// message).
 pub fn decode(alpha: &mut Alpha, mtl: &Path, name: &str, notes: &mut Vec<String>) {
     if let Some(map) = &mut alpha.map {
         let read = std::fs::read(&map.path).map_err(|e| e.to_string()).and_then(|b| AlphaImage::decode_matte(&b));
@@ -92,8 +128,5 @@ pub fn decode(alpha: &mut Alpha, mtl: &Path, name: &str, notes: &mut Vec<String>
                 map.path.display()
             )),
         }
-    }
-    if alpha.factor <= 0.0 && alpha.mode != AlphaMode::Opaque {
-        notes.push(format!("warning: {}: {name} has opacity 0 (d 0 or Tr 1): it is not drawn", mtl.display()));
     }
 }

@@ -134,8 +134,9 @@ fn mtl_d_tr_and_map_d_become_blend_and_mask() {
     assert_eq!(alpha("halo"), blend(0.7));
     assert_eq!(alpha("glass"), Alpha::OPAQUE, "a dielectric's d is its own transparency");
     assert_eq!(alpha("solid"), Alpha::OPAQUE);
-    assert_eq!(alpha("gone"), blend(0.0));
-    assert!(s.notes.iter().any(|n| n.contains("gone") && n.contains("not drawn")), "{:?}", s.notes);
+    // Wholly dissolved: drawn, with a warning (`mtl_keys_that_would_draw_nothing_are_read_as_meant`).
+    assert_eq!(alpha("gone"), Alpha::OPAQUE);
+    assert!(s.notes.iter().any(|n| n.contains("'gone'") && n.contains("d 0")), "{:?}", s.notes);
     // map_d after options, on a Windows path: a mask at 0.5 of the image's alpha channel,
     // v up (OBJ): uv (0.25, 0.75) is the top-left texel.
     let cut = alpha("cut");
@@ -152,4 +153,69 @@ fn mtl_d_tr_and_map_d_become_blend_and_mask() {
     let mut s2 = s.clone();
     s2.drop_unused_uvs();
     assert!(s2.mesh.uvs.is_some());
+}
+
+/// MTL keys that would leave a material wholly invisible (opacity 0) are read as their authors
+/// meant, as `load/obj/dissolve.rs` says: MeshLab's `Tr 1` on an opaque material (trimesh's
+/// `fuze.obj`, `capsule.obj`) is an opacity of 1, and `d 0` is drawn opaque too, each with a
+/// warning naming the library, the material and the key; a map keeps cutting. Values that
+/// draw something keep their meaning, and a dielectric's `Tr` stays unread.
+#[test]
+fn mtl_keys_that_would_draw_nothing_are_read_as_meant() {
+    use crate::accel::BruteForce;
+    use crate::render::render_normals;
+    use crate::scene::Camera;
+    use glam::{Vec3, vec3};
+    let d = temp_dir("cutouts-mtl-invisible");
+    png_file(&d, "cut.png", &png_uri(2, 2, Some(&ALPHAS), [255; 3]));
+    let mtl = "# Converted by Meshlab Group\n\
+               newmtl\tmeshlab\t\t\nKa 0.2 0.2 0.2\nKd 1 1 1\nKs 1 1 1\nTr 1.000000\nillum 2\nNs 0\n\
+               newmtl dissolved\nKd 0.5 0.5 0.5\nd 0\n\
+               newmtl both\nd 0.000000\nTr 1.000000\n\
+               newmtl tr-cut\nTr 1\nmap_d cut.png\n\
+               newmtl d-cut\nd 0\nmap_d cut.png\n\
+               newmtl d-wins\nd 1\nTr 1\n\
+               newmtl mostly\nTr 0.9\n\
+               newmtl glass\nillum 7\nTr 1\nNi 1.5\n";
+    write(&d, "m.mtl", mtl);
+    let names = ["meshlab", "dissolved", "both", "tr-cut", "d-cut", "d-wins", "mostly", "glass"];
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n");
+    for n in names {
+        obj.push_str(&format!("usemtl {n}\nf 1/1 2/2 3/3\n"));
+    }
+    write(&d, "a.obj", obj);
+    let s = load_ok(&d.join("a.obj"));
+    let alpha = |n: &str| by_name(&s, n).alpha.clone();
+    let warned = |name: &str, key: &str| {
+        s.notes.iter().any(|n| {
+            n.starts_with("warning: ") && n.contains("m.mtl") && n.contains(&format!("'{name}'")) && n.contains(key)
+        })
+    };
+    assert_eq!(alpha("meshlab"), Alpha::OPAQUE, "MeshLab's Tr 1 is an opacity");
+    assert!(warned("meshlab", "Tr 1"), "{:?}", s.notes);
+    assert_eq!(alpha("dissolved"), Alpha::OPAQUE);
+    assert!(warned("dissolved", "d 0"), "{:?}", s.notes);
+    assert_eq!(alpha("both"), Alpha::OPAQUE);
+    assert!(warned("both", "d 0"), "d is the key read when both are given: {:?}", s.notes);
+    for name in ["tr-cut", "d-cut"] {
+        let a = alpha(name);
+        assert_eq!((a.mode, a.factor), (AlphaMode::Mask { cutoff: 0.5 }, 1.0), "{name}: the map alone cuts");
+        assert_eq!(a.coverage(vec2(0.75, 0.25)), 1.0, "{name}");
+        assert_eq!(a.coverage(vec2(0.25, 0.75)), 0.0, "{name}");
+    }
+    assert!(warned("tr-cut", "Tr 1") && warned("d-cut", "d 0"), "{:?}", s.notes);
+    assert_eq!(alpha("d-wins"), Alpha::OPAQUE);
+    assert_eq!(alpha("mostly"), Alpha { mode: AlphaMode::Blend, factor: 1.0 - 0.9, map: None });
+    assert_eq!(alpha("glass"), Alpha::OPAQUE);
+    for quiet in ["d-wins", "mostly", "glass"] {
+        assert!(!s.notes.iter().any(|n| n.contains(&format!("'{quiet}'"))), "{quiet}: {:?}", s.notes);
+    }
+
+    // The file as MeshLab writes it renders its object: every pixel on the square sees it.
+    write(&d, "q.mtl", "newmtl\tm\t\t\nKd 1 1 1\nTr 1.000000\nillum 2\n");
+    write(&d, "q.obj", "mtllib q.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl m\nf 1 2 3 4\n");
+    let mut q = load_ok(&d.join("q.obj"));
+    q.camera = Camera::look_at(vec3(0.5, 0.5, 2.0), vec3(0.5, 0.5, 0.0), Vec3::Y, 10.0, 1.0);
+    let (film, _) = render_normals(&q, &BruteForce::new(&q), &crate::tests::common::render::settings(8, 8, 1, 1));
+    assert!(film.pixels.iter().all(|p| (*p - vec3(0.5, 0.5, 1.0)).abs().max_element() < 1e-5), "{:?}", film.pixels);
 }

@@ -333,6 +333,90 @@ fn vertex_colours_are_read_from_every_format() {
     assert!(load_ok(&d.join("plain.obj")).mesh.colors.is_none());
 }
 
+/// Vertex colours no render can use leave the mesh loaded, with a warning naming the file,
+/// in every format that carries colours: a NaN or infinite colour (trimesh's `nancolor.obj`
+/// has a vertex of `nan nan nan`) leaves its vertex uncoloured (white), a negative channel
+/// is read as 0, every other vertex keeps its colour. A NaN position is still refused, in
+/// one line.
+#[test]
+fn unusable_vertex_colours_are_dropped_with_a_warning() {
+    use crate::load::ply::{BULK_READER, GENERAL_READER};
+    use base64::Engine;
+    let d = temp_dir("exporters-nan-colours");
+    let warned = |s: &Scene, file: &str, what: &str| {
+        s.notes.iter().any(|n| n.starts_with("warning: ") && n.contains(file) && n.contains(what))
+    };
+
+    write(
+        &d,
+        "nan.obj",
+        "v 0 0 0 0.5 0.5 0.5\nv 1 0 0 nan nan nan\nv 1 1 0 0.2 0.4 0.6\nv 0 1 0 -0.25 0.5 1\nf 1 2 3 4\n",
+    );
+    let s = load_ok(&d.join("nan.obj"));
+    assert_eq!(s.mesh.triangles.len(), 2);
+    let want = [Vec3::splat(0.5), Vec3::ONE, vec3(0.2, 0.4, 0.6), vec3(0.0, 0.5, 1.0)];
+    assert_eq!(s.mesh.colors.as_deref(), Some(&want[..]));
+    assert!(warned(&s, "nan.obj", "1 of 4 vertex colours are NaN or infinite"), "{:?}", s.notes);
+    assert!(warned(&s, "nan.obj", "1 of 4 vertex colours have a negative channel"), "{:?}", s.notes);
+
+    // PLY, binary floats: triangles go to the bulk reader, a quad to the general one.
+    let colours = [[0.5f32, 0.25, 1.0], [0.1, f32::NAN, 0.3], [0.0, 0.0, f32::INFINITY], [0.2, 0.2, 0.2]];
+    let corners = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]];
+    for (name, faces, reader) in [
+        ("tris.ply", &[&[0, 1, 2][..], &[0, 2, 3][..]][..], BULK_READER),
+        ("quad.ply", &[&[0, 1, 2, 3][..]][..], GENERAL_READER),
+    ] {
+        let mut ply = format!(
+            "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\n\
+             property float z\nproperty float red\nproperty float green\nproperty float blue\nelement face {}\n\
+             property list uchar int vertex_indices\nend_header\n",
+            faces.len()
+        )
+        .into_bytes();
+        for (p, c) in corners.iter().zip(&colours) {
+            ply.extend(p.iter().chain(c).flat_map(|x| x.to_le_bytes()));
+        }
+        for f in faces {
+            ply.push(f.len() as u8);
+            ply.extend(f.iter().flat_map(|&i: &i32| i.to_le_bytes()));
+        }
+        write(&d, name, ply);
+        let s = load_ok(&d.join(name));
+        assert_eq!(s.source.reader, reader, "{name}");
+        assert_eq!(s.mesh.triangles.len(), 2, "{name}");
+        let want = [vec3(0.5, 0.25, 1.0), Vec3::ONE, Vec3::ONE, Vec3::splat(0.2)];
+        assert_eq!(s.mesh.colors.as_deref(), Some(&want[..]), "{name}");
+        assert!(warned(&s, name, "2 of 4 vertex colours are NaN or infinite"), "{name}: {:?}", s.notes);
+    }
+
+    // glTF: COLOR_0 as f32.
+    let mut bytes: Vec<u8> = corners[..3].iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
+    bytes.extend(
+        [[0.5f32, 0.25, 1.0], [f32::NAN, 1.0, 1.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|c| c.to_le_bytes()),
+    );
+    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
+    write(
+        &d,
+        "nan.gltf",
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+              "buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{uri}"}}],
+              "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
+              "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                           {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
+        ),
+    );
+    let s = load_ok(&d.join("nan.gltf"));
+    assert_eq!(s.mesh.triangles.len(), 1);
+    assert_eq!(s.mesh.colors.as_deref(), Some(&[vec3(0.5, 0.25, 1.0), Vec3::ONE, Vec3::Y][..]));
+    assert!(warned(&s, "nan.gltf", "1 of 3 vertex colours are NaN or infinite"), "{:?}", s.notes);
+
+    // A NaN position, coloured or not, is still an error of one line naming the file.
+    write(&d, "nanpos.obj", "v 0 0 0 1 1 1\nv nan 0 0 1 1 1\nv 0 1 0 1 1 1\nf 1 2 3\n");
+    let e = format!("{:#}", load(&d.join("nanpos.obj"), &LoadOptions::default()).expect_err("a NaN position"));
+    assert!(e.contains("nanpos.obj") && e.contains("NaN") && !e.contains('\n'), "{e}");
+}
+
 /// A vertex colour multiplies the base colour: a plane of albedo 0.8 coloured (1, 0.5, 0.25)
 /// at every vertex under the hemisphere light of radiance 1.5 has radiance 0.8 x colour x 1.5
 /// (the irradiance pi L times albedo / pi).

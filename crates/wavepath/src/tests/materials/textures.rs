@@ -145,3 +145,57 @@ fn box_textured_shows_its_embedded_texture() {
     let spread = colours.iter().fold(Vec3::ZERO, |a, c| a.max(*c)) - colours.iter().fold(Vec3::ONE, |a, c| a.min(*c));
     assert!(checked > 300 && spread.max_element() > 0.5, "checked {checked}, colour spread {spread}");
 }
+
+/// The uvs are freed only when no material has a decoded map of any kind: each map alone,
+/// decoded, keeps them; the same map not decoded (a file that could not be read) does not.
+#[test]
+fn every_kind_of_map_keeps_the_uvs_it_is_read_through() {
+    use crate::scene::alpha::AlphaMap;
+    use crate::scene::texture::TextureImage;
+    use crate::scene::{Layers, Material, Mesh, Relief, ReliefMap, SpecularGlossinessMap};
+    use std::sync::Arc;
+    let image = Arc::new(TextureImage { width: 1, height: 1, texels: vec![Vec3::ONE] });
+    let texture = |decoded: bool| {
+        let mut t = crate::scene::Texture::obj("t.png".into());
+        t.image = decoded.then(|| image.clone());
+        t
+    };
+    type Give = fn(&mut Material, crate::scene::Texture);
+    let kinds: [(&str, Give); 8] = [
+        ("albedo", |m, t| m.albedo_texture = Some(t)),
+        ("emission", |m, t| m.emission_texture = Some(t)),
+        ("metallic-roughness", |m, t| m.metallic_roughness_texture = Some(t)),
+        ("normal", |m, t| m.relief = Some(ReliefMap { texture: t, relief: Relief::Normal { scale: 1.0 } })),
+        ("height", |m, t| m.relief = Some(ReliefMap { texture: t, relief: Relief::Height { bm: 1.0 } })),
+        ("specular-glossiness", |m, t| {
+            m.specular_glossiness_texture = Some(Box::new(SpecularGlossinessMap { specular: t.clone(), glossiness: t }))
+        }),
+        ("transmission", |m, t| {
+            m.layers = Some(Box::new(Layers { transmission: 1.0, transmission_texture: Some(t), ..Layers::default() }))
+        }),
+        ("alpha", |m, t| {
+            let mut a = AlphaMap::obj("a.png".into());
+            if t.image.is_some() {
+                a.image = Some(Arc::new(crate::scene::alpha::AlphaImage { width: 1, height: 1, texels: vec![1.0] }));
+            }
+            m.alpha.map = Some(a);
+        }),
+    ];
+    let mesh = Mesh {
+        positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+        uvs: Some(vec![Vec2::ZERO, Vec2::X, Vec2::Y]),
+        triangles: vec![[0, 1, 2]],
+        material_ids: crate::scene::MaterialIds::uniform(1, 1),
+        ..Mesh::default()
+    };
+    for (kind, give) in kinds {
+        for decoded in [true, false] {
+            let mut m = Material::diffuse("m", Vec3::splat(0.5));
+            give(&mut m, texture(decoded));
+            assert_eq!(m.maps().len(), if kind == "specular-glossiness" { 2 } else { 1 }, "{kind}");
+            let mut s = Scene { mesh: mesh.clone(), materials: vec![Material::default(), m], ..Scene::default() };
+            s.drop_unused_uvs();
+            assert_eq!(s.mesh.uvs.is_some(), decoded, "a {kind} map, decoded: {decoded}");
+        }
+    }
+}

@@ -84,7 +84,7 @@ pub fn parse(text: &str, dir: &Path) -> Result<Library, String> {
     let mut materials = Vec::with_capacity(entries.len());
     for ((e, d), r) in entries.iter().zip(&mut dissolves).zip(&mut reliefs) {
         let mut m = illum::material(e, &mut notes);
-        m.alpha = d.take();
+        m.alpha = d.take(&e.name, &mut notes);
         m.relief = r.take();
         materials.push(m);
     }
