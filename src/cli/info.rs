@@ -16,8 +16,6 @@ pub fn run(a: &InfoArgs) -> Result<()> {
         scene.set_environment(Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?)));
     }
     let load_s = t0.elapsed().as_secs_f64();
-    // The camera as a render at the default resolution sees it.
-    scene.camera.fit_to(800.0, 600.0);
     // The settings a render of this file starts from (its dialect's defaults), as the
     // command line uses them.
     let settings = Settings::for_scene(&scene);
@@ -49,7 +47,8 @@ fn environment(env: &Environment) -> String {
 }
 
 pub fn summary_json(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> serde_json::Value {
-    let c = &scene.camera;
+    // The camera as a render with these settings sees it.
+    let c = &settings.image.camera(&scene.camera);
     let lights: Vec<_> = scene.lights.iter().map(|l| json!({ "kind": l.kind(), "detail": format!("{l:?}") })).collect();
     let materials: Vec<_> = scene
         .materials
@@ -111,7 +110,8 @@ pub fn summary_json(scene: &Scene, settings: &Settings, effects: &Effects, load_
 fn text(scene: &Scene, settings: &Settings, effects: &Effects, load_s: f64) -> String {
     use std::fmt::Write;
     let mut o = String::new();
-    let c = &scene.camera;
+    // The camera as a render with these settings sees it.
+    let c = &settings.image.camera(&scene.camera);
     let _ = writeln!(o, "scene:      {}", scene.name);
     let _ = writeln!(o, "load time:  {load_s:.4} s");
     let _ = writeln!(o, "read by:    {} ({} dialect)", scene.source.reader, scene.source.dialect.name());

@@ -20,7 +20,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         Some(p) => bail!("{}: a part is written as OpenEXR; give -f PART.exr", p.display()),
         None => bail!("--part needs -f PART.exr (where the part file goes)"),
     };
-    let scene = prepare_scene(a, &checked)?;
+    let scene = prepare_scene(a)?;
     let s = settings(a, Settings::for_scene(&scene))?;
     if s.accel.use_bvh {
         super::check_build_memory(&scene, s.accel.bvh.leaves, a.max_memory)?;

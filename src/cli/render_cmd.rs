@@ -12,8 +12,9 @@ use wavepath::{Extent, RenderPlan};
 use wavepath::{LoadOptions, default_scene};
 use wavepath::{Scene, read_camera_file};
 
-/// Loads the scene the arguments name (or the default) with the camera adjustments applied.
-pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
+/// Loads the scene the arguments name (or the default) with the camera file and lens
+/// applied; its fit to the image is the render plan's (from the settings' `--fov`).
+pub fn prepare_scene(a: &RenderArgs) -> Result<Scene> {
     let mut scene = match &a.scene {
         Some(p) => super::load_scene_within(
             p,
@@ -31,7 +32,7 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
     if let Some(c) = &a.camera_file {
         scene.camera = read_camera_file(c)?;
     }
-    scene.camera = request(a).camera(scene.camera, s);
+    scene.camera = request(a).camera(scene.camera);
     if let Some(e) = &a.envmap {
         scene.set_environment(wavepath::Environment::Map(std::sync::Arc::new(wavepath::EnvMap::load(e)?)));
     }
@@ -41,11 +42,11 @@ pub fn prepare_scene(a: &RenderArgs, s: &Settings) -> Result<Scene> {
 pub fn run(a: &RenderArgs) -> Result<()> {
     // The flags are checked before the (possibly long) load, then applied on top of the
     // defaults of the dialect the loader found.
-    let checked = settings(a, Settings::default())?;
+    settings(a, Settings::default())?;
     let out: PathBuf = a.output.clone().unwrap_or_else(|| PathBuf::from("wavepath.png"));
     check_output_extension(&out)?;
     let t0 = Instant::now();
-    let scene = super::with_spinner("loading", || prepare_scene(a, &checked))?;
+    let scene = super::with_spinner("loading", || prepare_scene(a))?;
     let s = settings(a, Settings::for_scene(&scene))?;
     let load_s = t0.elapsed().as_secs_f64();
     eprintln!(

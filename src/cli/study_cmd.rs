@@ -117,12 +117,11 @@ pub fn run(a: &StudyArgs) -> Result<()> {
     // Every flag is checked before the load, as a render's are.
     let request = request(a);
     config(a, request.apply(Settings::default(), flag)?)?;
-    let mut scene = match &a.scene {
+    let scene = match &a.scene {
         Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
         None => default_scene(),
     };
     let cfg = config(a, wavepath_apps::study::base_settings(&scene, &request, flag)?)?;
-    scene.camera = request.camera(scene.camera, &cfg.base);
     let identity = wavepath_apps::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));

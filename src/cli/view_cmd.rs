@@ -12,13 +12,14 @@ use wavepath_apps::view::{ViewOptions, Viewer};
 const DEFAULT_CAP: u32 = 1024;
 
 pub fn run(a: &ViewArgs) -> Result<()> {
-    let checked = settings(&a.render, Settings::default())?;
+    // The flags are checked before the (possibly long) load.
+    settings(&a.render, Settings::default())?;
     if let Some(d) = &a.save_dir
         && !d.is_dir()
     {
         bail!("{}: --save-dir is not a folder", d.display());
     }
-    let scene = super::with_spinner("loading", || prepare_scene(&a.render, &checked))?;
+    let scene = super::with_spinner("loading", || prepare_scene(&a.render))?;
     let mut s = settings(&a.render, Settings::for_scene(&scene))?;
     if a.render.spp == 1 {
         s.sampling.spp = DEFAULT_CAP;

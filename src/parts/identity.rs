@@ -45,8 +45,9 @@ pub fn pixels_hash(acc: &Accumulator) -> String {
     format!("{:016x}", h.0)
 }
 
-/// Hash of the scene as loaded and prepared (camera file, lens and aspect applied): the mesh
-/// arrays byte for byte, everything else through its `Debug` form (floats print round-trip).
+/// Hash of the scene as loaded and prepared (camera file and lens applied; the camera's fit
+/// to the image is the settings', in [`settings_key`]): the mesh arrays byte for byte,
+/// everything else through its `Debug` form (floats print round-trip).
 pub fn scene_hash(scene: &Scene) -> String {
     let mut h = Fnv::new();
     let m = &scene.mesh;

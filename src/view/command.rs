@@ -14,8 +14,7 @@ pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
     let s = &st.settings;
     // The fields of view as this image size has them, written out (the file's are kept as
     // written).
-    let mut cam = st.orbit.camera;
-    cam.fit_to(s.image.width as f32, s.image.height as f32);
+    let cam = s.image.camera(&st.orbit.camera);
     let quote = |p: &str| {
         if p.chars().all(|c| c.is_ascii_alphanumeric() || "/._-+".contains(c)) {
             p.to_string()

@@ -17,8 +17,8 @@ use std::sync::{Arc, Condvar, Mutex, OnceLock};
 use std::time::{Duration, Instant};
 use wavepath::RouletteKind;
 use wavepath::{Bvh, Intersector};
+use wavepath::{Camera, Environment, Scene};
 use wavepath::{Canvas, Film, Tonemap};
-use wavepath::{Environment, Scene};
 use wavepath::{Extent, RenderPlan};
 use wavepath::{Settings, Shading};
 
@@ -102,8 +102,7 @@ impl Session {
                 Change::Zoom(f) => orbit.zoom(f),
                 Change::Reset => *orbit = st.home,
                 Change::Focus(x, y) => {
-                    let mut cam = orbit.camera;
-                    cam.fit_to(s.image.width as f32, s.image.height as f32);
+                    let cam = s.image.camera(&orbit.camera);
                     let ray = cam.generate_ray(x, 1.0 - y);
                     if let Some(h) = accel.closest_hit(&ray, &mut Default::default()) {
                         // The lens focuses at a distance along the view axis.
@@ -196,7 +195,9 @@ impl Session {
             let (width, height) = (s.image.width, s.image.height);
             let fresh = st.generation != shown;
             if fresh {
-                // The scene changes with the generation: the old plan (which reads it) goes first.
+                // The scene changes with the generation: the old plan (which reads it) goes
+                // first. Only the camera's pose and lens are written into it: each plan fits
+                // the camera to its own image size.
                 plan = None;
                 scene.camera = st.orbit.camera;
                 scene.set_environment(if st.environment { environment.clone() } else { Environment::None });
@@ -204,7 +205,7 @@ impl Session {
                 (taken, band, pass_s) = (0, 0, 0.0);
                 totals = Totals::default();
                 // A coarse image at once: a quarter of the resolution, one sample, a one-off
-                // render with its own settings and camera.
+                // render with its own settings (and so its own fit of the camera).
                 let (w, h) = ((width / 4).max(1), (height / 4).max(1));
                 let mut quick = s.clone();
                 quick.image.width = w;
@@ -212,14 +213,11 @@ impl Session {
                 quick.sampling.spp = 1;
                 quick.sampling.adaptive = None;
                 quick.sampling.sample_range = None;
-                scene.camera.fit_to(w as f32, h as f32);
                 let t = Instant::now();
                 let quick_out = wavepath::render_with_progress(&scene, bvh, &quick, &|_| {});
                 let quick_s = t.elapsed();
                 // The plan of every pass: the full resolution's camera, all samples at once
                 // per pixel (no adaptive batches).
-                scene.camera = st.orbit.camera;
-                scene.camera.fit_to(width as f32, height as f32);
                 let mut full = s.clone();
                 full.sampling.adaptive = None;
                 full.sampling.sample_range = None;
@@ -325,8 +323,12 @@ impl Session {
         spp: u32,
         (w, h): (usize, usize),
     ) -> serde_json::Value {
-        let (scene, effects) = (plan.scene(), plan.effects());
-        let boxes = st.bvh_depth.map(|d| outlines(bvh, scene, d, w, h)).unwrap_or_default();
+        let effects = plan.effects();
+        // The camera of the image shown: the plan's at full size, the coarse image's own fit
+        // (of the same scene camera) at a quarter of it.
+        let image = wavepath::ImageSettings { width: w, height: h, ..plan.settings().image };
+        let camera = image.camera(&plan.scene().camera);
+        let boxes = st.bvh_depth.map(|d| outlines(bvh, &camera, d)).unwrap_or_default();
         serde_json::json!({
             "spp": spp,
             "spp_cap": st.settings.sampling.spp,
@@ -423,12 +425,10 @@ fn encode(film: &Film, last: bool) -> Vec<u8> {
     image
 }
 
-/// The boxes of the BVH at `depth` projected onto a `w x h` image: each box as its 12 edges,
-/// segments (x0, y0, x1, y1) in [0, 1]^2 (top-left origin), edges behind the camera dropped.
-/// At most 4096 boxes.
-fn outlines(bvh: &Bvh, scene: &Scene, depth: u32, w: usize, h: usize) -> Vec<[f32; 4]> {
-    let mut cam = scene.camera;
-    cam.fit_to(w as f32, h as f32);
+/// The boxes of the BVH at `depth` projected onto the image of `cam` (fitted to it): each
+/// box as its 12 edges, segments (x0, y0, x1, y1) in [0, 1]^2 (top-left origin), edges
+/// behind the camera dropped. At most 4096 boxes.
+fn outlines(bvh: &Bvh, cam: &Camera, depth: u32) -> Vec<[f32; 4]> {
     let (tx, ty) = ((cam.hfov_deg.to_radians() * 0.5).tan(), (cam.vfov_deg.to_radians() * 0.5).tan());
     let project = |p: Vec3| -> Option<(f32, f32)> {
         let d = cam.c2w.transpose() * (p - cam.position);

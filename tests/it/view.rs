@@ -204,6 +204,37 @@ fn view_converges_to_the_offline_render_and_its_command_reproduces_the_view() {
     assert!(view.interrupt().contains("stopped"));
 }
 
+/// A new size is a new plan: the view fits the file's camera to it by the `--fov` rule, as an
+/// offline render at that size does, and going back to the first size gives the first image
+/// (no fit was written into the view's scene on the way).
+#[test]
+fn view_refits_the_camera_to_a_new_size_as_an_offline_render_does() {
+    let dir = temp_dir("view-resize");
+    let args = |w: &str, h: &str| -> Vec<String> {
+        ["-r", w, h, "-s", "8", "-m", "2", "-t", "2", "--fov", "frame"].map(String::from).to_vec()
+    };
+    let offline = |w: &str, h: &str| {
+        let out = dir.join(format!("offline-{w}x{h}.exr"));
+        let r = Command::new(wavepath_bin()).args(args(w, h)).args(["-f", out.to_str().unwrap()]).output().unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        exr_pixels(&std::fs::read(&out).unwrap())
+    };
+    let view = View::start(&args("64", "48").iter().map(String::as_str).collect::<Vec<_>>());
+    view.wait(1, |v| v["converged"] == true);
+    let (_, first) = view.get("/image.exr");
+    let first = exr_pixels(&first);
+    assert_same_image(&first, &offline("64", "48"), "first size vs offline");
+    let g = generation(&view.post("/control?res=36x40").1);
+    view.wait(g, |v| v["converged"] == true && v["width"] == 36);
+    let (_, resized) = view.get("/image.exr");
+    assert_same_image(&exr_pixels(&resized), &offline("36", "40"), "new size vs offline");
+    let g = generation(&view.post("/control?res=64x48").1);
+    view.wait(g, |v| v["converged"] == true && v["width"] == 64);
+    let (_, back) = view.get("/image.exr");
+    assert_same_image(&exr_pixels(&back), &first, "first size again");
+    assert!(view.interrupt().contains("stopped"));
+}
+
 /// Bad requests get a status and a message; nothing a client sends reaches the file system;
 /// several frame streams can watch one render; Ctrl-C stops it cleanly.
 #[test]

@@ -299,13 +299,14 @@ impl PyScene {
         {
             return Err(value_error("progress must be callable as progress(done, total)"));
         }
-        // The render's camera is swapped in for its duration (queries from other threads
-        // wait); the scene's own is put back whatever happens.
+        // The render's camera (the one given, with the lens values) is swapped in for its
+        // duration (queries from other threads wait); the scene's own is put back whatever
+        // happens. Its fit to the image is the render plan's, from the settings.
         let mut guard = self.write(py)?;
         *self.rendering.lock().unwrap_or_else(|e| e.into_inner()) = Some(std::thread::current().id());
         let request = render::request(&o)?;
         let s: Settings = render::settings(&guard, &request)?;
-        let cam = request.camera(given_camera.unwrap_or(guard.camera), &s);
+        let cam = request.camera(given_camera.unwrap_or(guard.camera));
         let saved = std::mem::replace(&mut guard.camera, cam);
         let scene: &Scene = &guard;
         let result = (|| {

@@ -7,7 +7,7 @@
 //! stays the same, because every kernel part is exact when its effect is not needed (it
 //! adds zero, finds no light, or stops no path).
 
-use crate::scene::{Environment, Light, Scene};
+use crate::scene::{Camera, Environment, Light, Scene};
 use crate::settings::{RouletteKind, Settings, Shading};
 
 /// One effect that is on, and the reason it is on.
@@ -73,6 +73,8 @@ pub struct Effects {
 struct Facts<'a> {
     scene: &'a Scene,
     settings: &'a Settings,
+    /// The camera the render sees through, as its plan fits it.
+    camera: Camera,
     /// `--shading normals`: no light transport at all.
     normals: bool,
     /// The depth light transport runs to (`-m`, at most 1 with `--shading direct`).
@@ -106,6 +108,7 @@ impl<'a> Facts<'a> {
         Facts {
             scene,
             settings,
+            camera: settings.image.camera(&scene.camera),
             normals,
             depth,
             lit: !normals && depth >= 1,
@@ -329,7 +332,7 @@ const RULES: &[Rule] = &[
         name: "thin-lens",
         flag: |e| &mut e.thin_lens,
         rule: |f, _| {
-            let camera = &f.scene.camera;
+            let camera = &f.camera;
             (camera.lens_radius > 0.0)
                 .then(|| format!("lens radius {}, focal distance {}", camera.lens_radius, camera.focal_distance))
         },

@@ -4,14 +4,16 @@ use crate::accel::{Intersector, TraceCounters};
 use crate::geometry::Ray;
 use crate::sampling::Sampler;
 use crate::scene::Scene;
+use crate::settings::ImageSettings;
 use glam::Vec3;
 use rayon::prelude::*;
 
 /// Camera rays through pixel centres, row-major from the bottom-left (as the renderer
-/// generates them), with the camera fitted to the image by its own rule.
+/// generates them), through the camera a render of a `w x h` image with the default
+/// field-of-view rule sees through ([`ImageSettings::camera`]).
 pub fn primary_rays(scene: &Scene, w: usize, h: usize) -> Vec<Ray> {
-    let mut cam = scene.camera;
-    cam.fit_to(w as f32, h as f32);
+    let image = ImageSettings { width: w, height: h, ..ImageSettings::default() };
+    let cam = image.camera(&scene.camera);
     (0..w * h)
         .map(|i| {
             let (x, y) = (i % w, i / w);

@@ -196,7 +196,7 @@ pub struct Request {
     pub isa: Option<Isa>,
     pub all_effects: Option<bool>,
     pub cs184_light_pdf: Option<bool>,
-    /// How a CS184 camera's field of view follows the resolution ([`Request::camera`]).
+    /// How a CS184 camera's field of view follows the resolution (the settings' `image.fov`).
     pub fov: Option<FovRule>,
     pub lens_radius: Option<f64>,
     pub focal_distance: Option<f64>,
@@ -204,7 +204,7 @@ pub struct Request {
 
 impl Request {
     /// `base` (normally [`Settings::for_scene`] of the scene) with every value given
-    /// applied, or the first value out of range, named by `names`. The camera's values are
+    /// applied, or the first value out of range, named by `names`. The lens values are
     /// checked here too ([`Request::camera`] applies them).
     pub fn apply(&self, base: Settings, names: Names) -> Result<Settings, InvalidValue> {
         let mut s = base;
@@ -255,6 +255,7 @@ impl Request {
         set(&mut s.cs184.light_pdf, self.cs184_light_pdf);
         set(&mut s.sampling.seed, self.seed);
         set(&mut s.sampling.sampler, self.sampler);
+        set(&mut s.image.fov, self.fov);
         // Direct light alone at depth 1, global illumination beyond, unless named.
         s.paths.shading = self.shading.unwrap_or(Shading::for_depth(s.paths.max_depth));
         if let Some(p) = self.cell {
@@ -282,11 +283,11 @@ impl Request {
         Ok(s)
     }
 
-    /// `cam` for a render with `settings` (what [`Request::apply`] gave): fitted to the
-    /// image by the request's field-of-view rule, with the lens values given.
-    pub fn camera(&self, cam: Camera, settings: &Settings) -> Camera {
+    /// `cam` with the lens values given. The lens is the camera's, whatever the image; its
+    /// fit to the image is not applied here but by the render plan, from the settings'
+    /// field-of-view rule ([`Request::apply`] sets it).
+    pub fn camera(&self, cam: Camera) -> Camera {
         let mut cam = cam;
-        cam.fit_by(self.fov.unwrap_or_default(), settings.image.width, settings.image.height);
         if let Some(r) = self.lens_radius {
             cam.lens_radius = r as f32;
         }

@@ -1,6 +1,7 @@
 //! Render settings: everything the command line can change about a render.
 
 use crate::cs184::Dialect;
+use crate::scene::{Camera, FovRule};
 
 /// What a pixel shows.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -82,11 +83,24 @@ pub struct ImageSettings {
     pub height: usize,
     /// Only this rectangle of the image (`-p`); `None`: all of it.
     pub cell: Option<Cell>,
+    /// How a CS184 camera's field of view follows the image size (`--fov`). A setting of the
+    /// image, not of the scene: the render plan fits a copy of the scene's camera by it
+    /// ([`ImageSettings::camera`]), so one scene renders at any size and rule unchanged.
+    pub fov: FovRule,
 }
 
 impl Default for ImageSettings {
     fn default() -> Self {
-        ImageSettings { width: 800, height: 600, cell: None }
+        ImageSettings { width: 800, height: 600, cell: None, fov: FovRule::default() }
+    }
+}
+
+impl ImageSettings {
+    /// The camera this image sees through: `camera` (the scene's) fitted to the image's size
+    /// by its rule. Every render-time reader of the camera goes through this, so they all
+    /// see the same fields of view.
+    pub fn camera(&self, camera: &Camera) -> Camera {
+        camera.fitted(self.fov, self.width, self.height)
     }
 }
 
@@ -333,7 +347,7 @@ impl Settings {
 
     /// The pixel rectangle to render: the `-p` cell clipped to the image, or the whole image.
     pub fn region(&self) -> Cell {
-        let ImageSettings { width, height, cell } = self.image;
+        let ImageSettings { width, height, cell, .. } = self.image;
         match cell {
             Some(c) => {
                 let x = c.x.min(width);

@@ -5,7 +5,7 @@ use crate::sampling::{Sampler, warp};
 use crate::scene::Camera;
 use glam::Vec3;
 
-/// The scene's camera and its pinhole terms.
+/// The render's camera (the scene's fitted to the image) and its pinhole terms.
 #[derive(Clone, Copy, Debug)]
 pub struct CameraTerms {
     pub camera: Camera,

@@ -1,5 +1,6 @@
-//! Shading of materials that are not Lambertian (mirror, glass, rough conductors), shared
-//! by both integrators and used only when the scene has such a material.
+//! Shading of materials that are not Lambertian (mirror, glass, rough conductors) for the
+//! recursive reference (the wavefront's lane kernels reach the same bits through the models'
+//! `LaneModel` form), used only when the scene has such a material.
 //!
 //! Light is counted exactly once per path:
 //! - Lambertian vertices: light sampling and the cosine-sampled ray, weighted by the power

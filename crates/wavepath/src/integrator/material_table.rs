@@ -37,8 +37,6 @@ pub struct MaterialTable<'a> {
     pub models: Vec<Model>,
     /// Some material is not Lambertian: shading goes through [`ShadingFrame`](super::material::ShadingFrame).
     pub non_diffuse: bool,
-    /// Per material: it is Lambertian (its hits are shaded by the diffuse lane kernel).
-    pub lambertian: Vec<bool>,
     /// Albedo textures per material; empty lookups when the scene has none.
     pub textures: Textures,
     /// What the glTF material extensions need per render ([`LayerData`]).
@@ -69,7 +67,6 @@ impl<'a> MaterialTable<'a> {
                 })
                 .collect(),
             non_diffuse: models.iter().any(|m| m.kind() != Kind::Diffuse),
-            lambertian: models.iter().map(|m| matches!(m, crate::bsdf::Model::Lambert(_))).collect(),
             models,
             textures: Textures::new(scene),
             layers: LayerData::new(scene),

@@ -1,8 +1,10 @@
-//! What happens at one path vertex, shared by both integrators: emission, direct light
-//! (light or hemisphere sampling) and the continuation ray, with the seed's semantics.
+//! What happens at one path vertex: emission, direct light (light or hemisphere sampling)
+//! and the continuation ray, with the seed's semantics.
 //!
-//! The wavefront integrator spreads this work over queues and stages; the recursive
-//! reference calls it one ray at a time. Each vertex draws its random numbers from its own
+//! The recursive reference calls the vertex code here one ray at a time; the wavefront
+//! integrator's lane kernels (`wavefront::lanes`) leave vertices with the same per-sample
+//! functions and the parts here (the vertex, arrivals, the rules), and are tested against
+//! this vertex code bit for bit. Each vertex draws its random numbers from its own
 //! stream (pixel, sample, depth), at fixed dimensions: 0 continuation direction (two numbers
 //! from one hash), 2 Russian roulette, 3.. light or hemisphere samples (one dimension per
 //! 2-d sample, plus one for a light that needs a third number).
@@ -37,7 +39,6 @@ use streams::Streams;
 
 use crate::geometry::{Hit, Ray};
 use crate::lights::SampledLight;
-use crate::sampling::numbers::Layout;
 use crate::sampling::{Frame, Numbers, warp};
 use crate::scene::Scene;
 use crate::settings::Settings;
@@ -57,7 +58,8 @@ pub(crate) const DIM_LOBE: u32 = 1;
 /// own type, and the methods that need several of them.
 pub struct Transport<'a> {
     pub scene: &'a Scene,
-    /// The camera's terms (camera rays).
+    /// The camera's terms (camera rays): the scene's camera fitted to the image by the
+    /// settings, never the scene's own, which keeps the file's rule for other sizes.
     pub camera: CameraTerms,
     /// The seed and pattern every random number comes from.
     pub streams: Streams,
@@ -67,36 +69,6 @@ pub struct Transport<'a> {
     pub lights: LightSampler,
     /// Depth, what counts, direct-light strategy, MIS and roulette.
     pub rules: Rules,
-    /// The numbers a non-Lambertian vertex reads, by dimension ([`shaded_layout`]): what a
-    /// lane kernel draws ahead for it.
-    pub shaded_numbers: Layout,
-}
-
-/// Most dimensions a lane kernel draws ahead per vertex; a vertex reading more (many lights,
-/// many samples) draws the rest from its stream.
-const MAX_DRAWN: usize = 48;
-
-/// The dimensions [`Transport::direct_rays_shaded`] and [`Transport::scatter_shaded`] read,
-/// and as what: the continuation's pair (0), the lobe choice ([`DIM_LOBE`]), roulette
-/// ([`DIM_ROULETTE`]), then the hemisphere's pairs or each light's samples (a pair, and a
-/// third number for a light that reads one).
-fn shaded_layout(lights: &LightSampler, rules: &Rules) -> Layout {
-    let mut one_d = vec![false, true, true];
-    debug_assert_eq!((DIM_LOBE, DIM_ROULETTE, DIM_DIRECT), (1, 2, 3));
-    if rules.hemisphere {
-        one_d.extend(std::iter::repeat_n(false, rules.direct_per_vertex as usize));
-    } else {
-        for (i, light) in lights.set.lights.iter().enumerate() {
-            // A pair per sample, and the third number after it for a light that reads one.
-            let sample: &[bool] = if light.uses_third_number() { &[false, true] } else { &[false] };
-            for _ in 0..lights.set.samples_for(i, rules.light_samples) {
-                one_d.extend_from_slice(sample);
-            }
-        }
-    }
-    let complete = one_d.len() <= MAX_DRAWN;
-    one_d.truncate(MAX_DRAWN);
-    Layout { one_d, complete }
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -128,13 +100,20 @@ impl Vertex {
     /// otherwise let light leak through the surface.
     #[inline(always)]
     pub fn consistent(&self, wi: Vec3) -> bool {
-        !self.bumped || (wi.dot(self.ng) > 0.0) == (wi.dot(self.ns) > 0.0)
+        consistent(self.bumped, self.ng, self.ns, wi)
     }
 
     #[inline(always)]
     pub fn shading_point(&self) -> ShadingPoint {
         ShadingPoint { p: self.p, p_error: self.p_error, ng: self.ng, ns: self.ns }
     }
+}
+
+/// [`Vertex::consistent`] of a point with normals `ng`, `ns` (`bumped`: from a relief map),
+/// for the lane kernels, which hold points rather than vertices.
+#[inline(always)]
+pub fn consistent(bumped: bool, ng: Vec3, ns: Vec3, wi: Vec3) -> bool {
+    !bumped || (wi.dot(ng) > 0.0) == (wi.dot(ns) > 0.0)
 }
 
 /// The normals turned toward the side a ray along `dir` arrives from, and whether that is
@@ -174,10 +153,9 @@ impl<'a> Transport<'a> {
         let rules = Rules::new(settings, effects, &lights.set);
         Transport {
             scene,
-            camera: CameraTerms::new(&scene.camera),
+            camera: CameraTerms::new(&settings.image.camera(&scene.camera)),
             streams: Streams::new(settings),
             materials: MaterialTable::new(scene),
-            shaded_numbers: shaded_layout(&lights, &rules),
             rules,
             lights,
         }

@@ -1,7 +1,7 @@
 //! What a render derives from (scene, settings) before its first wave, built once and shared
 //! by every frame, viewer band and part cell that renders the same scene with the same
 //! settings: the effects table, the [`Transport`] (light set and its sampling tables,
-//! material table, textures, camera terms, path rules) and the lane kernels that run.
+//! material table, textures, the camera fitted to the image, path rules) and the lane kernels that run.
 //!
 //! What one piece of such a render changes, the pixel rectangle and the range of sample
 //! indices, is an [`Extent`] beside the plan, not part of it: a split render or the viewer's
@@ -10,7 +10,7 @@
 use super::Transport;
 use super::wavefront::Lanes;
 use crate::effects::Effects;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::settings::{Cell, Settings};
 
 /// Everything derived from one scene and one set of settings, ready for any number of
@@ -67,6 +67,12 @@ impl<'s> RenderPlan<'s> {
 
     pub fn scene(&self) -> &'s Scene {
         self.transport.scene
+    }
+
+    /// The camera the plan's renders see through: the scene's camera fitted to the image by
+    /// the settings' rule ([`ImageSettings::camera`](crate::settings::ImageSettings::camera)).
+    pub fn camera(&self) -> &Camera {
+        &self.transport.camera.camera
     }
 
     pub fn transport(&self) -> &Transport<'s> {

@@ -80,7 +80,7 @@ pub fn render_plan(
 ) -> Result<RenderOutput> {
     let settings = plan.settings_in(extent);
     if settings.paths.shading == Shading::Normals {
-        let (film, stats) = render_normals(plan.scene(), accel, &settings);
+        let (film, stats) = render_normals(plan.scene(), plan.camera(), accel, &settings);
         let samples = vec![settings.sampling.spp; film.pixels.len()];
         return Ok(RenderOutput { film, stats, samples });
     }

@@ -1,7 +1,7 @@
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::Film;
 use crate::sampling::Sampler;
-use crate::scene::Scene;
+use crate::scene::{Camera, Scene};
 use crate::settings::Settings;
 use crate::stats::RenderStats;
 use glam::Vec3;
@@ -13,7 +13,13 @@ use std::time::Instant;
 ///
 /// Samples are jittered inside the pixel (one uniform offset per sample; the pixel centre
 /// when `spp` is 1, as the reference does), with random numbers from (seed, pixel, sample).
-pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Settings) -> (Film, RenderStats) {
+/// Rays leave `camera`, already fitted to the image (a render plan's), not the scene's own.
+pub fn render_normals(
+    scene: &Scene,
+    camera: &Camera,
+    accel: &dyn Intersector,
+    settings: &Settings,
+) -> (Film, RenderStats) {
     let (w, h) = (settings.image.width, settings.image.height);
     let region = settings.region();
     let spp = settings.sampling.spp.max(1);
@@ -36,7 +42,7 @@ pub fn render_normals(scene: &Scene, accel: &dyn Intersector, settings: &Setting
                     } else {
                         Sampler::for_sample(settings.sampling.seed, pixel, s as u64).next_2d()
                     };
-                    let ray = scene.camera.generate_ray((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
+                    let ray = camera.generate_ray((x as f32 + jx) / w as f32, (y as f32 + jy) / h as f32);
                     if let Some(hit) = accel.closest_hit(&ray, &mut c) {
                         let sp = scene.surface_point(&ray, &hit);
                         let n = scene.relief_normal(&hit, sp.shading_normal, sp.uv, sp.material);

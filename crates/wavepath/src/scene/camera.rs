@@ -131,12 +131,17 @@ impl Camera {
         self.fit_to(aspect, 1.0);
     }
 
-    /// [`fit_to`](Self::fit_to) a `width x height` image by `rule`.
-    pub fn fit_by(&mut self, rule: FovRule, width: usize, height: usize) {
+    /// This camera as a `width x height` image under `rule` sees through it. A copy, so that
+    /// the scene keeps the file's camera and its rule: a render at another size (the
+    /// viewer's resized window, a second render of one scene) fits from what the file said,
+    /// not from an earlier fit.
+    pub fn fitted(&self, rule: FovRule, width: usize, height: usize) -> Camera {
+        let mut cam = *self;
         if rule == FovRule::Frame {
-            self.whole_frame();
+            cam.whole_frame();
         }
-        self.fit_to(width as f32, height as f32);
+        cam.fit_to(width as f32, height as f32);
+        cam
     }
 
     /// The CS184 rule turned into "the whole 800x600 picture at any size": the vertical

@@ -1,6 +1,6 @@
 //! Stage 1: camera rays for every (pixel, sample) slot of a wave.
 
-use super::lane_width::{LaneKernel, ShadeWidth};
+use super::lanes::width::{LaneKernel, ShadeWidth};
 use super::queues::PathQueue;
 use crate::integrator::Transport;
 use crate::sampling::rng8::Hasher;

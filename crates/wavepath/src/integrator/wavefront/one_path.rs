@@ -1,14 +1,12 @@
-//! One path's shading, in two halves: what the path finds where it arrives ([`arrive`]:
-//! emission, light its ray found, the vertex) and what it sends on from there ([`leave`]:
-//! direct-light rays and the continuation, from the vertex's random numbers). The one-path
-//! kernel runs both with the vertex's stream; the lane kernel for the non-Lambertian kinds
-//! runs [`arrive_as`] per lane, draws the group's numbers in lanes and then runs [`leave`] per
-//! lane with them, so both make the same rays, bit for bit.
+//! What every kernel, one path or lanes, does per path: arrival ([`arrive`], [`arrive_at_hit`]:
+//! emission seen, the light its ray found, the vertex) and the end of leaving a vertex
+//! ([`go_on`]: the continuation and Russian roulette). Leaving itself (light samples, MIS,
+//! the continuation's sample) is the lane kernels' `lanes::leave`, which the one-path code
+//! runs at one lane.
 
-use super::queues::{PathQueue, ShadowEntry, ShadowQueue};
+use super::queues::PathQueue;
 use crate::geometry::{Hit, Ray};
-use crate::integrator::{Bounce, DIM_ROULETTE, Transport, Vertex};
-use crate::sampling::Numbers;
+use crate::integrator::{Bounce, Transport, Vertex};
 use glam::{Vec2, Vec3};
 
 /// Path `i` arrives: `alive` cleared, emission and the light its ray found added; the vertex
@@ -18,10 +16,9 @@ pub fn arrive(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Vertex> {
     arrive_as::<true>(t, q, i).map(|a| a.vertex)
 }
 
-/// What a path that goes on from its hit leaves for the lanes: the hit, its material and the
-/// emission seen, and (from [`arrive_as`] with `WHOLE`) its vertex.
+/// What a path that goes on from its hit leaves for the lanes: its material and the emission
+/// seen, and (from [`arrive_as`] with `WHOLE`) its vertex.
 pub struct Arrival {
-    pub hit: Hit,
     pub material: usize,
     pub emission: Vec3,
     pub vertex: Vertex,
@@ -30,7 +27,7 @@ pub struct Arrival {
 /// [`arrive`]; without `WHOLE` the vertex is left out ([`NO_VERTEX`]) and the
 /// hit's material and emission are found without it, for kernels that reconstruct a group's
 /// vertices in lanes (surfaces with no textures, colours, relief or volumes:
-/// [`super::lanes::whole_vertices`] false; the emission is then the vertex's).
+/// `lanes::soa::whole_vertices` false; the emission is then the vertex's).
 #[inline(always)]
 pub fn arrive_as<const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize) -> Option<Arrival> {
     let sees_emission = t.rules.counts_emission();
@@ -45,6 +42,15 @@ pub fn arrive_as<const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize) 
         }
         return None;
     };
+    Some(arrive_at_hit::<WHOLE>(t, q, i, hit)).filter(|_| t.rules.features.direct || t.rules.features.indirect)
+}
+
+/// [`arrive_as`] for a path whose ray hit `hit`: the one arrival step of every kernel at a
+/// hit, returned whether or not the path goes on.
+#[inline(always)]
+pub fn arrive_at_hit<const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize, hit: Hit) -> Arrival {
+    let depth = q.depth[i];
+    q.alive[i] = false;
     let (material, emission, vertex) = if WHOLE {
         let v = t.vertex(&q.ray[i], &hit);
         if t.rules.features.non_diffuse && t.materials.layers.volumes {
@@ -55,39 +61,18 @@ pub fn arrive_as<const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usize) 
         let m = t.materials.material_of(hit.prim);
         (m, emission_of(t, m, &q.ray[i], &hit), NO_VERTEX)
     };
-    if t.rules.features.emission && depth == 0 && sees_emission {
+    // Most hits find no light: nothing is added (adding the zero cost the camera rays' hits
+    // a stalled reload of the emission each).
+    if t.rules.features.emission && depth == 0 && t.rules.counts_emission() && emission != Vec3::ZERO {
         q.radiance[i] += emission;
     }
     if (t.rules.features.non_diffuse || t.rules.mis) && depth > 0 {
-        q.radiance[i] += q.throughput[i] * t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, emission, depth);
-    }
-    (t.rules.features.direct || t.rules.features.indirect).then_some(Arrival { hit, material, emission, vertex })
-}
-
-/// Path `i` leaves vertex `v` (of its current depth) with the numbers `rng`: its shadow rays
-/// (throughput applied) and its continuation after Russian roulette.
-#[inline(always)]
-pub fn leave(t: &Transport, q: &mut PathQueue, i: usize, v: &Vertex, rng: impl Numbers, shadow: &mut ShadowQueue) {
-    let depth = q.depth[i];
-    let tp = q.throughput[i];
-    let push = |shadow: &mut ShadowQueue, d: crate::integrator::DirectRay| {
-        shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
-    };
-    let next = if t.rules.features.non_diffuse {
-        let sh = t.shading(v, q.ray[i].dir);
-        if t.rules.features.direct && t.rules.counts_direct(depth) {
-            t.direct_rays_shaded(v, &sh, depth, rng, |d| push(shadow, d));
+        let found = t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, emission, depth);
+        if found != Vec3::ZERO {
+            q.radiance[i] += q.throughput[i] * found;
         }
-        if t.rules.features.indirect { t.scatter_shaded(v, &sh, depth, rng) } else { None }
-    } else {
-        if t.rules.features.direct && t.rules.counts_direct(depth) {
-            t.direct_rays(v, depth, rng, |d| push(shadow, d));
-        }
-        if t.rules.features.indirect { t.scatter(v, depth, rng) } else { None }
-    };
-    if let Some((ray, w, bounce)) = next {
-        go_on(t, q, i, depth, ray, w, bounce, || rng.at(DIM_ROULETTE).next_f32());
     }
+    Arrival { material, emission, vertex }
 }
 
 /// Path `i` goes on from its vertex of `depth` along `ray`, its throughput times `weight`,

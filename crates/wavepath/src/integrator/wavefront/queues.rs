@@ -113,6 +113,9 @@ macro_rules! soa_queue {
         }
 
         #[doc = concat!("One entry of a [`", stringify!($name), "`].")]
+        // An entry and `push` write one at a time (tests, the path queue's camera rays); a
+        // queue the kernels fill in batches may have no other writer.
+        #[allow(dead_code)]
         #[derive(Clone, Copy, Debug)]
         $vis struct $entry {
             $($(#[$fattr])* $fvis $field: $ty,)+
@@ -139,6 +142,7 @@ macro_rules! soa_queue {
                 }
             )+
 
+            #[allow(dead_code)]
             #[inline]
             pub fn push(&mut self, e: $entry) {
                 let s = self.open(1);

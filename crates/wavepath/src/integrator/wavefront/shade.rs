@@ -1,8 +1,11 @@
 //! Stage 3: at every hit, emission, the direct-light rays and the continuation ray.
 
 use super::Lanes;
+use super::lanes;
+use super::lanes::hits::list_of;
 use super::one_path;
 use super::queues::{PathQueue, ShadowQueue};
+use crate::bsdf::{Lambert, Model};
 use crate::integrator::Transport;
 
 /// Shades every path against its hit: adds emission (and the environment) seen by camera
@@ -11,9 +14,9 @@ use crate::integrator::Transport;
 /// leaves out are not compiled in.
 ///
 /// The paths are first sorted by what shades them ([`Kinds`], pbrt-v4's queues after
-/// intersection): the Lambertian hits are shaded in lanes by [`super::lanes`] where the
-/// render's [`Lanes`] has a lane width, the other materials' hits by [`super::lanes_shaded`]
-/// (their random numbers drawn in lanes), the escaped paths by [`super::lanes_escaped`].
+/// intersection): where the render's [`Lanes`] has a lane width, the hits on each material
+/// model are shaded in lanes by [`super::lanes::hits`], the escaped paths by
+/// [`super::lanes::escaped`].
 /// Each path's shadow rays stay in the order it made them, so its radiance is the same bits
 /// whatever the grouping.
 pub fn shade(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
@@ -22,56 +25,47 @@ pub fn shade(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut Shadow
     };
     shadow.clear();
     kinds.sort(t, q);
-    super::lanes_escaped::shade_escaped(width, t, q, &kinds.escaped);
-    super::lanes_shaded::shade_shaded(width, t, q, &kinds.shaded, shadow, &mut kinds.numbers);
-    super::lanes::shade_diffuse(width, t, q, &kinds.diffuse, shadow);
+    super::lanes::escaped::shade_escaped(width, t, q, &kinds.escaped);
+    super::lanes::hits::shade_hits(width, t, q, &kinds.hits, shadow);
 }
 
 /// A wave's paths by what shades them, as index lists into the path queue.
 #[derive(Default)]
 pub struct Kinds {
-    /// Paths whose hit has a Lambertian material: the diffuse lane kernel's.
-    pub diffuse: Vec<u32>,
-    /// Hits on every other material: the lane kernel that draws their numbers in lanes.
-    pub shaded: Vec<u32>,
+    /// Hits, one list per material model ([`lanes::hits::list_of`]).
+    pub hits: [Vec<u32>; lanes::hits::MODELS],
     /// Escaped paths (the environment, light from infinity): their own lane kernel.
     pub escaped: Vec<u32>,
-    /// Scratch for the numbers the shaded kinds' kernel draws ahead.
-    numbers: Vec<[f32; 2]>,
 }
 
 impl Kinds {
     fn sort(&mut self, t: &Transport, q: &PathQueue) {
-        self.diffuse.clear();
-        self.shaded.clear();
+        for list in &mut self.hits {
+            list.clear();
+        }
         self.escaped.clear();
+        // Without a non-Lambertian material every hit is Lambertian (no model looked up).
+        let lambert = list_of(&Model::Lambert(Lambert { albedo: glam::Vec3::ZERO }));
         for (i, hit) in q.hit.iter().enumerate() {
             let list = match hit {
                 None => &mut self.escaped,
-                Some(h) if !t.rules.features.non_diffuse || t.materials.lambertian[t.materials.material_of(h.prim)] => {
-                    &mut self.diffuse
-                }
-                Some(_) => &mut self.shaded,
+                Some(_) if !t.rules.features.non_diffuse => &mut self.hits[lambert],
+                Some(h) => &mut self.hits[list_of(&t.materials.models[t.materials.material_of(h.prim)])],
             };
             list.push(i as u32);
         }
     }
 }
 
-/// [`shade`] one path at a time (any features; the reference for the lane kernel).
+/// [`shade`] one path at a time (any features): the lane kernels' code at one lane.
 pub fn shade_scalar(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
     shadow.clear();
+    let mut pending = Vec::new();
     for i in 0..q.len() {
-        shade_path(t, q, i, shadow);
-    }
-}
-
-/// Shades path `i` (see [`shade`]) from its vertex's own stream.
-#[inline]
-pub fn shade_path(t: &Transport, q: &mut PathQueue, i: usize, shadow: &mut ShadowQueue) {
-    if let Some(v) = one_path::arrive(t, q, i) {
-        let rng = t.streams.vertex_sampler(q.key[i], q.depth[i]);
-        one_path::leave(t, q, i, &v, rng, shadow);
+        if let Some(v) = one_path::arrive(t, q, i) {
+            let rng = t.streams.vertex_sampler(q.key[i], q.depth[i]);
+            lanes::hits::leave_one(t, q, i, &v, rng, &mut pending, shadow);
+        }
     }
 }
 
@@ -82,6 +76,7 @@ mod tests {
     use crate::geometry::Ray;
     use crate::integrator::rules::Features;
     use crate::integrator::wavefront::generate::{Wave, generate};
+    use crate::integrator::wavefront::queues::ShadowEntry;
     use crate::integrator::wavefront::{Lanes, ShadeWidth};
     use crate::integrator::wavefront::{compact, traverse};
     use crate::scene::{Bsdf, Layers, Light, Scene, Sphere};
@@ -109,6 +104,37 @@ mod tests {
         out
     }
 
+    /// The reference the kernels are checked against: each path shaded one at a time by the
+    /// recursive integrator's vertex code (`Transport::direct_rays`, `Transport::scatter` and
+    /// their BSDF forms), written independently of the leaving kernel.
+    fn shade_by_transport(t: &Transport, q: &mut PathQueue, shadow: &mut ShadowQueue) {
+        shadow.clear();
+        for i in 0..q.len() {
+            let Some(v) = one_path::arrive(t, q, i) else { continue };
+            let rng = t.streams.vertex_sampler(q.key[i], q.depth[i]);
+            let (depth, tp) = (q.depth[i], q.throughput[i]);
+            let push = |shadow: &mut ShadowQueue, d: crate::integrator::DirectRay| {
+                shadow.push(ShadowEntry { ray: d.ray, weight: d.weight * tp, owner: i as u32 })
+            };
+            let next = if t.rules.features.non_diffuse {
+                let sh = t.shading(&v, q.ray[i].dir);
+                if t.rules.features.direct && t.rules.counts_direct(depth) {
+                    t.direct_rays_shaded(&v, &sh, depth, rng, |d| push(shadow, d));
+                }
+                if t.rules.features.indirect { t.scatter_shaded(&v, &sh, depth, rng) } else { None }
+            } else {
+                if t.rules.features.direct && t.rules.counts_direct(depth) {
+                    t.direct_rays(&v, depth, rng, |d| push(shadow, d));
+                }
+                if t.rules.features.indirect { t.scatter(&v, depth, rng) } else { None }
+            };
+            if let Some((ray, w, bounce)) = next {
+                let u = || rng.at(crate::integrator::DIM_ROULETTE).next_f32();
+                one_path::go_on(t, q, i, depth, ray, w, bounce, u);
+            }
+        }
+    }
+
     /// Five bounces of a 24x18 wave shaded both ways: every path gets the same continuation,
     /// throughput, radiance and shadow rays, bit for bit; returns the shadow rays made.
     fn compare(parts: Features, scene: &Scene, s: &Settings) -> usize {
@@ -117,15 +143,16 @@ mod tests {
 
     /// [`compare`], with the paths that escaped after a bounce.
     fn compare_counts(parts: Features, scene: &Scene, s: &Settings) -> (usize, usize) {
-        let widths = ShadeWidth::all();
-        let counts: Vec<_> = widths.into_iter().map(|w| compare_width(parts, scene, s, w)).collect();
+        // Every lane width, and one lane (`shade_scalar`).
+        let widths = ShadeWidth::all().into_iter().map(Some).chain([None]);
+        let counts: Vec<_> = widths.map(|w| compare_width(parts, scene, s, w)).collect();
         (counts.iter().map(|c| c.0).min().unwrap_or(0), counts.iter().map(|c| c.1).min().unwrap_or(0))
     }
 
-    fn compare_width(parts: Features, scene: &Scene, s: &Settings, width: ShadeWidth) -> (usize, usize) {
+    fn compare_width(parts: Features, scene: &Scene, s: &Settings, width: Option<ShadeWidth>) -> (usize, usize) {
         let mut t = Transport::new(scene, s, &crate::effects::Effects::of(scene, s));
         t.rules.features = parts;
-        let lanes = Lanes { camera: None, shade: Some(width) };
+        let lanes = Lanes { camera: None, shade: width };
         let mut kinds = Kinds::default();
         let accel = BruteForce::new(scene);
         let pixels: Vec<u32> = (0..(24 * 18) as u32).collect();
@@ -140,7 +167,7 @@ mod tests {
             escaped += (0..q.len()).filter(|&i| q.hit[i].is_none() && q.depth[i] > 0).count();
             let mut qs = q.clone();
             shade(&t, lanes, &mut q, &mut sl, &mut kinds);
-            shade_scalar(&t, &mut qs, &mut ss);
+            shade_by_transport(&t, &mut qs, &mut ss);
             assert_eq!(q.ray, qs.ray);
             assert_eq!(q.throughput, qs.throughput);
             assert_eq!(q.radiance, qs.radiance);
@@ -305,8 +332,7 @@ mod tests {
         tilted_normals(&mut scene);
         compare_every_sampler(&scene, |t| {
             assert!(t.rules.mis && t.materials.non_diffuse);
-            assert!(t.shaded_numbers.one_d.len() > 3 + 4, "light samples are drawn ahead");
-            assert!(t.shaded_numbers.complete, "the glossy lanes read the table alone");
+            assert!(t.lights.set.lights.len() > 4, "a sample of every light kind at each glossy vertex");
         });
     }
 
@@ -414,7 +440,7 @@ mod tests {
         scene.spheres.push(Sphere { center: Vec3::new(0.4, 1.0, -0.3), radius: 0.25, material: 5 });
         tilted_normals(&mut scene);
         compare_every_sampler(&scene, |t| {
-            assert!(t.rules.mis && t.shaded_numbers.complete);
+            assert!(t.rules.mis);
             assert!(t.materials.models.iter().filter(|m| matches!(m, crate::bsdf::Model::Layered(_))).count() == 5);
         });
     }
@@ -496,7 +522,7 @@ mod tests {
                 let t = Transport::new(&scene, &s, &crate::effects::Effects::of(&scene, &s));
                 assert_eq!(t.rules.mis, mis);
                 assert!(t.lights.infinite.is_some());
-                assert!(t.materials.non_diffuse && t.shaded_numbers.complete);
+                assert!(t.materials.non_diffuse);
                 let (shadow_rays, escaped) = compare_counts(shaded, &scene, &s);
                 assert!(shadow_rays > 500, "{name} {sampler:?}: {shadow_rays}");
                 assert!(escaped > 100, "{name} {sampler:?}: {escaped} paths escaped after a bounce");

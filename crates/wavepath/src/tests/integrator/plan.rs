@@ -165,3 +165,96 @@ fn a_canvas_holds_its_extents_merged_in_order() {
     let err = Canvas::new(W + 1, H).render(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &never).unwrap_err();
     assert!(err.to_string().contains("canvas") && !err.is::<Interrupted>(), "{err}");
 }
+
+// ---------------------------------------------------------------------------------------
+// The camera a plan fits
+// ---------------------------------------------------------------------------------------
+
+/// The repository's CS184 COLLADA scene, whose camera follows the reference's pixel rule.
+fn cs184_dae() -> crate::scene::Scene {
+    let path = crate::tests::common::repo_root().join("scenes/cornell_mesh.dae");
+    let scene = crate::load::load(&path, &crate::load::LoadOptions::default()).unwrap();
+    assert!(matches!(scene.camera.fit, crate::scene::FovFit::Cs184 { .. }), "{:?}", scene.camera.fit);
+    scene
+}
+
+/// Renders of one CS184 scene at two sizes under both rules, the request applied as the
+/// command line applies it, each see through their own fit, and the scene is the value it
+/// was loaded as: nothing writes a fit into it, so a second size fits from the file's camera.
+#[test]
+fn renders_at_two_sizes_leave_a_cs184_scene_and_its_camera_as_loaded() {
+    use crate::request::Request;
+    use crate::scene::FovRule;
+    let scene = cs184_dae();
+    let request = |w, h, fov| Request { resolution: Some((w, h)), fov: Some(fov), ..Request::default() };
+    // The request's own camera step applies the lens alone: no fit.
+    assert_eq!(request(20, 30, FovRule::Frame).camera(scene.camera), scene.camera);
+    let (loaded, camera) = (format!("{scene:?}"), scene.camera);
+    let (accel, _) = crate::accel::build(&scene, &Settings::default());
+    let mut cameras = Vec::new();
+    for fov in [FovRule::Cs184, FovRule::Frame] {
+        for (w, h) in [(32, 24), (20, 30)] {
+            let s = request(w, h, fov).apply(render::settings(1, 1, 1, 1), |_| "-x").unwrap();
+            assert_eq!((s.image.width, s.image.height, s.image.fov), (w as usize, h as usize, fov));
+            let plan = RenderPlan::new(&scene, &s);
+            assert_eq!(*plan.camera(), camera.fitted(fov, w as usize, h as usize));
+            let never = AtomicBool::new(false);
+            let film = render_plan(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &never).unwrap().film;
+            assert!(film.pixels.iter().any(|p| p.max_element() > 0.0), "{fov:?} {w}x{h}: a black image");
+            cameras.push(*plan.camera());
+            assert_eq!(scene.camera, camera, "{fov:?} {w}x{h}");
+        }
+    }
+    // Four different fits of the one camera (the sizes and the rules both reach the render).
+    for (i, a) in cameras.iter().enumerate() {
+        assert!(cameras[i + 1..].iter().all(|b| (a.hfov_deg, a.vfov_deg) != (b.hfov_deg, b.vfov_deg)), "{cameras:?}");
+    }
+    assert_eq!(format!("{scene:?}"), loaded);
+}
+
+/// A plan at W x H with `--fov frame` traces the camera rays of the scene's camera fitted by
+/// hand (the whole 800x600 picture's vertical field, then the aspect), bit for bit; the
+/// default rule's are those of the camera's own fit. The expectation is built from the
+/// camera's parts, not from the function the plan calls.
+#[test]
+fn a_plan_traces_the_rays_of_the_camera_fitted_by_hand() {
+    use crate::scene::FovRule;
+    let scene = cs184_dae();
+    let (w, h) = (W, H);
+    let mut frame = scene.camera;
+    frame.whole_frame();
+    frame.fit_to(w as f32, h as f32);
+    let mut own = scene.camera;
+    own.fit_to(w as f32, h as f32);
+    assert_ne!((frame.hfov_deg, frame.vfov_deg), (own.hfov_deg, own.vfov_deg));
+    for (fov, by_hand) in [(FovRule::Frame, frame), (FovRule::Cs184, own)] {
+        let s = render::settings(w, h, 1, 1).with(|s| s.image.fov = fov);
+        let plan = RenderPlan::new(&scene, &s);
+        for (x, y) in [(0, 0), (w - 1, 0), (7, 11), (w - 1, h - 1), (0, h - 1)] {
+            let ray = plan.transport().camera_ray(x as u32, y as u32, w, h, 0, 1);
+            let expected = by_hand.generate_ray((x as f32 + 0.5) / w as f32, (y as f32 + 0.5) / h as f32);
+            assert_eq!(ray, expected, "{fov:?} ({x}, {y})");
+        }
+    }
+}
+
+/// The normals view of a plan sees through the plan's fitted camera, as light transport does.
+#[test]
+fn a_plans_normals_view_sees_through_its_fitted_camera() {
+    use crate::render::render_normals;
+    use crate::scene::FovRule;
+    let scene = cs184_dae();
+    let s = render::settings(W, H, 1, 1).with(|s| {
+        s.paths.shading = crate::settings::Shading::Normals;
+        s.image.fov = FovRule::Frame;
+    });
+    let (accel, _) = crate::accel::build(&scene, &s);
+    let plan = RenderPlan::new(&scene, &s);
+    let never = AtomicBool::new(false);
+    let film = render_plan(&plan, accel.as_ref(), Extent::WHOLE, &|_| {}, &never).unwrap().film;
+    let mut by_hand = scene.camera;
+    by_hand.whole_frame();
+    by_hand.fit_to(W as f32, H as f32);
+    assert_eq!(film, render_normals(&scene, &by_hand, accel.as_ref(), &s).0);
+    assert_ne!(film, render_normals(&scene, &scene.camera, accel.as_ref(), &s).0);
+}

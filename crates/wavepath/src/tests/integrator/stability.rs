@@ -32,7 +32,7 @@ fn render(scene: &Scene, s: &Settings) -> Accumulator {
 
 fn normals(scene: &Scene, w: usize, h: usize) -> Film {
     let (accel, _) = build(scene, &crate::settings::Settings::default());
-    render_normals(scene, accel.as_ref(), &settings(w, h, 1, 1)).0
+    render_normals(scene, &scene.camera, accel.as_ref(), &settings(w, h, 1, 1)).0
 }
 
 /// Pixels where the camera ray hit nothing (normal shading is black only there).

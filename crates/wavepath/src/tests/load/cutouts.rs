@@ -23,6 +23,15 @@ fn by_name<'a>(s: &'a Scene, name: &str) -> &'a Material {
 /// 2 x 2 texels of alpha 0, 64, 128, 255 (rows top first).
 const ALPHAS: [u8; 4] = [0, 64, 128, 255];
 
+/// An OBJ reading `m.mtl` with one textured triangle per material of `names`, in order.
+fn triangle_per_material(names: &[&str]) -> String {
+    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n");
+    for n in names {
+        obj.push_str(&format!("usemtl {n}\nf 1/1 2/2 3/3\n"));
+    }
+    obj
+}
+
 /// The centre of texel (x, y) of a 2 x 2 image in glTF's frame (v down).
 fn centre(x: usize, y: usize) -> glam::Vec2 {
     vec2(0.25 + 0.5 * x as f32, 0.25 + 0.5 * y as f32)
@@ -120,11 +129,7 @@ fn mtl_d_tr_and_map_d_become_blend_and_mask() {
                newmtl gone\nd 0\n";
     write(&d, "m.mtl", mtl);
     let names = ["d", "tr", "both", "halo", "cut", "grey", "glass", "solid", "gone"];
-    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n");
-    for n in names {
-        obj.push_str(&format!("usemtl {n}\nf 1/1 2/2 3/3\n"));
-    }
-    write(&d, "a.obj", obj);
+    write(&d, "a.obj", triangle_per_material(&names));
     let s = load_ok(&d.join("a.obj"));
     let alpha = |n: &str| by_name(&s, n).alpha.clone();
     let blend = |f: f32| Alpha { mode: AlphaMode::Blend, factor: f, map: None };
@@ -179,11 +184,7 @@ fn mtl_keys_that_would_draw_nothing_are_read_as_meant() {
                newmtl glass\nillum 7\nTr 1\nNi 1.5\n";
     write(&d, "m.mtl", mtl);
     let names = ["meshlab", "dissolved", "both", "tr-cut", "d-cut", "d-wins", "mostly", "glass"];
-    let mut obj = String::from("mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 1 1\n");
-    for n in names {
-        obj.push_str(&format!("usemtl {n}\nf 1/1 2/2 3/3\n"));
-    }
-    write(&d, "a.obj", obj);
+    write(&d, "a.obj", triangle_per_material(&names));
     let s = load_ok(&d.join("a.obj"));
     let alpha = |n: &str| by_name(&s, n).alpha.clone();
     let warned = |name: &str, key: &str| {
@@ -216,6 +217,7 @@ fn mtl_keys_that_would_draw_nothing_are_read_as_meant() {
     write(&d, "q.obj", "mtllib q.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl m\nf 1 2 3 4\n");
     let mut q = load_ok(&d.join("q.obj"));
     q.camera = Camera::look_at(vec3(0.5, 0.5, 2.0), vec3(0.5, 0.5, 0.0), Vec3::Y, 10.0, 1.0);
-    let (film, _) = render_normals(&q, &BruteForce::new(&q), &crate::tests::common::render::settings(8, 8, 1, 1));
+    let (film, _) =
+        render_normals(&q, &q.camera, &BruteForce::new(&q), &crate::tests::common::render::settings(8, 8, 1, 1));
     assert!(film.pixels.iter().all(|p| (*p - vec3(0.5, 0.5, 1.0)).abs().max_element() < 1e-5), "{:?}", film.pixels);
 }

@@ -4,6 +4,7 @@
 use crate::load::{LoadOptions, load};
 use crate::scene::Scene;
 use crate::tests::common::temp_dir;
+use base64::Engine;
 use glam::{Vec3, vec3};
 use std::path::Path;
 
@@ -156,7 +157,6 @@ fn obj_textures_in_bmp_and_tga_load_and_an_undecodable_one_is_a_warning() {
 
 #[test]
 fn gltf_images_from_data_uris_and_percent_encoded_names() {
-    use base64::Engine;
     let d = temp_dir("exporters-gltf-images");
     let png = two_texels(image::ImageFormat::Png);
     write(&d, "Box With Spaces.png", &png);
@@ -184,7 +184,6 @@ fn gltf_images_from_data_uris_and_percent_encoded_names() {
 /// A glTF document whose one buffer holds `positions` (a data URI), one mesh of primitives
 /// `prims` (JSON objects using accessor 0), in the default scene.
 fn gltf_positions(positions: &[[f32; 3]], prims: &str) -> String {
-    use base64::Engine;
     let bytes: Vec<u8> = positions.iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
     let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
     format!(
@@ -235,7 +234,6 @@ fn gltf_triangle_strips_and_fans() {
 /// node's own transform, applied to the mesh.
 #[test]
 fn gltf_gpu_instancing_places_every_instance() {
-    use base64::Engine;
     let d = temp_dir("exporters-instancing");
     let tri = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
     let translations = [[0.0f32, 0.0, 0.0], [5.0, 0.0, 0.0], [0.0, 0.0, -3.0]];
@@ -283,6 +281,18 @@ fn gltf_gpu_instancing_places_every_instance() {
     }
 }
 
+/// A glTF triangle whose buffer `bytes` holds three f32 positions, then three f32 `COLOR_0`s.
+fn colour_triangle_gltf(bytes: &[u8]) -> String {
+    let uri = base64::engine::general_purpose::STANDARD.encode(bytes);
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
+          "buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{uri}"}}],
+          "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
+          "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                       {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
+    )
+}
+
 /// sRGB byte to linear, from the sRGB definition.
 fn srgb_byte(b: u8) -> f32 {
     let c = b as f64 / 255.0;
@@ -293,7 +303,6 @@ fn srgb_byte(b: u8) -> f32 {
 /// (`COLOR_0`, linear floats); a mesh without them has none.
 #[test]
 fn vertex_colours_are_read_from_every_format() {
-    use base64::Engine;
     let d = temp_dir("exporters-colours");
     write(&d, "c.obj", "v 0 0 0 1 0.5 0.25\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n");
     let s = load_ok(&d.join("c.obj"));
@@ -315,18 +324,7 @@ fn vertex_colours_are_read_from_every_format() {
         [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|c| c.to_le_bytes()).collect();
     bytes
         .extend([[0.5f32, 0.25, 1.0], [1.0, 1.0, 1.0], [0.0, 0.0, 0.0]].iter().flatten().flat_map(|c| c.to_le_bytes()));
-    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
-    write(
-        &d,
-        "c.gltf",
-        format!(
-            r#"{{"asset":{{"version":"2.0"}},"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
-              "buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{uri}"}}],
-              "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
-              "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
-                           {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
-        ),
-    );
+    write(&d, "c.gltf", colour_triangle_gltf(&bytes));
     let s = load_ok(&d.join("c.gltf"));
     assert_eq!(s.mesh.colors.as_deref(), Some(&[vec3(0.5, 0.25, 1.0), Vec3::ONE, Vec3::ZERO][..]));
     write(&d, "plain.obj", format!("{QUAD}f 1 2 3\n"));
@@ -341,7 +339,6 @@ fn vertex_colours_are_read_from_every_format() {
 #[test]
 fn unusable_vertex_colours_are_dropped_with_a_warning() {
     use crate::load::ply::{BULK_READER, GENERAL_READER};
-    use base64::Engine;
     let d = temp_dir("exporters-nan-colours");
     let warned = |s: &Scene, file: &str, what: &str| {
         s.notes.iter().any(|n| n.starts_with("warning: ") && n.contains(file) && n.contains(what))
@@ -394,18 +391,7 @@ fn unusable_vertex_colours_are_dropped_with_a_warning() {
     bytes.extend(
         [[0.5f32, 0.25, 1.0], [f32::NAN, 1.0, 1.0], [0.0, 1.0, 0.0]].iter().flatten().flat_map(|c| c.to_le_bytes()),
     );
-    let uri = base64::engine::general_purpose::STANDARD.encode(&bytes);
-    write(
-        &d,
-        "nan.gltf",
-        format!(
-            r#"{{"asset":{{"version":"2.0"}},"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"COLOR_0":1}}}}]}}],"nodes":[{{"mesh":0}}],"scenes":[{{"nodes":[0]}}],
-              "buffers":[{{"byteLength":72,"uri":"data:application/octet-stream;base64,{uri}"}}],
-              "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":36}}],
-              "accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
-                           {{"bufferView":1,"componentType":5126,"count":3,"type":"VEC3"}}]}}"#
-        ),
-    );
+    write(&d, "nan.gltf", colour_triangle_gltf(&bytes));
     let s = load_ok(&d.join("nan.gltf"));
     assert_eq!(s.mesh.triangles.len(), 1);
     assert_eq!(s.mesh.colors.as_deref(), Some(&[vec3(0.5, 0.25, 1.0), Vec3::ONE, Vec3::Y][..]));
@@ -446,7 +432,6 @@ fn vertex_colours_multiply_the_base_colour_in_a_render() {
 /// write them), i8 normals and u16 uvs, each decoded as the glTF specification defines.
 #[test]
 fn gltf_quantised_attributes() {
-    use base64::Engine;
     let d = temp_dir("exporters-quantised");
     let mut bytes = Vec::new();
     // Positions: (0,0,0), (32767,0,0), (0,-32768,0) as i16 x3, padded to 8 bytes per vertex.
@@ -491,7 +476,6 @@ fn gltf_quantised_attributes() {
 /// the texture emits nothing and is not kept.
 #[test]
 fn gltf_emissive_textures_load_with_factor_and_strength() {
-    use base64::Engine;
     let d = temp_dir("exporters-emissive");
     let png = two_texels(image::ImageFormat::Png);
     let data = format!("data:image/png;base64,{}", base64::engine::general_purpose::STANDARD.encode(&png));

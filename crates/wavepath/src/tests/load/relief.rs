@@ -66,7 +66,7 @@ fn square_gltf(texel: [u8; 3], scale: f32, tangents: bool) -> String {
 fn assert_normals(scene: &mut Scene, n: Vec3, within: impl Fn(f32) -> bool, what: &str) {
     scene.camera = Camera::look_at(vec3(0.5, 0.5, 2.0), vec3(0.5, 0.5, 0.0), Vec3::Y, 10.0, 1.0);
     let s = common::render::settings(12, 12, 1, 1);
-    let (film, _) = render_normals(scene, &BruteForce::new(scene), &s);
+    let (film, _) = render_normals(scene, &scene.camera, &BruteForce::new(scene), &s);
     let want = n * 0.5 + Vec3::splat(0.5);
     let mut checked = 0;
     for (i, p) in film.pixels.iter().enumerate() {

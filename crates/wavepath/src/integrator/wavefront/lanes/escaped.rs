@@ -14,12 +14,12 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::lane_width::{LaneKernel, ShadeWidth};
-use super::lanes::{get, put};
-use super::one_path;
-use super::queues::PathQueue;
+use super::soa::{get, put};
+use super::width::{LaneKernel, ShadeWidth};
 use crate::integrator::Transport;
 use crate::integrator::light_ray::found_at_infinity;
+use crate::integrator::wavefront::one_path;
+use crate::integrator::wavefront::queues::PathQueue;
 use crate::lights::{LightSet, SampledLight};
 use crate::sampling::rng8::Hasher;
 use glam::Vec3;
