@@ -77,6 +77,10 @@ E2E_QUICK = "--scenes box -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
 # The harness's older scenes were made when wavepath's emitters were two-sided (their Mitsuba
 # versions carry a back copy of each emitter): they compare like with like only so.
 E2E_OLDER = "--scenes cornell,cornell-flush,cornell-dragon --wavepath-args=--two-sided-emission"
+# The project's own harness scenes (tools/e2e_scenes.py, through the harness's E2E_EXTRA_SCENES):
+# a scan under an environment map, how scans are usually shown.
+E2E_OWN = "--scenes dragon-env"
+E2E_OWN_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "e2e_scenes.py")
 # Effects every global-illumination render of a lit scene has; the table lists the others.
 COMMON_EFFECTS = {"emission", "area-lights", "direct-light", "indirect", "russian-roulette"}
 
@@ -613,7 +617,9 @@ def part_e2e(args, scenes_dir, peers_dir):
     elif os.path.realpath(link) != scenes_dir:
         raise SystemExit(f"{link} exists and is not a link to {scenes_dir}; e2e needs it (or another --peers-work)")
     part = {"load_before": loadavg(), "date": now_utc(), "cmds": [], "rows": []}
-    env = dict(os.environ, WAVEPATH=os.path.abspath(args.bin), E2E_BUILD=os.path.join(work, "e2e", "build"))
+    extra = ":".join(p for p in (os.environ.get("E2E_EXTRA_SCENES", ""), E2E_OWN_FILE) if p)
+    env = dict(os.environ, WAVEPATH=os.path.abspath(args.bin), E2E_BUILD=os.path.join(work, "e2e", "build"),
+               E2E_EXTRA_SCENES=extra)
     logf = os.path.join(args.work, "e2e.log")
     # One harness run per --e2e-args (the older scenes need their own wavepath options).
     with open(logf, "w") as lf:
@@ -669,7 +675,8 @@ def md_e2e(args, part):
 # ------------------------------------------------------------------- split ----
 # The harness scenes, each with the wavepath options its comparison needs (as E2E_OLDER says).
 SPLIT_SCENES = [("box", ""), ("dragon-box", ""), ("spheres-box", ""), ("cornell", "--two-sided-emission"),
-                ("cornell-flush", "--two-sided-emission"), ("cornell-dragon", "--two-sided-emission")]
+                ("cornell-flush", "--two-sided-emission"), ("cornell-dragon", "--two-sided-emission"),
+                ("dragon-env", "")]
 SPLIT_FLAGS = "-s 64 -m 5 -r 320 240 -t 1"
 PERF_HZ = 4000
 
@@ -716,7 +723,9 @@ def part_split(args, scenes_dir, peers_dir):
                 spec = json.load(f)
             cam = os.path.join(d, "camera.txt")
             stats = os.path.join(tmp, "wavepath.json")
+            envmap = spec.get("envmap", {}).get("file")
             wp = ([args.bin] + (["-c", cam] if os.path.exists(cam) else []) +
+                  (["-e", os.path.normpath(os.path.join(d, envmap))] if envmap else []) +
                   [os.path.normpath(os.path.join(d, spec["wavepath_scene"]))] + SPLIT_FLAGS.split() +
                   extra.split() + ["-f", os.path.join(tmp, "wavepath.pfm"), "--stats", stats])
             mi = [py, render_py, "--spec", os.path.join(d, "spec.json"), "--variant", "llvm_ad_rgb", "-r", "320",
@@ -1002,7 +1011,7 @@ def main(argv):
     ap.add_argument("--e2e-args", action="append", default=None,
                     help="extra options for one e2e/run.sh run; repeat for several runs in one table "
                          "(default: the front views, then the older cornell scenes with "
-                         + repr(E2E_OLDER) + "; quick: " + repr(E2E_QUICK) + ", under a minute)")
+                         + repr(E2E_OLDER) + ", then the project's own with " + repr(E2E_OWN) + "; quick: " + repr(E2E_QUICK) + ", under a minute)")
     ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
     ap.add_argument("--python", default="python3",
                     help="python: the interpreter with numpy, the wavepath package, embreex, open3d and mitsuba "
@@ -1015,7 +1024,7 @@ def main(argv):
     args.peer_passes = args.peer_passes or (1 if q else 3)
     args.reps = args.reps or (3 if q else 10)
     args.large_levels = [int(x) for x in args.large_levels.split(",") if x]
-    args.e2e_args = args.e2e_args if args.e2e_args is not None else ([E2E_QUICK] if q else ["", E2E_OLDER])
+    args.e2e_args = args.e2e_args if args.e2e_args is not None else ([E2E_QUICK] if q else ["", E2E_OLDER, E2E_OWN])
     args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:

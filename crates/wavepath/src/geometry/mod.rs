@@ -6,6 +6,7 @@ pub mod colour;
 pub mod error_bound;
 pub mod offset;
 mod ray;
+pub mod trig;
 
 pub use colour::illuminance;
 pub use ray::{Hit, Ray};

@@ -255,8 +255,7 @@ impl Transport<'_> {
         if hit.is_none() && !self.lights.area_arrivals {
             // Only the light from infinity is found there.
             let inf = &self.lights.set.infinite;
-            let (mapped, mapped_pdf) =
-                inf.map.as_ref().map_or((Vec3::ZERO, 0.0), |m| (m.radiance(ray.dir), m.pdf(ray.dir)));
+            let (mapped, mapped_pdf) = inf.map.as_ref().map_or((Vec3::ZERO, 0.0), |m| m.lookup(ray.dir));
             return self.infinity_mis(prev, ray.dir, mapped, mapped_pdf, inf.map.is_some());
         }
         if hit.is_some() && emission == Vec3::ZERO && !self.lights.area_arrivals {

@@ -36,28 +36,30 @@ impl Infinite {
     /// weight is radiance / pdf (the density [`pdf`](Self::pdf) reports).
     #[inline]
     pub fn sample(&self, n: Vec3, u: [f32; 2]) -> Option<LightSample> {
+        self.sample_pdf(n, u).map(|(ls, _)| ls)
+    }
+
+    /// As [`sample`](Self::sample), with the sample's solid-angle density. The steps are
+    /// the ones the lane kernels take for all lanes at once (the map's table read, then
+    /// [`Sky::drawn`], then for a mixture the map looked up toward the direction chosen
+    /// and [`Sky::mixed`]), so one lane and many compute the same bits.
+    #[inline]
+    pub fn sample_pdf(&self, n: Vec3, u: [f32; 2]) -> Option<(LightSample, f32)> {
+        let sky = self.sky();
         let Some(map) = &self.map else {
-            let (wi, weight, valid) = self.sky().sample_cosine(n, u);
-            return valid.then_some(LightSample { wi, target: None, weight });
+            let (wi, weight, valid) = sky.sample_cosine(n, u);
+            return valid.then(|| (LightSample { wi, target: None, weight }, sky.pdf_with(n, wi, 0.0, false)));
         };
-        let f = self.sky().map_fraction();
-        if f == 1.0 {
-            // The map alone: its own density and the texel drawn, no second lookup.
-            let (wi, pdf, l) = map.sample_texel(u)?;
-            return Some(LightSample { wi, target: None, weight: l / pdf });
-        }
-        let wi = if u[0] < f {
-            map.sample_dir([u[0] / f, u[1]])?.0
+        let (uv, index) = map.draw(sky.map_numbers(u));
+        let (texel, pdf_uv) = map.texel_at(index);
+        let s = sky.drawn(n, u, uv, pdf_uv, texel);
+        let s = if sky.map_alone() {
+            s
         } else {
-            let a = ((u[0] - f) / (1.0 - f)).min(1.0 - f32::EPSILON);
-            Frame::new(n).to_world(warp::cosine_hemisphere(a, u[1]))
+            let (l, p) = map.lookup(s.wi);
+            sky.mixed(n, s, l, p)
         };
-        let pdf = self.pdf(n, wi);
-        let l = self.radiance(wi);
-        if pdf <= 0.0 || l == Vec3::ZERO {
-            return None;
-        }
-        Some(LightSample { wi, target: None, weight: l / pdf })
+        s.valid.then_some((LightSample { wi: s.wi, target: None, weight: s.weight }, s.pdf))
     }
 
     /// The solid-angle density with which [`sample`](Self::sample) draws `wi` at a point with
@@ -67,6 +69,16 @@ impl Infinite {
         let mapped = self.map.as_ref().map_or(0.0, |m| m.pdf(wi));
         self.sky().pdf_with(n, wi, mapped, self.map.is_some())
     }
+}
+
+/// A sample of the light from infinity: direction, radiance over density, density, and
+/// whether it carries light.
+#[derive(Clone, Copy, Debug)]
+pub struct SkySample {
+    pub wi: Vec3,
+    pub weight: Vec3,
+    pub pdf: f32,
+    pub valid: bool,
 }
 
 /// The constant terms of the light from infinity (the hemisphere light and the constant
@@ -91,7 +103,50 @@ impl Sky {
     /// Probability of drawing from the map rather than the cosine lobe.
     #[inline(always)]
     fn map_fraction(&self) -> f32 {
-        if self.upper == Vec3::ZERO && self.all == Vec3::ZERO { 1.0 } else { 0.5 }
+        if self.map_alone() { 1.0 } else { 0.5 }
+    }
+
+    /// Whether a map is the only light from infinity (its samples need no second lookup).
+    #[inline(always)]
+    pub fn map_alone(&self) -> bool {
+        self.upper == Vec3::ZERO && self.all == Vec3::ZERO
+    }
+
+    /// The numbers the map's table reads for a sample from `u` (for a mixture, `u[0]`
+    /// rescaled over the map's share; unused where the lobe is chosen).
+    #[inline(always)]
+    pub fn map_numbers(&self, u: [f32; 2]) -> [f32; 2] {
+        let f = self.map_fraction();
+        if f == 1.0 { u } else { [u[0] / f, u[1]] }
+    }
+
+    /// A sample from the map's draw (`uv` from [`EnvMap::draw`] at
+    /// [`map_numbers`](Self::map_numbers)`(u)`, `texel` and `pdf_uv` of the texel it drew): with the map alone, complete (the texel
+    /// drawn is the radiance, the draw's density the pdf); in a mixture, only the direction
+    /// (the map's or the cosine lobe's, chosen by `u[0]`), which [`mixed`](Self::mixed) weighs.
+    #[inline(always)]
+    pub fn drawn(&self, n: Vec3, u: [f32; 2], uv: [f32; 2], pdf_uv: f32, texel: Vec3) -> SkySample {
+        let (d, pdf) = EnvMap::sampled(uv, pdf_uv);
+        let f = self.map_fraction();
+        if f == 1.0 {
+            let valid = pdf > 0.0;
+            return SkySample { wi: d, weight: if valid { texel / pdf } else { Vec3::ZERO }, pdf, valid };
+        }
+        let a = ((u[0] - f) / (1.0 - f)).min(1.0 - f32::EPSILON);
+        let lobe = Frame::new(n).to_world(warp::cosine_hemisphere(a, u[1]));
+        let from_map = u[0] < f;
+        let wi = if from_map { d } else { lobe };
+        SkySample { wi, weight: Vec3::ZERO, pdf: 0.0, valid: !from_map || pdf > 0.0 }
+    }
+
+    /// A mixture's sample `s` (from [`drawn`](Self::drawn)) completed with the map's
+    /// radiance `mapped` and density `mapped_pdf` toward its direction.
+    #[inline(always)]
+    pub fn mixed(&self, n: Vec3, s: SkySample, mapped: Vec3, mapped_pdf: f32) -> SkySample {
+        let pdf = self.pdf_with(n, s.wi, mapped_pdf, true);
+        let l = self.radiance_with(s.wi, mapped, true);
+        let valid = s.valid & (pdf > 0.0) & (l != Vec3::ZERO);
+        SkySample { wi: s.wi, weight: if valid { l / pdf } else { Vec3::ZERO }, pdf, valid }
     }
 
     /// [`Infinite::sample`] where there is no map, without branches (the lane kernels

@@ -15,7 +15,7 @@ mod emissive;
 mod infinite;
 
 pub use emissive::{EmissiveTriangles, Emitter};
-pub use infinite::{Infinite, Sky};
+pub use infinite::{Infinite, Sky, SkySample};
 
 use crate::geometry::error_bound::gamma;
 use crate::scene::{Environment, Light, Scene};
@@ -158,10 +158,7 @@ impl SampledLight {
                 let d = if cs184_pdf { crate::cs184::area_pdf_distance(dist2.sqrt()) } else { dist2 };
                 Some((ls, d / (-ls.wi.dot(normal) * area)))
             }
-            SampledLight::Infinite(ref inf) => {
-                let ls = inf.sample(n, [u[0], u[1]])?;
-                Some((ls, inf.pdf(n, ls.wi)))
-            }
+            SampledLight::Infinite(ref inf) => inf.sample_pdf(n, [u[0], u[1]]),
             SampledLight::Emissive(ref e) => e.sample_pdf(p, u),
             _ => self.sample(p, n, u).map(|ls| (ls, f32::INFINITY)),
         }

@@ -11,6 +11,7 @@
 //! are the texels, so the sampling density is exactly proportional to luminance x sin(theta)
 //! of what [`EnvMap::radiance`] returns, and no texel with light has zero density.
 
+use crate::geometry::trig;
 use crate::sampling::distribution::Distribution2D;
 use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
@@ -23,10 +24,20 @@ pub struct EnvMap {
     pub path: PathBuf,
     pub width: usize,
     pub height: usize,
-    /// Linear RGB, row-major, row 0 at the top (+Y).
-    texels: Vec<Vec3>,
-    /// Sampling by luminance x sin(theta); each cell carries its texel's radiance.
-    dist: Distribution2D<Vec3>,
+    /// Row-major, row 0 at the top (+Y): each texel's radiance beside its sampling density,
+    /// so that looking a direction up for both (an escaped ray, a MIS weight) reads one
+    /// 16-byte entry.
+    texels: Vec<Texel>,
+    /// Sampling by luminance x sin(theta); its cells are the texels.
+    dist: Distribution2D,
+}
+
+/// One texel: linear RGB and the density of [`Distribution2D`] in its cell (with respect to
+/// du dv: the row's marginal times the column's conditional).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Texel {
+    rgb: Vec3,
+    pdf_uv: f32,
 }
 
 impl std::fmt::Debug for EnvMap {
@@ -77,45 +88,86 @@ impl EnvMap {
                 crate::geometry::illuminance(*t) * theta.sin()
             })
             .collect();
-        let dist = Distribution2D::with_payload(&weights, &texels, width, height);
+        let dist = Distribution2D::new(&weights, width, height);
+        let texels = texels
+            .iter()
+            .enumerate()
+            .map(|(i, &rgb)| Texel { rgb, pdf_uv: dist.pdf_of_cell(i % width, i / width) })
+            .collect();
         Ok(EnvMap { path, width, height, texels, dist })
     }
 
     /// Image coordinates (u, v) in [0,1] of direction `d` (unit).
-    #[inline]
+    #[inline(always)]
     pub fn uv_of(d: Vec3) -> [f32; 2] {
-        let theta = d.y.clamp(-1.0, 1.0).acos();
-        let phi = (-d.z).atan2(d.x) + PI;
+        let theta = trig::acos(d.y);
+        let phi = trig::atan2(-d.z, d.x) + PI;
         [phi / TAU, theta / PI]
     }
 
+    /// The unit direction at image coordinates (u, v), and sin(theta) (the sphere's area
+    /// element per du dv, over 2 pi^2).
+    #[inline(always)]
+    pub fn dir_sin_of(uv: [f32; 2]) -> (Vec3, f32) {
+        let (st, ct) = trig::sin_cos_turns(uv[1] * 0.5);
+        let (sp, cp) = trig::sin_cos_turns(uv[0]);
+        (Vec3::new(-cp * st, ct, sp * st), st)
+    }
+
     /// The unit direction at image coordinates (u, v).
-    #[inline]
+    #[inline(always)]
     pub fn dir_of(uv: [f32; 2]) -> Vec3 {
-        let (theta, phi) = (uv[1] * PI, uv[0] * TAU);
-        let (st, ct) = theta.sin_cos();
-        let (sp, cp) = phi.sin_cos();
-        Vec3::new(-cp * st, ct, sp * st)
+        Self::dir_sin_of(uv).0
+    }
+
+    /// The index of the texel direction `d` (unit) falls in, and the sine of its polar angle;
+    /// plain arithmetic, so that a loop over lanes vectorises.
+    #[inline(always)]
+    pub fn index_of(&self, d: Vec3) -> (usize, f32) {
+        let [u, v] = Self::uv_of(d);
+        let x = ((u * self.width as f32) as usize).min(self.width - 1);
+        let y = ((v * self.height as f32) as usize).min(self.height - 1);
+        (y * self.width + x, ((1.0 - d.y) * (1.0 + d.y)).max(0.0).sqrt())
     }
 
     /// The texel (x, y) direction `d` falls in.
     #[inline]
     pub fn texel_of(&self, d: Vec3) -> (usize, usize) {
-        let [u, v] = Self::uv_of(d);
-        let x = ((u * self.width as f32) as usize).min(self.width - 1);
-        let y = ((v * self.height as f32) as usize).min(self.height - 1);
-        (x, y)
+        let (i, _) = self.index_of(d);
+        (i % self.width, i / self.width)
     }
 
     pub fn texel(&self, x: usize, y: usize) -> Vec3 {
-        self.texels[y * self.width + x]
+        self.texels[y * self.width + x].rgb
     }
 
     /// Radiance arriving along `-d` (looking toward `d`, unit).
     #[inline]
     pub fn radiance(&self, d: Vec3) -> Vec3 {
-        let (x, y) = self.texel_of(d);
-        self.texels[y * self.width + x]
+        self.texels[self.index_of(d).0].rgb
+    }
+
+    /// The radiance and solid-angle density of texel `index` (from [`index_of`](Self::index_of)
+    /// with `sin_theta`): one read; the density is zero at the poles.
+    #[inline(always)]
+    pub fn at_index(&self, index: usize, sin_theta: f32) -> (Vec3, f32) {
+        let t = self.texels[index];
+        (t.rgb, Self::solid_angle_pdf(t.pdf_uv, sin_theta))
+    }
+
+    /// Radiance toward `d` (unit) and the solid-angle density with which
+    /// [`sample_dir`](Self::sample_dir) draws it.
+    #[inline]
+    pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
+        let (i, st) = self.index_of(d);
+        self.at_index(i, st)
+    }
+
+    /// A density per du dv as one per solid angle at a polar angle with sine `sin_theta`
+    /// (zero where the sine is: the poles have no area).
+    #[inline(always)]
+    pub fn solid_angle_pdf(pdf_uv: f32, sin_theta: f32) -> f32 {
+        if sin_theta > 0.0 { pdf_uv / (2.0 * PI * PI * sin_theta) } else { 0.0 }
     }
 
     /// Draws a direction by luminance x sin(theta): (direction, solid-angle density).
@@ -124,27 +176,43 @@ impl EnvMap {
         self.sample_texel(u).map(|(d, pdf, _)| (d, pdf))
     }
 
+    /// The image coordinates a sample draws from two uniform numbers and the index of the
+    /// texel drawn: the table reads, separate from [`texel_at`](Self::texel_at) and
+    /// [`sampled`](Self::sampled) so that lanes can do each step for all of them at once.
+    #[inline(always)]
+    pub fn draw(&self, u: [f32; 2]) -> ([f32; 2], usize) {
+        self.dist.draw(u)
+    }
+
+    /// The radiance of texel `index` and its density per du dv.
+    #[inline(always)]
+    pub fn texel_at(&self, index: usize) -> (Vec3, f32) {
+        let t = self.texels[index];
+        (t.rgb, t.pdf_uv)
+    }
+
+    /// What [`draw`](Self::draw) gave as a direction and its solid-angle density (zero: no
+    /// sample).
+    #[inline(always)]
+    pub fn sampled(uv: [f32; 2], pdf_uv: f32) -> (Vec3, f32) {
+        let (d, st) = Self::dir_sin_of(uv);
+        (d, Self::solid_angle_pdf(pdf_uv, st))
+    }
+
     /// As [`sample_dir`](Self::sample_dir), plus the radiance of the texel drawn (no second
     /// lookup by direction).
     #[inline]
     pub fn sample_texel(&self, u: [f32; 2]) -> Option<(Vec3, f32, Vec3)> {
-        let (uv, pdf_uv, l) = self.dist.sample_payload(u);
-        let sin_theta = (uv[1] * PI).sin();
-        if pdf_uv <= 0.0 || sin_theta <= 0.0 {
-            return None;
-        }
-        Some((Self::dir_of(uv), pdf_uv / (2.0 * PI * PI * sin_theta), l))
+        let (uv, index) = self.draw(u);
+        let (l, pdf_uv) = self.texel_at(index);
+        let (d, pdf) = Self::sampled(uv, pdf_uv);
+        (pdf > 0.0).then_some((d, pdf, l))
     }
 
     /// Solid-angle density with which [`sample_dir`](Self::sample_dir) draws `d` (unit).
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
-        let uv = Self::uv_of(d);
-        let sin_theta = (uv[1] * PI).sin();
-        if sin_theta <= 0.0 {
-            return 0.0;
-        }
-        self.dist.pdf(uv) / (2.0 * PI * PI * sin_theta)
+        self.lookup(d).1
     }
 }
 

@@ -1,9 +1,9 @@
 //! Shade for the paths whose rays left the scene, eight at a time with AVX2 and sixteen with
 //! AVX-512: what a camera ray sees of the environment, and the light from infinity a
 //! BSDF-sampled ray finds, weighed by MIS against the infinite light's own samples
-//! ([`Transport::arrival`]). The environment map's radiance and density toward each ray are
-//! looked up one lane at a time (a texel and a table entry); the selection between the
-//! cases, the constant sky, the map mixture's density and the power heuristic run in a loop
+//! ([`Transport::arrival`]). The environment map's texel toward each ray is found in lanes
+//! and read one lane at a time (radiance and density side by side: one load); the selection
+//! between the cases, the constant sky, the map mixture's density and the power heuristic run in a loop
 //! over the lanes that vectorises, through the functions the one-path code calls
 //! ([`found_at_infinity`],
 //! [`LightSet::background_with`](crate::lights::LightSet::background_with)), so each path
@@ -89,18 +89,27 @@ fn escaped_groups<const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32])
             camera[j] = t.rules.features.environment && depth == 0 && sees_emission;
             arrives[j] = arrivals && depth > 0;
             counts[j] = t.rules.accumulate || depth == t.rules.max_depth;
-            if let Some(m) = map {
-                let found = arrives[j] && b.pdf != 0.0 && counts[j];
-                if camera[j] || found {
-                    put(&mut mapped, j, m.radiance(d));
-                }
-                if found && b.pdf != f32::INFINITY && mis {
-                    mapped_pdf[j] = m.pdf(d);
-                }
-            }
         }
         if !(0..chunk.len()).any(|j| camera[j] || arrives[j]) {
             continue;
+        }
+        if let Some(m) = map {
+            // The texels toward every lane in lanes, then one read per lane that needs it.
+            let mut index = [0usize; L];
+            let mut sin_theta = [0.0f32; L];
+            for j in 0..L {
+                (index[j], sin_theta[j]) = m.index_of(get(&dir, j));
+            }
+            for j in 0..chunk.len() {
+                let found = arrives[j] && pdf[j] != 0.0 && counts[j];
+                if camera[j] || found {
+                    let (l, p) = m.at_index(index[j], sin_theta[j]);
+                    put(&mut mapped, j, l);
+                    if found && pdf[j] != f32::INFINITY && mis {
+                        mapped_pdf[j] = p;
+                    }
+                }
+            }
         }
         let mut l = [[0.0f32; L]; 3];
         for j in 0..L {

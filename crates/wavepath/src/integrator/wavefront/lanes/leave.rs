@@ -264,9 +264,12 @@ fn light_samples<M: LaneModel, N: LaneNumbers<L>, const L: usize>(
     let delta = LightPoints::delta(light, &g.pts.p, mis, &g.direct);
     let ls = match (light, delta) {
         (_, Some(ls)) => ls,
-        (SampledLight::Infinite(inf), None) if inf.map.is_none() => {
+        (SampledLight::Infinite(inf), None) => {
             let (ua, ub) = rng.pair(dim);
-            LightPoints::sky(inf.sky(), &g.pts.ns, &ua, &ub, &g.direct)
+            match inf.map.as_deref() {
+                None => LightPoints::sky(inf.sky(), &g.pts.ns, &ua, &ub, &g.direct),
+                Some(map) => LightPoints::environment(inf, map, &g.pts.ns, &ua, &ub, mis, &g.direct),
+            }
         }
         _ => {
             let (ua, ub) = rng.pair(dim);

@@ -9,7 +9,8 @@ use crate::geometry::{Hit, Ray};
 use crate::integrator::area::{AreaLight, LightRay, ShadingPoint, area_ray};
 use crate::integrator::light_ray::LightPoint;
 use crate::integrator::{Transport, orient};
-use crate::lights::{Emitter, SampledLight, Sky};
+use crate::lights::{Emitter, Infinite, SampledLight, Sky, SkySample};
+use crate::scene::EnvMap;
 use crate::scene::surface::{interpolated_normal, sphere_point, triangle_point};
 use glam::Vec3;
 
@@ -349,6 +350,75 @@ impl<const L: usize> LightPoints<L> {
 }
 
 impl<const L: usize> LightPoints<L> {
+    /// The samples of the light from infinity with an environment map (`inf`, its map `map`)
+    /// for every lane in `take` about the normals `n`, from `(ua, ub)` (the density kept where
+    /// `mis`), as
+    /// [`Infinite::sample_pdf`] computes them one at a time: the map's table read for every
+    /// lane first, then the texels drawn (independent loads the core overlaps), then the directions, densities and
+    /// weights of all lanes in one loop that vectorises ([`Sky::drawn`]); a mixture with
+    /// the constant sky also looks the map up toward each chosen direction (the texel
+    /// indices in lanes, the reads, then [`Sky::mixed`] in lanes).
+    #[inline(always)]
+    pub fn environment(
+        inf: &Infinite,
+        map: &EnvMap,
+        n: &[[f32; L]; 3],
+        ua: &[f32; L],
+        ub: &[f32; L],
+        mis: &[bool; L],
+        take: &[bool; L],
+    ) -> Self {
+        let sky = inf.sky();
+        let mut uv = [[0.0f32; L]; 2];
+        let mut index = [usize::MAX; L];
+        for j in 0..L {
+            if take[j] {
+                let (c, i) = map.draw(sky.map_numbers([ua[j], ub[j]]));
+                (uv[0][j], uv[1][j], index[j]) = (c[0], c[1], i);
+            }
+        }
+        let mut pdf_uv = [0.0f32; L];
+        let mut texel = [[0.0f32; L]; 3];
+        for j in 0..L {
+            if take[j] {
+                let (l, p) = map.texel_at(index[j]);
+                put(&mut texel, j, l);
+                pdf_uv[j] = p;
+            }
+        }
+        let mut drawn = [SkySample { wi: Vec3::ZERO, weight: Vec3::ZERO, pdf: 0.0, valid: false }; L];
+        for j in 0..L {
+            drawn[j] = sky.drawn(get(n, j), [ua[j], ub[j]], [uv[0][j], uv[1][j]], pdf_uv[j], get(&texel, j));
+        }
+        if !sky.map_alone() {
+            let mut index = [0usize; L];
+            let mut sin_theta = [0.0f32; L];
+            for j in 0..L {
+                (index[j], sin_theta[j]) = map.index_of(drawn[j].wi);
+            }
+            let mut mapped = [[0.0f32; L]; 3];
+            let mut mapped_pdf = [0.0f32; L];
+            for j in 0..L {
+                if take[j] {
+                    let (l, p) = map.at_index(index[j], sin_theta[j]);
+                    put(&mut mapped, j, l);
+                    mapped_pdf[j] = p;
+                }
+            }
+            for j in 0..L {
+                drawn[j] = sky.mixed(get(n, j), drawn[j], get(&mapped, j), mapped_pdf[j]);
+            }
+        }
+        let mut out = LightPoints::default();
+        for j in 0..L {
+            let s = drawn[j];
+            let valid = s.valid & take[j];
+            let pdf = if mis[j] { s.pdf } else { 0.0 };
+            out.set(j, &LightPoint { wi: s.wi, weight: s.weight, pdf, target: Vec3::ZERO, finite: false, valid });
+        }
+        out
+    }
+
     /// The samples of a point, spot or directional light (`SampledLight::sample`, and
     /// `sample_pdf`'s infinite density where `mis`) at the points `p` of every lane in `take`:
     /// all lanes at once, the same operations lane by lane (`try_normalize` spelled out; a
