@@ -74,6 +74,8 @@ LARGE_RENDER = ("cs184/reconstructed/sky/CBlucy.dae", "-s 16 -l 4 -m 5 -r 800 60
 STAGES = ["generate", "traverse", "shade", "shadow", "compact"]
 LARGE_SOURCE = "meshes/lucy_100k.obj"
 E2E_QUICK = "--scenes box -r 160 120 --ladder 1,4,16,64 --ref-spp 1024"
+# The harness's front views (its own default leaves spheres-box out).
+E2E_FRONT = "--scenes box,dragon-box,spheres-box"
 # The harness's older scenes were made when wavepath's emitters were two-sided (their Mitsuba
 # versions carry a back copy of each emitter): they compare like with like only so.
 E2E_OLDER = "--scenes cornell,cornell-flush,cornell-dragon --wavepath-args=--two-sided-emission"
@@ -482,7 +484,9 @@ def md_renders(args, part, scenes_dir):
 # ------------------------------------------------------------------ peers ----
 def copy_tree(src, dst):
     """Copy src's files into dst (mtimes kept, so the harness rebuilds only what changed);
-    build products already in dst stay."""
+    build products already in dst stay; nothing to do when dst is src (a writable checkout)."""
+    if os.path.realpath(src) == os.path.realpath(dst):
+        return
     os.makedirs(dst, exist_ok=True)
     subprocess.run(["cp", "-a", "--no-preserve=ownership", os.path.join(src, "."), dst], check=True)
     subprocess.run(["chmod", "-R", "u+w", dst], check=True)
@@ -1010,7 +1014,7 @@ def main(argv):
                     help="before each run wait up to S s for a quiet second (default 2; quick 0)")
     ap.add_argument("--e2e-args", action="append", default=None,
                     help="extra options for one e2e/run.sh run; repeat for several runs in one table "
-                         "(default: the front views, then the older cornell scenes with "
+                         "(default: the front views, " + repr(E2E_FRONT) + ", then the older cornell scenes with "
                          + repr(E2E_OLDER) + ", then the project's own with " + repr(E2E_OWN) + "; quick: " + repr(E2E_QUICK) + ", under a minute)")
     ap.add_argument("--skip-build", action="store_true", help="peers: use what is already built")
     ap.add_argument("--python", default="python3",
@@ -1024,7 +1028,7 @@ def main(argv):
     args.peer_passes = args.peer_passes or (1 if q else 3)
     args.reps = args.reps or (3 if q else 10)
     args.large_levels = [int(x) for x in args.large_levels.split(",") if x]
-    args.e2e_args = args.e2e_args if args.e2e_args is not None else ([E2E_QUICK] if q else ["", E2E_OLDER, E2E_OWN])
+    args.e2e_args = args.e2e_args if args.e2e_args is not None else ([E2E_QUICK] if q else [E2E_FRONT, E2E_OLDER, E2E_OWN])
     args.wait_quiet = args.wait_quiet if args.wait_quiet is not None else (0 if q else 2)
     parts = [p for p in args.parts.split(",") if p] + (["e2e"] if args.e2e and "e2e" not in args.parts else [])
     for p in parts:
