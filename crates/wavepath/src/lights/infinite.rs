@@ -62,6 +62,14 @@ impl Infinite {
         s.valid.then_some((LightSample { wi: s.wi, target: None, weight: s.weight }, s.pdf))
     }
 
+    /// [`radiance`](Self::radiance) and [`pdf`](Self::pdf) toward `wi` from one lookup of the map.
+    #[inline]
+    pub fn radiance_pdf(&self, n: Vec3, wi: Vec3) -> (Vec3, f32) {
+        let (mapped, mapped_pdf) = self.map.as_ref().map_or((Vec3::ZERO, 0.0), |m| m.lookup(wi));
+        let (sky, has_map) = (self.sky(), self.map.is_some());
+        (sky.radiance_with(wi, mapped, has_map), sky.pdf_with(n, wi, mapped_pdf, has_map))
+    }
+
     /// The solid-angle density with which [`sample`](Self::sample) draws `wi` at a point with
     /// shading normal `n` (for multiple importance sampling).
     #[inline]

@@ -198,7 +198,7 @@ impl SampledLight {
                 pdf.is_finite().then_some((radiance, pdf))
             }
             SampledLight::Infinite(ref inf) => match seen {
-                Seen::Miss => Some((inf.radiance(wi), inf.pdf(n, wi))),
+                Seen::Miss => Some(inf.radiance_pdf(n, wi)),
                 Seen::Hit { .. } => None,
             },
             SampledLight::Emissive(ref e) => match seen {

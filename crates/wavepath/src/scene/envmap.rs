@@ -115,7 +115,7 @@ impl EnvMap {
     }
 
     /// The unit direction at image coordinates (u, v).
-    #[inline(always)]
+    #[cfg(test)]
     pub fn dir_of(uv: [f32; 2]) -> Vec3 {
         Self::dir_sin_of(uv).0
     }
@@ -156,7 +156,7 @@ impl EnvMap {
     }
 
     /// Radiance toward `d` (unit) and the solid-angle density with which
-    /// [`sample_dir`](Self::sample_dir) draws it.
+    /// a light sample ([`draw`](Self::draw)) draws it.
     #[inline]
     pub fn lookup(&self, d: Vec3) -> (Vec3, f32) {
         let (i, st) = self.index_of(d);
@@ -168,12 +168,6 @@ impl EnvMap {
     #[inline(always)]
     pub fn solid_angle_pdf(pdf_uv: f32, sin_theta: f32) -> f32 {
         if sin_theta > 0.0 { pdf_uv / (2.0 * PI * PI * sin_theta) } else { 0.0 }
-    }
-
-    /// Draws a direction by luminance x sin(theta): (direction, solid-angle density).
-    #[inline]
-    pub fn sample_dir(&self, u: [f32; 2]) -> Option<(Vec3, f32)> {
-        self.sample_texel(u).map(|(d, pdf, _)| (d, pdf))
     }
 
     /// The image coordinates a sample draws from two uniform numbers and the index of the
@@ -199,9 +193,9 @@ impl EnvMap {
         (d, Self::solid_angle_pdf(pdf_uv, st))
     }
 
-    /// As [`sample_dir`](Self::sample_dir), plus the radiance of the texel drawn (no second
-    /// lookup by direction).
-    #[inline]
+    /// A direction drawn by luminance x sin(theta), its solid-angle density and the radiance
+    /// of the texel drawn: the three steps the light's samples take, in one call.
+    #[cfg(test)]
     pub fn sample_texel(&self, u: [f32; 2]) -> Option<(Vec3, f32, Vec3)> {
         let (uv, index) = self.draw(u);
         let (l, pdf_uv) = self.texel_at(index);
@@ -209,7 +203,7 @@ impl EnvMap {
         (pdf > 0.0).then_some((d, pdf, l))
     }
 
-    /// Solid-angle density with which [`sample_dir`](Self::sample_dir) draws `d` (unit).
+    /// Solid-angle density with which a light sample ([`draw`](Self::draw)) draws `d` (unit).
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
         self.lookup(d).1

@@ -245,10 +245,10 @@ fn direct_light<M: LaneModel, N: LaneNumbers<L>, const L: usize>(
 
 /// One sample of light `li` (`light`: the light from infinity, point, spot and directional
 /// lights, an area light a model samples as any light; `ns` samples a vertex) for every lane,
-/// from the pair at dimension `dim`: the light from infinity without a map and the delta
-/// lights sampled in all lanes at once, any other light one lane at a time
-/// (`SampledLight::sample_pdf`: the map's table, a normalisation); then the model's shadow
-/// rays and weights of all lanes ([`LaneModel::light_ray`]).
+/// from the pair at dimension `dim`: the light from infinity (with or without a map) and the
+/// delta lights sampled in all lanes at once, any other light one lane at a time
+/// (`SampledLight::sample_pdf`); then the model's shadow rays and weights of all lanes
+/// ([`LaneModel::light_ray`]).
 #[inline(always)]
 fn light_samples<M: LaneModel, N: LaneNumbers<L>, const L: usize>(
     gs: Samples<'_, '_, M, N, L>,
