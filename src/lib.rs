@@ -3,6 +3,7 @@
 //! only the engine's face (`wavepath::*`); the `wavepath` command (`main.rs`, `cli/`) puts
 //! them on the command line.
 
+pub mod oidn_runtime;
 pub mod parts;
 pub mod rayfile;
 pub mod study;

@@ -127,9 +127,15 @@ class Scene:
         fov: Optional[Literal["cs184", "frame"]] = None,
         lens_radius: Optional[float] = None,
         focal_distance: Optional[float] = None,
+        aovs: Optional[Sequence[Literal["albedo", "normal", "depth", "position", "variance"]]] = None,
+        denoise: bool = False,
+        oidn: Optional[Union[str, PathLike[str]]] = None,
         progress: Optional[Callable[[int, int], Any]] = None,
-    ) -> Tuple[npt.NDArray[np.float32], dict[str, Any]]:
-        """Renders; returns (image, stats).
+    ) -> Union[
+        Tuple[npt.NDArray[np.float32], dict[str, Any]],
+        Tuple[npt.NDArray[np.float32], dict[str, Any], dict[str, npt.NDArray[np.float32]]],
+    ]:
+        """Renders; returns (image, stats), or (image, stats, aovs) when aovs is given.
 
         image: float32 (height, width, 3), linear radiance, top row first. stats: what
         `wavepath --stats` writes (rays, mrays_per_s, stages, effects, ...) plus "log", the
@@ -141,6 +147,15 @@ class Scene:
         --roulette, --rr, --rr-depth, --isa, --fov, lens_radius -b, focal_distance -d); left
         out, the command line's default for the scene stands. The same options give the same
         image, bit for bit, as the command line. camera replaces the scene's for this render.
+
+        aovs (--aov): output variables by name, returned as a dict of float32 arrays, top row
+        first: albedo, normal, position and variance (height, width, 3), depth (height, width).
+        Albedo and normal are those of the first hit that is not a mirror or glass, depth and
+        position of the first hit (zero where a pixel's rays hit nothing), variance the
+        estimated variance of each pixel's mean. denoise (--denoise): the image denoised by
+        Intel Open Image Denoise with the render's albedo and normal, loaded at run time from
+        oidn (a library, a folder holding it) or from the installed pyoidn package
+        (`pip install pyoidn`); RuntimeError in one line when neither is there.
 
         The GIL is released; Ctrl-C raises KeyboardInterrupt within a fraction of a second;
         progress(done, total) is called a few times a second with camera samples finished.

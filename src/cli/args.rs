@@ -4,7 +4,7 @@ use super::choices::{Split, named};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use wavepath::{
-    BvhBuild, CameraMode, FovRule, IntegratorKind, Isa, LeafLayout, RouletteKind, SamplerKind, Shading, Tonemap,
+    Aov, BvhBuild, CameraMode, FovRule, IntegratorKind, Isa, LeafLayout, RouletteKind, SamplerKind, Shading, Tonemap,
 };
 
 #[derive(Parser, Debug)]
@@ -248,6 +248,22 @@ pub struct RenderArgs {
     /// Write machine-readable statistics (JSON) to FILE.
     #[arg(long, value_name = "FILE")]
     pub stats: Option<PathBuf>,
+    /// Output variables kept beside the picture, comma-separated: albedo and normal (at the
+    /// first hit that is not a mirror or glass), depth and position (of the first hit),
+    /// variance (of each pixel's mean). An .exr output holds them as layers of one image
+    /// (albedo.R, normal.X, depth.Z...); other formats write <stem>.<aov>.<ext> beside it
+    /// (.exr beside a .png).
+    #[arg(long, value_name = "LIST", value_parser = named::<Aov>(), value_delimiter = ',')]
+    pub aov: Vec<Aov>,
+    /// Denoise the picture with Intel Open Image Denoise, fed the albedo and normal of the
+    /// same render (prefiltered, as OIDN recommends for noisy auxiliaries). The library is
+    /// loaded at run time: `pip install pyoidn`, or give it with --oidn.
+    #[arg(long)]
+    pub denoise: bool,
+    /// Open Image Denoise's library, a folder holding it, or an installed pyoidn package.
+    /// Default: the pyoidn that `python3` on the PATH imports.
+    #[arg(long, value_name = "PATH")]
+    pub oidn: Option<PathBuf>,
     /// Render only part I of N (0-based) into an .exr part file for `wavepath merge`;
     /// `auto`: I and N from a Slurm array job or a Kubernetes Indexed Job.
     #[arg(long, value_name = "I/N|auto")]

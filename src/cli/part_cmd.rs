@@ -11,6 +11,9 @@ use wavepath_apps::parts::{PartMeta, PartSpec, PartStats, identity};
 
 pub fn run(a: &RenderArgs) -> Result<()> {
     let t0 = Instant::now();
+    if !a.aov.is_empty() || a.denoise {
+        bail!("--aov and --denoise need the whole render in one process: a part file keeps only the picture's sums");
+    }
     let checked = settings(a, Settings::default())?;
     let text = a.part.as_deref().unwrap_or("auto");
     let spec = PartSpec::parse(text, a.parts, a.split.into(), &|k| std::env::var(k).ok())?;

@@ -45,6 +45,13 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     settings(a, Settings::default())?;
     let out: PathBuf = a.output.clone().unwrap_or_else(|| PathBuf::from("wavepath.png"));
     check_output_extension(&out)?;
+    // The denoiser is found before the (possibly long) load and render.
+    let denoiser = if a.denoise {
+        let lib = wavepath_apps::oidn_runtime::find_oidn(a.oidn.as_deref())?;
+        Some(wavepath::Denoiser::load(&lib)?)
+    } else {
+        None
+    };
     let t0 = Instant::now();
     let scene = super::with_spinner("loading", || prepare_scene(a))?;
     let s = settings(a, Settings::for_scene(&scene))?;
@@ -102,8 +109,14 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         }
         Ok((result, build))
     })??;
-    let wavepath::RenderOutput { film, stats, samples } = film;
-    wavepath::write_image(&film, &out, a.tonemap)?;
+    let wavepath::RenderOutput { film, stats, samples, aovs } = film;
+    let film = match &denoiser {
+        Some(d) => denoise(d, &film, &aovs)?,
+        None => film,
+    };
+    // Only the variables asked for are written (a denoiser's albedo and normal are its own).
+    let written: Vec<_> = aovs.into_iter().filter(|v| a.aov.contains(&v.aov)).collect();
+    let files = wavepath::write_image_with_aovs(&film, &written, &out, a.tonemap)?;
     // The sample-rate image shows where adaptive sampling spent its samples; a fixed-rate
     // render's would be one flat grey nobody asked for.
     if s.sampling.adaptive.is_some() && s.paths.shading != wavepath::Shading::Normals {
@@ -115,13 +128,31 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     for line in stats.log_lines() {
         eprintln!("[wavepath] {line}");
     }
-    eprintln!("[wavepath] Wrote {}", out.display());
+    for f in &files {
+        eprintln!("[wavepath] Wrote {}", f.display());
+    }
     if let Some(p) = &a.stats {
         let json = wavepath::stats_json(&scene, &s, effects, &build, &stats);
         write_atomic(p, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     let _: &RenderStats = &stats;
     Ok(())
+}
+
+/// The picture denoised with the render's albedo and normal (prefiltered: they carry the
+/// render's own noise), with the time it took logged.
+fn denoise(d: &wavepath::Denoiser, film: &wavepath::Film, aovs: &[wavepath::AovImage]) -> Result<wavepath::Film> {
+    let find = |k: wavepath::Aov| aovs.iter().find(|v| v.aov == k).map(|v| v.to_film());
+    let (albedo, normal) = (find(wavepath::Aov::Albedo), find(wavepath::Aov::Normal));
+    let t = Instant::now();
+    let aux = wavepath::Aux { albedo: albedo.as_ref(), normal: normal.as_ref(), prefilter: true };
+    let out = d.denoise(film, aux)?;
+    eprintln!(
+        "[wavepath] Denoised in {:.3} s (Open Image Denoise, {})",
+        t.elapsed().as_secs_f64(),
+        d.library().display()
+    );
+    Ok(out)
 }
 
 /// `<out>_rate.png` beside the output image.

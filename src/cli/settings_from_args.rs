@@ -4,7 +4,7 @@
 
 use super::RenderArgs;
 use anyhow::Result;
-use wavepath::{Field, Request, Settings};
+use wavepath::{Aov, AovSet, Field, Request, Settings};
 
 /// The command line's name for each checked value, as its messages show it.
 pub fn flag(f: Field) -> &'static str {
@@ -54,7 +54,15 @@ pub fn request(a: &RenderArgs) -> Request {
         fov: Some(a.fov),
         lens_radius: a.lens_radius,
         focal_distance: a.focal_distance,
+        aovs: Some(kept_aovs(a)),
     }
+}
+
+/// The output variables the render keeps: those asked for with `--aov`, and the albedo and
+/// normal a denoiser is fed.
+pub fn kept_aovs(a: &RenderArgs) -> AovSet {
+    let asked = a.aov.iter().fold(AovSet::NONE, |s, &v| s.with(v));
+    if a.denoise { asked.with(Aov::Albedo).with(Aov::Normal) } else { asked }
 }
 
 /// The flags applied on top of `base`, normally [`Settings::for_scene`] of the loaded scene:

@@ -6,6 +6,7 @@
 //! Ctrl-C. The stub `wavepath.pyi` beside this crate's pyproject.toml documents the types.
 
 mod arrays;
+mod denoise;
 mod errors;
 mod rays;
 mod render;

@@ -7,7 +7,8 @@ use pyo3::prelude::*;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::Duration;
 use wavepath::{
-    BuildInfo, Choice, Extent, Field, Intersector, RenderOutput, RenderPlan, RenderStats, Request, Scene, Settings,
+    Aov, AovSet, BuildInfo, Choice, Extent, Field, Intersector, RenderOutput, RenderPlan, RenderStats, Request, Scene,
+    Settings,
 };
 
 /// How often the waiting loop looks at Ctrl-C and calls the progress callback.
@@ -37,6 +38,10 @@ pub struct RenderOptions {
     pub fov: Option<String>,
     pub lens_radius: Option<f64>,
     pub focal_distance: Option<f64>,
+    /// Output variables returned beside the image, by name.
+    pub aovs: Option<Vec<String>>,
+    /// The image is denoised (the albedo and normal it is fed are kept for it).
+    pub denoise: bool,
 }
 
 /// Python's name for each checked value: the keyword argument's.
@@ -86,8 +91,24 @@ pub fn request(o: &RenderOptions) -> PyResult<Request> {
         fov: choice("fov", &o.fov)?,
         lens_radius: o.lens_radius,
         focal_distance: o.focal_distance,
+        aovs: Some(kept_aovs(o)?),
         ..Request::default()
     })
+}
+
+/// The output variables asked for by name (`aovs`), refused in one line if unknown.
+pub fn asked_aovs(o: &RenderOptions) -> PyResult<AovSet> {
+    let mut set = AovSet::NONE;
+    for name in o.aovs.iter().flatten() {
+        set = set.with(Aov::from_name(name).map_err(|e| value_error(e.for_option("aovs").to_string()))?);
+    }
+    Ok(set)
+}
+
+/// What the render keeps: the variables asked for and, to denoise, the albedo and normal.
+fn kept_aovs(o: &RenderOptions) -> PyResult<AovSet> {
+    let asked = asked_aovs(o)?;
+    Ok(if o.denoise { asked.with(Aov::Albedo).with(Aov::Normal) } else { asked })
 }
 
 /// The settings of a render: [`Settings::for_scene`], then each option given (a left-out

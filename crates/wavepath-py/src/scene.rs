@@ -8,7 +8,7 @@ use crate::render::{self, RenderOptions};
 use crate::values;
 use glam::{Vec2, Vec3};
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArray2, PyArray3};
+use numpy::{IntoPyArray, PyArray1, PyArray2};
 use pyo3::exceptions::PyRuntimeError;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyTuple};
@@ -243,7 +243,7 @@ impl PyScene {
     /// (`wavepath SCENE -s SPP -l LIGHT_SAMPLES -m MAX_DEPTH -r W H ...`). Ctrl-C stops the
     /// render (KeyboardInterrupt); `progress(done, total)` is called a few times a second
     /// with the camera samples finished. Other Python threads run meanwhile.
-    #[pyo3(signature = (*, spp=None, light_samples=None, max_depth=None, accumulate=None, resolution=None, camera=None, threads=None, sampler=None, seed=None, adaptive=None, shading=None, integrator=None, hemisphere=None, mis=None, roulette=None, rr=None, rr_depth=None, isa=None, fov=None, lens_radius=None, focal_distance=None, progress=None))]
+    #[pyo3(signature = (*, spp=None, light_samples=None, max_depth=None, accumulate=None, resolution=None, camera=None, threads=None, sampler=None, seed=None, adaptive=None, shading=None, integrator=None, hemisphere=None, mis=None, roulette=None, rr=None, rr_depth=None, isa=None, fov=None, lens_radius=None, focal_distance=None, aovs=None, denoise=false, oidn=None, progress=None))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -269,8 +269,11 @@ impl PyScene {
         fov: Option<String>,
         lens_radius: Option<f64>,
         focal_distance: Option<f64>,
+        aovs: Option<Vec<String>>,
+        denoise: bool,
+        oidn: Option<std::path::PathBuf>,
         progress: Option<Py<PyAny>>,
-    ) -> PyResult<(Bound<'py, PyArray3<f32>>, Bound<'py, PyAny>)> {
+    ) -> PyResult<Bound<'py, PyTuple>> {
         let o = RenderOptions {
             spp,
             light_samples,
@@ -292,7 +295,13 @@ impl PyScene {
             fov,
             lens_radius,
             focal_distance,
+            aovs,
+            denoise,
         };
+        let asked = render::asked_aovs(&o)?;
+        let wants_aovs = o.aovs.is_some();
+        // The denoiser is found before the render, so a missing one costs no render.
+        let denoiser = if denoise { Some(crate::denoise::load(py, oidn.as_deref())?) } else { None };
         let given_camera = camera.map(values::camera).transpose()?;
         if let Some(p) = &progress
             && !p.bind(py).is_callable()
@@ -325,23 +334,34 @@ impl PyScene {
         *self.rendering.lock().unwrap_or_else(|e| e.into_inner()) = None;
         drop(guard);
         let r = result?;
-        let film = r.out.film;
-        let (w, h) = (film.width, film.height);
-        // Film rows run bottom-up; numpy images top-down.
-        let mut data = Vec::with_capacity(w * h * 3);
-        for y in (0..h).rev() {
-            for p in &film.pixels[y * w..(y + 1) * w] {
-                data.extend_from_slice(&p.to_array());
+        let mut log = r.log;
+        let film = match &denoiser {
+            Some(d) => {
+                let (film, line) = crate::denoise::run(py, d, &r.out.film, &r.out.aovs)?;
+                log.push(line);
+                film
             }
-        }
-        let image = numpy::ndarray::Array3::from_shape_vec((h, w, 3), data)
-            .map_err(|e| value_error(e.to_string()))?
-            .into_pyarray(py);
+            None => r.out.film,
+        };
+        let image = film_rows(
+            py,
+            film.width,
+            film.height,
+            3,
+            &film.pixels.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>(),
+        )?;
         let stats = py.import("json")?.call_method1("loads", (r.stats_json,))?;
         if let Ok(d) = stats.cast::<PyDict>() {
-            d.set_item("log", r.log)?;
+            d.set_item("log", log)?;
         }
-        Ok((image, stats))
+        if !wants_aovs {
+            return PyTuple::new(py, [image.into_any(), stats]);
+        }
+        let out = PyDict::new(py);
+        for a in r.out.aovs.iter().filter(|a| asked.contains(a.aov)) {
+            out.set_item(a.aov.name(), film_rows(py, a.width, a.height, a.channels(), &a.data)?)?;
+        }
+        PyTuple::new(py, [image.into_any(), stats, out.into_any()])
     }
 
     /// Closest hits of rays given as numpy arrays.
@@ -546,4 +566,19 @@ fn ray_dict<'py>(py: Python<'py>, rays: &[wavepath::Ray]) -> PyResult<Bound<'py,
     out.set_item("tmin", PyArray1::from_vec(py, rays.iter().map(|r| r.tmin).collect()))?;
     out.set_item("tmax", PyArray1::from_vec(py, rays.iter().map(|r| r.tmax).collect()))?;
     Ok(out)
+}
+
+/// An image's interleaved channels (film rows, bottom first) as a numpy array, top row
+/// first: (height, width, channels), or (height, width) for one channel.
+fn film_rows<'py>(py: Python<'py>, w: usize, h: usize, c: usize, data: &[f32]) -> PyResult<Bound<'py, PyAny>> {
+    let mut rows = Vec::with_capacity(w * h * c);
+    for y in (0..h).rev() {
+        rows.extend_from_slice(&data[y * w * c..(y + 1) * w * c]);
+    }
+    if c == 1 {
+        let a = numpy::ndarray::Array2::from_shape_vec((h, w), rows).map_err(|e| value_error(e.to_string()))?;
+        return Ok(a.into_pyarray(py).into_any());
+    }
+    let a = numpy::ndarray::Array3::from_shape_vec((h, w, c), rows).map_err(|e| value_error(e.to_string()))?;
+    Ok(a.into_pyarray(py).into_any())
 }

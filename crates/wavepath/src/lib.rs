@@ -52,7 +52,8 @@ mod film;
 mod lights;
 mod load;
 mod request;
-// 4: what a render measured.
+// 4: what a render measured; denoising a rendered film (Open Image Denoise, loaded at run time).
+mod denoise;
 mod stats;
 // 5: light transport: the shared vertex logic, the wavefront stages, the recursive reference.
 mod integrator;
@@ -81,8 +82,8 @@ pub use cs184::Dialect;
 pub use request::{Field, InvalidValue, MAX_PIXELS, MAX_SIDE, Names, Range, Request, check_resolution};
 pub use sampling::SamplerKind;
 pub use settings::{
-    AccelSettings, BvhBuild, BvhOptions, Cell, Cs184Compat, Execution, ImageSettings, IntegratorKind, LeafLayout,
-    PathRules, Roulette, RouletteKind, Sampling, Settings, Shading,
+    AccelSettings, Aov, AovSet, BvhBuild, BvhOptions, Cell, Cs184Compat, Execution, ImageSettings, IntegratorKind,
+    LeafLayout, PathRules, Roulette, RouletteKind, Sampling, Settings, Shading,
 };
 
 // Rays: the acceleration structures and their queries.
@@ -91,8 +92,11 @@ pub use geometry::{Hit, Ray};
 pub use raysets::{diffuse_rays, primary_rays};
 
 // Renders and what they produce.
+pub use denoise::{Aux, Denoiser, OIDN_HELP};
 pub use effects::{Effect, Effects};
-pub use film::{Accumulator, Film, PixelSums, Tonemap, rate_film, write_image, write_rate_image};
+pub use film::{
+    Accumulator, AovImage, Film, PixelSums, Tonemap, rate_film, write_image, write_image_with_aovs, write_rate_image,
+};
 pub use integrator::plan::{Extent, RenderPlan};
 pub use render::{
     Canvas, Interrupted, RenderOutput, render, render_plan, render_plan_sums, render_sums, render_until,

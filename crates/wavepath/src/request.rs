@@ -200,6 +200,8 @@ pub struct Request {
     pub fov: Option<FovRule>,
     pub lens_radius: Option<f64>,
     pub focal_distance: Option<f64>,
+    /// Output variables kept beside the picture (`--aov`).
+    pub aovs: Option<crate::settings::AovSet>,
 }
 
 impl Request {
@@ -256,6 +258,7 @@ impl Request {
         set(&mut s.sampling.seed, self.seed);
         set(&mut s.sampling.sampler, self.sampler);
         set(&mut s.image.fov, self.fov);
+        set(&mut s.image.aovs, self.aovs);
         // Direct light alone at depth 1, global illumination beyond, unless named.
         s.paths.shading = self.shading.unwrap_or(Shading::for_depth(s.paths.max_depth));
         if let Some(p) = self.cell {
@@ -273,6 +276,18 @@ impl Request {
                 )));
             }
             s.image.cell = Some(cell);
+        }
+        if s.image.aovs.traced() && s.execution.integrator == IntegratorKind::Recursive {
+            return Err(InvalidValue(format!(
+                "the output variables {} need the wavefront integrator: the recursive reference records no first hits",
+                s.image.aovs
+            )));
+        }
+        if !s.image.aovs.is_empty() && s.paths.shading == Shading::Normals {
+            return Err(InvalidValue(format!(
+                "the normals view keeps no output variables ({}); render light transport",
+                s.image.aovs
+            )));
         }
         if let Some(r) = self.lens_radius {
             Field::LensRadius.number(names(Field::LensRadius), r)?;

@@ -1,5 +1,6 @@
 //! Render settings: everything the command line can change about a render.
 
+use crate::choice::{Choice, UnknownName};
 use crate::cs184::Dialect;
 use crate::scene::{Camera, FovRule};
 
@@ -87,11 +88,14 @@ pub struct ImageSettings {
     /// image, not of the scene: the render plan fits a copy of the scene's camera by it
     /// ([`ImageSettings::camera`]), so one scene renders at any size and rule unchanged.
     pub fov: FovRule,
+    /// Output variables kept beside the picture (`--aov`); none by default, and then the
+    /// render records nothing more.
+    pub aovs: AovSet,
 }
 
 impl Default for ImageSettings {
     fn default() -> Self {
-        ImageSettings { width: 800, height: 600, cell: None, fov: FovRule::default() }
+        ImageSettings { width: 800, height: 600, cell: None, fov: FovRule::default(), aovs: AovSet::NONE }
     }
 }
 
@@ -356,5 +360,110 @@ impl Settings {
             }
             None => Cell { x: 0, y: 0, w: width, h: height },
         }
+    }
+}
+
+/// One output variable.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Aov {
+    Albedo,
+    Normal,
+    Depth,
+    Position,
+    Variance,
+}
+
+crate::choice::named!(Aov, "AOV", {
+    Albedo => "albedo", "reflectance at the first non-delta hit, in [0, 1] (OIDN's albedo)";
+    Normal => "normal", "world-space shading normal at the first non-delta hit, facing the ray";
+    Depth => "depth", "distance from the camera to the first hit along the camera ray";
+    Position => "position", "world-space position of the first hit";
+    Variance => "variance", "estimated variance of each pixel's mean, per channel";
+});
+
+impl Aov {
+    /// The channels of its layer, named as OpenEXR readers expect (Blender's and OIDN's
+    /// tools: colours R G B, vectors X Y Z, depth Z).
+    pub fn channels(self) -> &'static [&'static str] {
+        match self {
+            Aov::Albedo | Aov::Variance => &["R", "G", "B"],
+            Aov::Normal | Aov::Position => &["X", "Y", "Z"],
+            Aov::Depth => &["Z"],
+        }
+    }
+}
+
+/// A set of output variables (`--aov albedo,normal`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct AovSet(u8);
+
+impl AovSet {
+    pub const NONE: AovSet = AovSet(0);
+
+    fn bit(a: Aov) -> u8 {
+        1 << Aov::ALL.iter().position(|&b| b == a).unwrap_or(0)
+    }
+
+    pub fn with(self, a: Aov) -> AovSet {
+        AovSet(self.0 | Self::bit(a))
+    }
+
+    pub fn union(self, o: AovSet) -> AovSet {
+        AovSet(self.0 | o.0)
+    }
+
+    pub fn contains(self, a: Aov) -> bool {
+        self.0 & Self::bit(a) != 0
+    }
+
+    pub fn is_empty(self) -> bool {
+        self.0 == 0
+    }
+
+    /// The members, in the order [`Aov::ALL`] lists them.
+    pub fn iter(self) -> impl Iterator<Item = Aov> {
+        Aov::ALL.iter().copied().filter(move |&a| self.contains(a))
+    }
+
+    /// Whether the paths must record their first hits (every AOV but the variance, which
+    /// comes from the beauty's own sums).
+    pub fn traced(self) -> bool {
+        self.iter().any(|a| a != Aov::Variance)
+    }
+}
+
+impl std::str::FromStr for AovSet {
+    type Err = UnknownName;
+
+    /// A comma-separated list of names; an unknown name is refused with the list of known ones.
+    fn from_str(s: &str) -> Result<AovSet, UnknownName> {
+        let mut set = AovSet::NONE;
+        for part in s.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            set = set.with(part.parse::<Aov>()?);
+        }
+        Ok(set)
+    }
+}
+
+impl std::fmt::Display for AovSet {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let names: Vec<&str> = self.iter().map(|a| a.name()).collect();
+        f.write_str(&names.join(","))
+    }
+}
+
+#[cfg(test)]
+mod aov_tests {
+    use super::*;
+
+    #[test]
+    fn sets_parse_lists_and_refuse_unknown_names() {
+        let s: AovSet = "albedo, depth,variance".parse().unwrap();
+        assert_eq!(s.iter().collect::<Vec<_>>(), [Aov::Albedo, Aov::Depth, Aov::Variance]);
+        assert!(s.traced());
+        assert!(!"variance".parse::<AovSet>().unwrap().traced());
+        assert_eq!(s.to_string(), "albedo,depth,variance");
+        let e = "albedo,nromal".parse::<AovSet>().unwrap_err().to_string();
+        assert!(e.contains("nromal") && e.contains("normal") && !e.contains('\n'), "{e}");
     }
 }

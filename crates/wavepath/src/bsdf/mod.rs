@@ -128,6 +128,26 @@ impl Model {
         }
     }
 
+    /// The colour a denoiser's albedo image takes for this model (Open Image Denoise asks for
+    /// values in [0, 1], not a strict albedo): the diffuse colour plus the specular
+    /// reflectance at normal incidence, clamped; `None` for delta models, which the image sees
+    /// through to the next surface.
+    pub fn albedo_estimate(&self) -> Option<Vec3> {
+        let a = match self {
+            Model::Lambert(l) => l.albedo,
+            Model::Mirror(_) | Model::Dielectric(_) => return None,
+            Model::Microfacet(m) => Vec3::new(
+                microfacet::fresnel_conductor(1.0, m.eta.x, m.k.x),
+                microfacet::fresnel_conductor(1.0, m.eta.y, m.k.y),
+                microfacet::fresnel_conductor(1.0, m.eta.z, m.k.z),
+            ),
+            Model::Pbr(p) => p.diffuse + p.f0,
+            Model::Glossy(g) => g.diffuse + g.specular,
+            Model::Layered(l) => l.diffuse + l.transmit + l.f0,
+        };
+        Some(if a.is_finite() { a.clamp(Vec3::ZERO, Vec3::ONE) } else { Vec3::ZERO })
+    }
+
     /// This model at a hit on the `front` (outer) side or the back side: a dielectric's
     /// relative index of refraction (transmitted over incident side) flips inside.
     #[inline]

@@ -1,4 +1,4 @@
-use super::Film;
+use super::{AovSums, Film};
 use glam::{DVec3, Vec3};
 
 /// Running sums of one pixel's samples: enough for its mean, the variance of that mean, and
@@ -77,6 +77,9 @@ pub struct Accumulator {
     pub width: usize,
     pub height: usize,
     pub pixels: Vec<PixelSums>,
+    /// Each pixel's first-hit sums ([`super::AovSet::traced`]); empty when the render records
+    /// none, so a render without AOVs keeps nothing more.
+    pub aovs: Vec<AovSums>,
 }
 
 impl Accumulator {
@@ -93,7 +96,18 @@ impl Accumulator {
     }
 
     pub fn new(width: usize, height: usize) -> Self {
-        Accumulator { width, height, pixels: vec![PixelSums::default(); width * height] }
+        Accumulator { width, height, pixels: vec![PixelSums::default(); width * height], aovs: Vec::new() }
+    }
+
+    /// As [`new`](Self::new), with first-hit sums for every pixel when `first_hits`.
+    pub fn with_aovs(width: usize, height: usize, first_hits: bool) -> Self {
+        let aovs = if first_hits { vec![AovSums::default(); width * height] } else { Vec::new() };
+        Accumulator { aovs, ..Accumulator::new(width, height) }
+    }
+
+    /// The images of the output variables `set` (see [`super::AovImage::from_sums`]).
+    pub fn aov_images(&self, set: crate::settings::AovSet) -> Vec<super::AovImage> {
+        super::AovImage::from_sums(set, self.width, self.height, &self.pixels, &self.aovs)
     }
 
     /// The mean of every pixel, f32 linear RGB.

@@ -1,12 +1,14 @@
 //! The image being rendered and how it is written to disk.
 
 mod accum;
+mod aov;
 mod rate;
 mod write;
 
 pub use accum::{Accumulator, PixelSums};
+pub use aov::{AovImage, AovSample, AovSums};
 pub use rate::{rate_film, write_rate_image};
-pub use write::{Tonemap, write_image};
+pub use write::{Tonemap, write_image, write_image_with_aovs};
 
 use glam::Vec3;
 

@@ -1,4 +1,4 @@
-use super::Film;
+use super::{AovImage, Film};
 use anyhow::{Context, Result, bail};
 use std::io::Write;
 use std::path::Path;
@@ -99,4 +99,78 @@ fn write_pfm(film: &Film, path: &Path) -> Result<()> {
     }
     f.flush()?;
     Ok(())
+}
+
+/// Writes the film with the output variables `aovs`: an OpenEXR file holds them all as
+/// named layers of one image beside the beauty's `R`, `G`, `B` (`albedo.R`, `normal.X`,
+/// `depth.Z`, `position.X`, `variance.R`...: the `layer.channel` names Nuke, Blender and
+/// OpenEXR's tools group into layers); any other format writes each variable to a file of its
+/// own beside the image, `<stem>.<aov>.<ext>` (`.exr` beside a PNG, whose bytes cannot hold
+/// them). Returns the files written, the image first.
+pub fn write_image_with_aovs(
+    film: &Film,
+    aovs: &[AovImage],
+    path: &Path,
+    tonemap: Tonemap,
+) -> Result<Vec<std::path::PathBuf>> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
+    if aovs.is_empty() {
+        write_image(film, path, tonemap)?;
+        return Ok(vec![path.to_path_buf()]);
+    }
+    if ext == "exr" {
+        write_layered_exr(film, aovs, path)?;
+        return Ok(vec![path.to_path_buf()]);
+    }
+    write_image(film, path, tonemap)?;
+    let mut written = vec![path.to_path_buf()];
+    let side_ext = if ext == "png" { "exr" } else { ext.as_str() };
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
+    for a in aovs {
+        let side = path.with_file_name(format!("{stem}.{}.{side_ext}", a.aov.name()));
+        write_image(&a.to_film(), &side, tonemap)?;
+        written.push(side);
+    }
+    Ok(written)
+}
+
+/// One OpenEXR image: the beauty's R, G, B and every variable's channels under its name.
+fn write_layered_exr(film: &Film, aovs: &[AovImage], path: &Path) -> Result<()> {
+    use exr::prelude::*;
+    let (w, h) = (film.width, film.height);
+    // File rows run top-down, film rows bottom-up.
+    let top_down = |c: usize, channels: usize, data: &dyn Fn(usize) -> f32| -> Vec<f32> {
+        let mut out = Vec::with_capacity(w * h);
+        for y in (0..h).rev() {
+            for x in 0..w {
+                let v = data((y * w + x) * channels + c);
+                out.push(if v.is_finite() { v } else { 0.0 });
+            }
+        }
+        out
+    };
+    let beauty: Vec<f32> = film.pixels.iter().flat_map(|p| p.to_array()).collect();
+    let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        channels.push(AnyChannel::new(name, FlatSamples::F32(top_down(c, 3, &|i| beauty[i]))));
+    }
+    for a in aovs {
+        if (a.width, a.height) != (w, h) {
+            bail!("{}: the {} image is {}x{}, the picture {w}x{h}", path.display(), a.aov.name(), a.width, a.height);
+        }
+        let n = a.channels();
+        for (c, ch) in a.aov.channels().iter().enumerate() {
+            let name = format!("{}.{ch}", a.aov.name());
+            channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(top_down(c, n, &|i| a.data[i]))));
+        }
+    }
+    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
+    let ext = "exr";
+    let tmp = path.with_extension(format!("tmp.{ext}"));
+    let result = Image::from_layer(layer).write().to_file(&tmp);
+    if let Err(e) = result {
+        let _ = std::fs::remove_file(&tmp);
+        bail!("{}: cannot write image: {e}", path.display());
+    }
+    std::fs::rename(&tmp, path).with_context(|| format!("{}: cannot write image", path.display()))
 }

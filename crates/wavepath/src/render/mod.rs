@@ -5,7 +5,7 @@ mod normals;
 pub use normals::render_normals;
 
 use crate::accel::Intersector;
-use crate::film::{Accumulator, Film, PixelSums};
+use crate::film::{Accumulator, AovImage, Film, PixelSums};
 use crate::integrator::plan::{Extent, RenderPlan};
 use crate::integrator::recursive::render_recursive_into;
 use crate::integrator::wavefront::{RenderJob, WaveWorkers, render_wavefront_into};
@@ -21,6 +21,8 @@ pub struct RenderOutput {
     pub film: Film,
     pub stats: RenderStats,
     pub samples: Vec<u32>,
+    /// The output variables the settings asked for (`image.aovs`), in [`crate::Aov::ALL`]'s order.
+    pub aovs: Vec<AovImage>,
 }
 
 /// Renders `scene` with `settings`; the film covers the whole image, pixels outside a
@@ -80,12 +82,16 @@ pub fn render_plan(
 ) -> Result<RenderOutput> {
     let settings = plan.settings_in(extent);
     if settings.paths.shading == Shading::Normals {
+        if !settings.image.aovs.is_empty() {
+            anyhow::bail!("the normals view keeps no output variables; drop --aov or render light transport");
+        }
         let (film, stats) = render_normals(plan.scene(), plan.camera(), accel, &settings);
         let samples = vec![settings.sampling.spp; film.pixels.len()];
-        return Ok(RenderOutput { film, stats, samples });
+        return Ok(RenderOutput { film, stats, samples, aovs: Vec::new() });
     }
     let (acc, stats) = transport(plan, &settings, accel, progress, stop)?;
-    Ok(RenderOutput { film: acc.to_film(), samples: acc.samples_taken(), stats })
+    let aovs = acc.aov_images(settings.image.aovs);
+    Ok(RenderOutput { film: acc.to_film(), samples: acc.samples_taken(), stats, aovs })
 }
 
 /// The per-pixel sums behind the film, for renders that are merged later (`--part`):
@@ -132,7 +138,9 @@ fn transport(
     progress: &(dyn Fn(u64) + Sync),
     stop: &AtomicBool,
 ) -> Result<(Accumulator, RenderStats)> {
-    let mut canvas = Canvas::new(settings.image.width, settings.image.height);
+    let (w, h) = (settings.image.width, settings.image.height);
+    let sums = Accumulator::with_aovs(w, h, settings.image.aovs.traced());
+    let mut canvas = Canvas { sums, workers: WaveWorkers::for_current_pool() };
     let stats = canvas.add(plan, settings, accel, progress, stop)?;
     Ok((canvas.sums, stats))
 }
@@ -162,6 +170,7 @@ impl Canvas {
     /// Back to zero sums, keeping the memory and the queues (a new view of the same size).
     pub fn clear(&mut self) {
         self.sums.pixels.fill(PixelSums::default());
+        self.sums.aovs.fill(Default::default());
     }
 
     /// Renders `extent` of `plan` (an image of the canvas's size) into the sums; stopped as
@@ -198,12 +207,19 @@ impl Canvas {
         progress: &(dyn Fn(u64) + Sync),
         stop: &AtomicBool,
     ) -> Result<RenderStats> {
+        if settings.image.aovs.traced() && self.sums.aovs.len() != self.sums.pixels.len() {
+            anyhow::bail!("this canvas keeps no first-hit sums for the output variables {}", settings.image.aovs);
+        }
         let done = match settings.execution.integrator {
             IntegratorKind::Wavefront => {
                 let (transport, effects, lanes) = (plan.transport(), plan.effects(), plan.lanes());
                 let job = RenderJob { transport, effects, lanes, settings, accel, progress, stop };
                 render_wavefront_into(&job, &self.workers, &mut self.sums)
             }
+            IntegratorKind::Recursive if settings.image.aovs.traced() => anyhow::bail!(
+                "the recursive reference records no first hits: --aov {} needs the wavefront integrator",
+                settings.image.aovs
+            ),
             IntegratorKind::Recursive => {
                 render_recursive_into(plan.transport(), settings, accel, progress, stop, &mut self.sums)
             }

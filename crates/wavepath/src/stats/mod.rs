@@ -12,6 +12,9 @@ pub struct StageTimes {
     pub generate: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub traverse: Option<f64>,
+    /// The output variables' first hits (only when a render keeps them).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub aov: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub shade: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -30,6 +33,7 @@ impl StageTimes {
         [
             ("generate", self.generate),
             ("traverse", self.traverse),
+            ("aov", self.aov),
             ("shade", self.shade),
             ("shadow", self.shadow),
             ("compact", self.compact),
@@ -50,6 +54,7 @@ impl StageTimes {
         self.shade = sum(self.shade, o.shade);
         self.shadow = sum(self.shadow, o.shadow);
         self.compact = sum(self.compact, o.compact);
+        self.aov = sum(self.aov, o.aov);
     }
 }
 

@@ -15,7 +15,8 @@ const LAYERS: &[&[&str]] = &[
     &["scene"],
     &["settings"],
     &["accel", "bsdf", "effects", "film", "lights", "load", "request"],
-    &["stats"],
+    // `denoise` uses `film`, so it sits above it.
+    &["denoise", "stats"],
     &["integrator"],
     &["raysets", "render"],
 ];

@@ -9,6 +9,7 @@
 mod accel;
 pub mod common;
 mod cs184;
+mod denoise;
 pub mod integrator;
 mod isa;
 mod layers;

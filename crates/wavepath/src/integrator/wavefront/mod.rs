@@ -19,6 +19,7 @@
 //! Results do not depend on the thread count: every random number comes from (seed, pixel,
 //! sample, depth), every sum runs in slot order.
 
+mod aov;
 pub mod compact;
 pub mod generate;
 mod handout;
@@ -32,7 +33,7 @@ pub mod traverse;
 use crate::accel::{Intersector, TraceCounters};
 use crate::cpu::Isa;
 use crate::effects::Effects;
-use crate::film::{Accumulator, PixelSums};
+use crate::film::{Accumulator, AovSums, PixelSums};
 use crate::integrator::Transport;
 use crate::settings::Settings;
 use crate::stats::{RenderStats, StageTimes};
@@ -80,6 +81,7 @@ pub struct WaveQueues {
     kinds: shade::Kinds,
     occluded: Vec<bool>,
     slot_radiance: Vec<Vec3>,
+    aov: aov::AovRecords,
 }
 
 /// What one wave (or a sum of waves) traced and how long each stage took.
@@ -164,7 +166,7 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
         .min(end);
         let batch = (check - n).min(WAVE_PATHS as u32);
         let per_wave = (WAVE_PATHS / batch as usize).max(1);
-        let waves = wave_windows(&mut acc.pixels, &active, per_wave);
+        let waves = wave_windows(&mut acc.pixels, &mut acc.aovs, &active, per_wave);
         let frame = workers.run(waves, WaveStats::default, WaveStats::sum, |queues, (pixels, window)| {
             if job.stop.load(Ordering::Relaxed) {
                 return WaveStats::default();
@@ -200,28 +202,44 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
     Some(stats)
 }
 
-/// A frame's waves: each wave's pixels and the window of the image's sums from its first
-/// pixel to its last. `active` rises, so the windows are disjoint and each wave's thread adds
-/// its pixels' sums into the image itself: no per-frame buffer, no merge on one thread while
-/// the others wait.
-fn wave_windows<'a>(sums: &'a mut [PixelSums], active: &'a [u32], per_wave: usize) -> Vec<(&'a [u32], Window<'a>)> {
+/// A frame's waves: each wave's pixels and the window of the image's sums (and first-hit
+/// sums, when the render keeps them) from its first pixel to its last. `active` rises, so the
+/// windows are disjoint and each wave's thread adds its pixels' sums into the image itself:
+/// no per-frame buffer, no merge on one thread while the others wait.
+fn wave_windows<'a>(
+    sums: &'a mut [PixelSums],
+    aovs: &'a mut [AovSums],
+    active: &'a [u32],
+    per_wave: usize,
+) -> Vec<(&'a [u32], Window<'a>)> {
     debug_assert!(active.windows(2).all(|p| p[0] < p[1]), "active pixels rise");
+    let keeps_aovs = !aovs.is_empty();
     let mut waves = Vec::with_capacity(active.len().div_ceil(per_wave));
-    let (mut rest, mut at) = (sums, 0usize);
+    let (mut rest, mut rest_aovs, mut at) = (sums, aovs, 0usize);
     for pixels in active.chunks(per_wave) {
         let (first, last) = (pixels[0] as usize, pixels[pixels.len() - 1] as usize);
         let (_, from_first) = rest.split_at_mut(first - at);
         let (sums, after) = from_first.split_at_mut(last + 1 - first);
-        waves.push((pixels, Window { first: first as u32, sums }));
+        let aovs = if keeps_aovs {
+            let (_, from_first) = std::mem::take(&mut rest_aovs).split_at_mut(first - at);
+            let (aovs, after) = from_first.split_at_mut(last + 1 - first);
+            rest_aovs = after;
+            aovs
+        } else {
+            &mut []
+        };
+        waves.push((pixels, Window { first: first as u32, sums, aovs }));
         (rest, at) = (after, last + 1);
     }
     waves
 }
 
-/// The image's pixel sums from pixel `first` on, for one wave's thread alone.
+/// The image's pixel sums (and first-hit sums, empty when the render keeps none) from pixel
+/// `first` on, for one wave's thread alone.
 struct Window<'a> {
     first: u32,
     sums: &'a mut [PixelSums],
+    aovs: &'a mut [AovSums],
 }
 
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
@@ -234,6 +252,10 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
     generate::generate(t, job.lanes.camera, &mut q.paths, wave, s.image.width, s.image.height, s.sampling.spp.max(1));
     st.camera = n as u64;
     let mut clock = lap(clock, &mut st.stages.generate);
+    let aovs = !out.aovs.is_empty();
+    if aovs {
+        q.aov.start(n);
+    }
     q.slot_radiance.clear();
     q.slot_radiance.resize(n, Vec3::ZERO);
     let mut first = true;
@@ -244,6 +266,10 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
         }
         first = false;
         clock = lap(clock, &mut st.stages.traverse);
+        if aovs {
+            aov::record(t, &q.paths, &mut q.aov);
+            clock = lap(clock, &mut st.stages.aov);
+        }
         shade::shade(t, job.lanes, &mut q.paths, &mut q.shadow, &mut q.kinds);
         clock = lap(clock, &mut st.stages.shade);
         if t.rules.features.direct {
@@ -269,6 +295,13 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
             frame.add(*r);
         }
         out.sums[(pixel - out.first) as usize].merge(&frame);
+        if aovs {
+            let mut frame = AovSums::default();
+            for r in &q.aov.samples[j * batch..(j + 1) * batch] {
+                frame.add(r);
+            }
+            out.aovs[(pixel - out.first) as usize].merge(&frame);
+        }
     }
     st
 }

@@ -4,6 +4,7 @@
 
 mod agree_controls;
 mod analytic;
+mod aov;
 mod effects;
 pub mod emitter_filter;
 mod emitter_sides;
