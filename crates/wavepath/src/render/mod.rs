@@ -162,6 +162,20 @@ impl Canvas {
         Canvas { sums: Accumulator::new(width, height), workers: WaveWorkers::for_current_pool() }
     }
 
+    /// As [`new`](Self::new), keeping first-hit sums for the output variables `aovs` (when
+    /// [`AovSet::traced`](crate::settings::AovSet::traced)); renders into it may then ask for
+    /// any of them.
+    pub fn with_aovs(width: usize, height: usize, aovs: crate::settings::AovSet) -> Canvas {
+        let sums = Accumulator::with_aovs(width, height, aovs.traced());
+        Canvas { sums, workers: WaveWorkers::for_current_pool() }
+    }
+
+    /// The images of the output variables `aovs` from the sums added so far (first-hit ones
+    /// are zero unless the canvas keeps them: [`with_aovs`](Self::with_aovs)).
+    pub fn aov_images(&self, aovs: crate::settings::AovSet) -> Vec<AovImage> {
+        self.sums.aov_images(aovs)
+    }
+
     /// The sums added so far.
     pub fn sums(&self) -> &Accumulator {
         &self.sums
