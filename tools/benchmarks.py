@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Regenerate BENCHMARKS.md: current results of wavepath on this machine.
 
-    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,split,viewer,large,python] [--quick] [options]
+    tools/benchmarks.sh [--bin PATH] [--parts renders,peers,e2e,split,viewer,large,python,denoise] [--quick] [options]
 
 The page is one section per part, each between `<!-- part:NAME -->` and `<!-- /part:NAME -->`
 and each with the date, machine, binary and command it was measured with. A run replaces the
@@ -25,6 +25,10 @@ Parts (default: renders,peers; e2e is opt-in, it takes 15-25 minutes):
   python   ray casting from numpy through the Python package beside embreex, Open3D and Mitsuba 3
            (tools/python_bench.py, run by the interpreter `--python` names: one with numpy, the
            package and the peers installed)
+  denoise  how many samples Open Image Denoise saves at the raw image's error at 64 and 256
+           spp on the harness scenes and the environment-lit scan, and what denoising costs
+           (tools/denoise_figures.py, in a virtual environment it makes with numpy, OpenEXR
+           and pyoidn)
 
 The peers folder is copied to a scratch folder (--work) first: its scripts write build
 products beside themselves, and the shared copy must stay untouched.
@@ -900,13 +904,91 @@ def md_python(args, part):
     return out
 
 
+# ----------------------------------------------------------------- denoise ----
+DENOISE_SCENES = "box,dragon-box,spheres-box,dragon-env"
+
+
+def part_denoise(args, scenes_dir, peers_dir):
+    """tools/denoise_figures.py in a virtual environment of its own (numpy, OpenEXR, pyoidn)."""
+    venv = os.path.join(args.work, "denoise-venv")
+    py = os.path.join(venv, "bin", "python")
+    if not os.access(py, os.X_OK):
+        log(f"denoise: making {venv} (numpy, OpenEXR, pyoidn)")
+        sh([sys.executable, "-m", "venv", venv])
+        sh([os.path.join(venv, "bin", "pip"), "install", "-q", "numpy", "OpenEXR", "pyoidn"])
+    oidn = sh([py, "-c", "import os, pyoidn; print(os.path.dirname(pyoidn.__file__))"]).strip()
+    out = os.path.join(args.work, "denoise.json")
+    part = {"load_before": loadavg(), "date": now_utc(), "busy_mean": 0.0, "busy_max": 0.0}
+    cmd = [py, os.path.join(REPO, "tools", "denoise_figures.py"), "--bin", os.path.abspath(args.bin), "--oidn", oidn,
+           "--e2e", os.path.join(peers_dir, "e2e"), "--scenes-dir", scenes_dir, "--work",
+           os.path.join(args.work, "denoise"), "--scenes", DENOISE_SCENES, "--threads", str(args.threads),
+           "--out", out]
+    if args.quick:
+        cmd += ["--scenes", "box", "--ref-spp", "512", "--ladder", "1,4,16,64", "--big", "640", "360"]
+    log("denoise: tools/denoise_figures.py")
+    # Other processes' share of the CPUs: all busy time less this run's own (its children's).
+    b0, t0, own0 = busy_ticks(), time.monotonic(), resource.getrusage(resource.RUSAGE_CHILDREN)
+    r = subprocess.run(cmd)
+    if r.returncode != 0:
+        raise SystemExit(f"denoise: tools/denoise_figures.py failed (exit {r.returncode})")
+    own1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    own = (own1.ru_utime + own1.ru_stime) - (own0.ru_utime + own0.ru_stime)
+    other = (busy_ticks() - b0) / TICK - own
+    part["busy_mean"] = part["busy_max"] = max(other, 0.0) / ((time.monotonic() - t0) * NCPU)
+    with open(out) as f:
+        part["result"] = json.load(f)
+    part["cmd"] = cmd[1:]
+    part["load_after"] = loadavg()
+    return part
+
+
+def md_denoise(args, part):
+    d = part["result"]
+    out = ["## Denoising\n"]
+    out.append(f"What Intel Open Image Denoise (`--denoise`: its `RT` filter, HDR, fed the render's albedo and normal, "
+               f"prefiltered) buys at {d['width']}x{d['height']}, `-m {d['m']}`, {d['threads']} threads. Error: relative "
+               f"MSE, (x - ref)^2 / (ref^2 + 0.01) averaged over pixels and channels, against wavepath's own "
+               f"{d['ref_spp']}-spp reference, less the reference's own noise (from its `variance` output variable). "
+               f"**The denoised error is biased**: it is measured against the converged raw reference, and a denoiser "
+               f"trades noise for blur, so its curve flattens where the raw one keeps falling. 'Samples' is the "
+               f"sample count at which the denoised image reaches the raw image's error at 64 and 256 spp "
+               f"(log-log interpolation on the ladder {','.join(map(str, d['ladder']))}; `<=1`: already at one "
+               f"sample; `never`: not on the ladder); 'fewer' is the raw count over it.\n")
+    out.append("| scene | raw relMSE at 64 spp | denoised: samples for it | fewer | raw relMSE at 256 spp | "
+               "denoised: samples for it | fewer | denoised relMSE at 16 spp | reference's own |")
+    out.append("|---|--:|--:|--:|--:|--:|--:|--:|--:|")
+    for s in d["scenes"]:
+        cells = []
+        for at in (64, 256):
+            t = next((t for t in s["targets"] if t["raw_spp"] == at), None)
+            if t is None:
+                cells += ["n/a", "n/a", "n/a"]
+                continue
+            n = t["denoised_spp"]
+            need = "never" if n is None else (f"<={n:.0f}" if t["how"] == "<=" else f"{n:.1f}")
+            fewer = "n/a" if n is None else (f">={at / n:.0f}x" if t["how"] == "<=" else f"{at / n:.1f}x")
+            cells += [f"{t['raw_error']:.2e}", need, fewer]
+        d16 = next((r["denoised"] for r in s["rows"] if r["spp"] == 16), float("nan"))
+        out.append(f"| {s['scene']} | " + " | ".join(cells) + f" | {d16:.2e} | {s['ref_rel_mse']:.1e} |")
+    c = d["cost"]
+    sizes = [k for k in c if k != "scene"]
+    out.append("")
+    out.append("Denoising costs (`denoise_s` of `--stats`, median of 3 fresh processes, the "
+               f"{c['scene']} scene at 1 spp; prefiltering runs three filters): "
+               + ", ".join(f"{k}: {c[k]['median_s']:.2f} s" for k in sizes) + ".  ")
+    out.append(f"Command: `tools/benchmarks.sh --parts denoise` (`tools/denoise_figures.py {shlex.join(part['cmd'][1:3])} "
+               f"... --scenes {DENOISE_SCENES}`).  ")
+    out.append(stamp(part) + "\n")
+    return out
+
+
 # ------------------------------------------------------------------ page ----
 # The page's parts in order, with the title a part has before it was ever run.
-PART_ORDER = ["renders", "peers", "e2e", "split", "viewer", "large", "python"]
+PART_ORDER = ["renders", "peers", "e2e", "split", "viewer", "large", "python", "denoise"]
 PART_TITLES = {"renders": "Renders", "peers": "Ray throughput against the peers",
                "e2e": "End to end against Mitsuba 3", "split": "Where a sample's time goes against Mitsuba 3",
                "viewer": "Interactive viewer",
-               "large": "Large meshes", "python": "Ray casting from Python"}
+               "large": "Large meshes", "python": "Ray casting from Python", "denoise": "Denoising"}
 NOT_RUN = {
     "e2e": "`tools/benchmarks.sh --parts e2e` adds whole renders against Mitsuba 3 at equal error "
            "(`../shared/peers/e2e/run.sh`, 15-25 min; with `--e2e-args '" + E2E_QUICK + "'` under a minute).",
@@ -916,12 +998,14 @@ NOT_RUN = {
     "python": "`tools/benchmarks.sh --parts python --python VENV/bin/python` casts rays from numpy through the "
               "Python package beside embreex, Open3D and Mitsuba 3 (tools/python_bench.py, about 15 min; "
               "`--quick` about one), with an interpreter made by `" + PYTHON_VENV + "`.",
+    "denoise": "`tools/benchmarks.sh --parts denoise` measures how many samples Open Image Denoise saves and what "
+               "it costs (tools/denoise_figures.py, about 15 min).",
 }
 SECTION = re.compile(r"^<!-- part:([a-z0-9_-]+) -->\n(.*?)^<!-- /part:\1 -->[ \t]*\n?", re.S | re.M)
 PAGE_HEAD = """# Benchmarks
 
 Generated by `tools/benchmarks.sh`; rerun it rather than editing this page. Each section is one
-part (`--parts renders,peers,e2e,split,viewer,large,python`) and says when, on what machine, with
+part (`--parts renders,peers,e2e,split,viewer,large,python,denoise`) and says when, on what machine, with
 which binary and command it was measured: a run replaces the sections of the parts it ran and
 keeps the others as they were, with their dates, so sections of one page may come from
 different days and builds. Why the code is as it is, with the figures of past experiments:
@@ -1044,7 +1128,7 @@ def main(argv):
     if not os.path.isdir(scenes_dir):
         ap.error(f"no scenes folder at {scenes_dir} (--scenes or WAVEPATH_SCENES)")
     peers_dir = os.path.abspath(args.peers or os.path.join(os.path.dirname(scenes_dir), "peers"))
-    if ("peers" in parts or "e2e" in parts or "split" in parts) and not os.path.isfile(os.path.join(peers_dir, "run.sh")):
+    if ("peers" in parts or "e2e" in parts or "split" in parts or "denoise" in parts) and not os.path.isfile(os.path.join(peers_dir, "run.sh")):
         ap.error(f"no peers harness at {peers_dir} (--peers)")
     os.makedirs(args.work, exist_ok=True)
     args.peers_work = os.path.abspath(args.peers_work or os.path.join(args.work, "peers"))
@@ -1078,6 +1162,8 @@ def main(argv):
         results["large"] = part_large(args, scenes_dir, peers_dir)
     if "python" in parts:
         results["python"] = part_python(args, scenes_dir, peers_dir)
+    if "denoise" in parts:
+        results["denoise"] = part_denoise(args, scenes_dir, peers_dir)
     took = time.monotonic() - t0
     with open(os.path.join(args.work, "results.json"), "w") as f:
         json.dump({"args": {k: v for k, v in vars(args).items()}, "results": results}, f, indent=1, default=str)
@@ -1101,6 +1187,8 @@ def main(argv):
         md["large"] = with_measured(md_large(args, results["large"]), run, results["large"])
     if "python" in results:
         md["python"] = with_measured(md_python(args, results["python"]), run, results["python"])
+    if "denoise" in results:
+        md["denoise"] = with_measured(md_denoise(args, results["denoise"]), run, results["denoise"])
     old = ""
     if os.path.exists(args.out):
         with open(args.out) as f:

@@ -110,13 +110,18 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         Ok((result, build))
     })??;
     let wavepath::RenderOutput { film, stats, samples, aovs } = film;
-    let film = match &denoiser {
-        Some(d) => denoise(d, &film, &aovs)?,
-        None => film,
+    // A denoised picture keeps the noisy one beside it (a layer of an .exr).
+    let (film, noisy, denoise_s) = match &denoiser {
+        Some(d) => {
+            let t = Instant::now();
+            let denoised = denoise(d, &film, &aovs)?;
+            (denoised, Some(film), Some(t.elapsed().as_secs_f64()))
+        }
+        None => (film, None, None),
     };
     // Only the variables asked for are written (a denoiser's albedo and normal are its own).
     let written: Vec<_> = aovs.into_iter().filter(|v| a.aov.contains(&v.aov)).collect();
-    let files = wavepath::write_image_with_aovs(&film, &written, &out, a.tonemap)?;
+    let files = wavepath::write_image_with_aovs(&film, &written, noisy.as_ref(), &out, a.tonemap)?;
     // The sample-rate image shows where adaptive sampling spent its samples; a fixed-rate
     // render's would be one flat grey nobody asked for.
     if s.sampling.adaptive.is_some() && s.paths.shading != wavepath::Shading::Normals {
@@ -132,7 +137,10 @@ pub fn run(a: &RenderArgs) -> Result<()> {
         eprintln!("[wavepath] Wrote {}", f.display());
     }
     if let Some(p) = &a.stats {
-        let json = wavepath::stats_json(&scene, &s, effects, &build, &stats);
+        let mut json = wavepath::stats_json(&scene, &s, effects, &build, &stats);
+        if let (Some(t), Some(m)) = (denoise_s, json.as_object_mut()) {
+            m.insert("denoise_s".into(), t.into());
+        }
         write_atomic(p, serde_json::to_string_pretty(&json)?.as_bytes())?;
     }
     let _: &RenderStats = &stats;

@@ -112,6 +112,15 @@ def test_denoising_lowers_the_error_through_the_binary(cli, tmp_path, scenes, re
     raw, den = read_pfm(tmp_path / "raw.pfm"), read_pfm(tmp_path / "den.pfm")
     e_raw, e_den = mse(raw, reference), mse(den, reference)
     assert e_raw / e_den >= FACTOR_REQUIRED, f"raw {e_raw:.3e}, denoised {e_den:.3e}: {e_raw / e_den:.2f}x"
+    # An .exr keeps the noisy picture beside the denoised one, the raw render's very numbers.
+    import OpenEXR
+
+    cli(*args, "--denoise", "--oidn", oidn_folder(), "-f", tmp_path / "den.exr")
+    with OpenEXR.File(str(tmp_path / "den.exr"), separate_channels=True) as f:
+        ch = {k: v.pixels for k, v in f.channels().items()}
+    assert {"noisy.R", "noisy.G", "noisy.B"} <= set(ch)
+    assert np.array_equal(np.stack([ch[f"noisy.{c}"] for c in "RGB"], axis=2), raw)
+    assert np.array_equal(np.stack([ch[c] for c in "RGB"], axis=2), den)
 
 
 def test_without_the_runtime_denoise_fails_in_one_line(cli, tmp_path):

@@ -101,42 +101,81 @@ fn write_pfm(film: &Film, path: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes the film with the output variables `aovs`: an OpenEXR file holds them all as
-/// named layers of one image beside the beauty's `R`, `G`, `B` (`albedo.R`, `normal.X`,
-/// `depth.Z`, `position.X`, `variance.R`...: the `layer.channel` names Nuke, Blender and
-/// OpenEXR's tools group into layers); any other format writes each variable to a file of its
-/// own beside the image, `<stem>.<aov>.<ext>` (`.exr` beside a PNG, whose bytes cannot hold
-/// them). Returns the files written, the image first.
+/// Writes the film with the output variables `aovs` and, for a denoised film, the `noisy`
+/// picture it was made from: an OpenEXR file holds them all as named layers of one image
+/// beside the picture's `R`, `G`, `B` (`albedo.R`, `normal.X`, `depth.Z`, `position.X`,
+/// `variance.R`, `noisy.R`...: the `layer.channel` names Nuke, Blender and OpenEXR's tools
+/// group into layers); any other format writes each to a file of its own beside the image,
+/// `<stem>.<layer>.<ext>` (`.exr` beside a PNG, whose bytes cannot hold them). Returns the
+/// files written, the image first.
 pub fn write_image_with_aovs(
     film: &Film,
     aovs: &[AovImage],
+    noisy: Option<&Film>,
     path: &Path,
     tonemap: Tonemap,
 ) -> Result<Vec<std::path::PathBuf>> {
     let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase()).unwrap_or_default();
-    if aovs.is_empty() {
+    let mut layers: Vec<Layer> = aovs
+        .iter()
+        .map(|a| Layer {
+            name: a.aov.name(),
+            channels: a.aov.channels(),
+            width: a.width,
+            height: a.height,
+            data: a.data.clone(),
+        })
+        .collect();
+    if let Some(n) = noisy {
+        let data = n.pixels.iter().flat_map(|p| p.to_array()).collect();
+        layers.push(Layer { name: "noisy", channels: &["R", "G", "B"], width: n.width, height: n.height, data });
+    }
+    if layers.is_empty() {
         write_image(film, path, tonemap)?;
         return Ok(vec![path.to_path_buf()]);
     }
     if ext == "exr" {
-        write_layered_exr(film, aovs, path)?;
+        write_layered_exr(film, &layers, path)?;
         return Ok(vec![path.to_path_buf()]);
     }
     write_image(film, path, tonemap)?;
     let mut written = vec![path.to_path_buf()];
     let side_ext = if ext == "png" { "exr" } else { ext.as_str() };
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("image");
-    for a in aovs {
-        let side = path.with_file_name(format!("{stem}.{}.{side_ext}", a.aov.name()));
-        write_image(&a.to_film(), &side, tonemap)?;
+    for l in &layers {
+        let side = path.with_file_name(format!("{stem}.{}.{side_ext}", l.name));
+        write_image(&l.to_film(), &side, tonemap)?;
         written.push(side);
     }
     Ok(written)
 }
 
-/// One OpenEXR image: the beauty's R, G, B and every variable's channels under its name.
-fn write_layered_exr(film: &Film, aovs: &[AovImage], path: &Path) -> Result<()> {
-    use exr::prelude::*;
+/// A named layer of an image file: its channels interleaved, rows bottom first.
+struct Layer {
+    name: &'static str,
+    channels: &'static [&'static str],
+    width: usize,
+    height: usize,
+    data: Vec<f32>,
+}
+
+impl Layer {
+    fn to_film(&self) -> Film {
+        let c = self.channels.len();
+        let pixels = self
+            .data
+            .chunks_exact(c)
+            .map(|p| if c == 1 { glam::Vec3::splat(p[0]) } else { glam::Vec3::new(p[0], p[1], p[2]) })
+            .collect();
+        Film { width: self.width, height: self.height, pixels }
+    }
+}
+
+/// One OpenEXR image: the picture's R, G, B and every layer's channels under its name.
+fn write_layered_exr(film: &Film, layers: &[Layer], path: &Path) -> Result<()> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, Encoding, FlatSamples, Image, LayerAttributes, SmallVec, WritableImage,
+    };
     let (w, h) = (film.width, film.height);
     // File rows run top-down, film rows bottom-up.
     let top_down = |c: usize, channels: usize, data: &dyn Fn(usize) -> f32| -> Vec<f32> {
@@ -154,19 +193,23 @@ fn write_layered_exr(film: &Film, aovs: &[AovImage], path: &Path) -> Result<()> 
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         channels.push(AnyChannel::new(name, FlatSamples::F32(top_down(c, 3, &|i| beauty[i]))));
     }
-    for a in aovs {
-        if (a.width, a.height) != (w, h) {
-            bail!("{}: the {} image is {}x{}, the picture {w}x{h}", path.display(), a.aov.name(), a.width, a.height);
+    for l in layers {
+        if (l.width, l.height) != (w, h) {
+            bail!("{}: the {} image is {}x{}, the picture {w}x{h}", path.display(), l.name, l.width, l.height);
         }
-        let n = a.channels();
-        for (c, ch) in a.aov.channels().iter().enumerate() {
-            let name = format!("{}.{ch}", a.aov.name());
-            channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(top_down(c, n, &|i| a.data[i]))));
+        let n = l.channels.len();
+        for (c, ch) in l.channels.iter().enumerate() {
+            let name = format!("{}.{ch}", l.name);
+            channels.push(AnyChannel::new(name.as_str(), FlatSamples::F32(top_down(c, n, &|i| l.data[i]))));
         }
     }
-    let layer = Layer::new((w, h), LayerAttributes::default(), Encoding::SMALL_LOSSLESS, AnyChannels::sort(channels));
-    let ext = "exr";
-    let tmp = path.with_extension(format!("tmp.{ext}"));
+    let layer = exr::prelude::Layer::new(
+        (w, h),
+        LayerAttributes::default(),
+        Encoding::SMALL_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    let tmp = path.with_extension("tmp.exr");
     let result = Image::from_layer(layer).write().to_file(&tmp);
     if let Err(e) = result {
         let _ = std::fs::remove_file(&tmp);
