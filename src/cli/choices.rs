@@ -86,5 +86,8 @@ choice! {
         Sampler,
         /// MIS of light and BSDF samples against light sampling alone (--no-mis).
         Mis,
+        /// Each render raw and denoised (Open Image Denoise, albedo + normal), both against
+        /// the raw reference (the denoised error is biased).
+        Denoise,
     }
 }

@@ -5,9 +5,10 @@ use super::settings_from_args::flag;
 use anyhow::{Result, bail};
 use clap::Args;
 use std::path::PathBuf;
+use std::sync::Arc;
 use wavepath::Settings;
 use wavepath::{CameraMode, FovRule, LoadOptions, Request, SamplerKind, default_scene};
-use wavepath_apps::study::StudyConfig;
+use wavepath_apps::study::{StudyConfig, SweepKind};
 
 #[derive(Args, Debug, Clone)]
 #[command(long_about = "Sweeps one setting and, for each value, renders at samples per pixel \
@@ -22,7 +23,9 @@ use wavepath_apps::study::StudyConfig;
     --rr 1.0 down to 0.1); adaptive (-a 64 T for T = 0.2..0.01, against fixed spp); sampler \
     (independent, stratified, sobol); mis (MIS of light and BSDF samples against light sampling \
     alone: it differs only where the scene's lights are emissive triangles or an environment \
-    map).")]
+    map); denoise (each render as it is and denoised by Open Image Denoise with its albedo and \
+    normal, the denoised time adding the denoising; both judged against the raw reference, so \
+    the denoised error is biased: needs the runtime, see --oidn).")]
 pub struct StudyArgs {
     /// Scene file; omitted: the embedded Cornell box.
     pub scene: Option<PathBuf>,
@@ -73,6 +76,11 @@ pub struct StudyArgs {
     /// render: independent for .dae files and the embedded scene, sobol for other files.
     #[arg(long, value_parser = named::<SamplerKind>())]
     pub sampler: Option<SamplerKind>,
+    /// Open Image Denoise's library, a folder holding it, or an installed pyoidn package, for
+    /// the denoise sweep (other sweeps do not load it). Default: the pyoidn that `python3` on
+    /// the PATH imports.
+    #[arg(long, value_name = "PATH")]
+    pub oidn: Option<PathBuf>,
 }
 
 fn in_range(name: &str, v: i64, lo: i64, hi: i64) -> Result<i64> {
@@ -110,6 +118,7 @@ fn config(a: &StudyArgs, base: Settings) -> Result<StudyConfig> {
         ref_spp: in_range("--ref-spp", a.ref_spp, 1, 1 << 24)? as u32,
         time_budget: a.time_budget,
         cache_dir: a.cache.clone(),
+        denoiser: None,
     })
 }
 
@@ -117,11 +126,19 @@ pub fn run(a: &StudyArgs) -> Result<()> {
     // Every flag is checked before the load, as a render's are.
     let request = request(a);
     config(a, request.apply(Settings::default(), flag)?)?;
+    // The denoiser is loaded before the (possibly long) load and the renders.
+    let sweep: SweepKind = a.sweep.into();
+    let denoiser = if sweep.needs_denoiser() {
+        let lib = wavepath_apps::oidn_runtime::find_oidn(a.oidn.as_deref())?;
+        Some(Arc::new(wavepath::Denoiser::load(&lib)?))
+    } else {
+        None
+    };
     let scene = match &a.scene {
         Some(p) => super::load_scene(p, &LoadOptions { camera: a.camera, ..LoadOptions::default() })?,
         None => default_scene(),
     };
-    let cfg = config(a, wavepath_apps::study::base_settings(&scene, &request, flag)?)?;
+    let cfg = StudyConfig { denoiser, ..config(a, wavepath_apps::study::base_settings(&scene, &request, flag)?)? };
     let identity = wavepath_apps::study::reference::scene_identity(a.scene.as_deref())?;
     let stem = a.scene.as_ref().and_then(|p| p.file_stem()).and_then(|s| s.to_str()).unwrap_or("default").to_string();
     let out = a.out.clone().unwrap_or_else(|| PathBuf::from(format!("study-{stem}-{}", cfg.sweep.name())));

@@ -4,6 +4,10 @@
 //!
 //! The reference is rendered once per scene and settings and cached (see [`reference`]);
 //! it uses its own seed so it shares no random numbers with the renders it judges.
+//!
+//! The denoise sweep measures each render twice: as rendered, and denoised by Open Image
+//! Denoise with the render's albedo and normal ([`denoise_point`]), both against the same
+//! raw reference.
 
 pub mod metrics;
 pub mod plot;
@@ -11,16 +15,18 @@ pub mod reference;
 pub mod report;
 pub mod sweep;
 
-pub use metrics::{ErrorStats, Reference, compare, log_log_slope};
+pub use metrics::{ErrorStats, Reference, compare, compare_film, log_log_slope};
 pub use sweep::{Curve, Ladder, SweepKind, curves, spp_ladder};
 
-use anyhow::Result;
+use anyhow::{Result, bail};
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::Instant;
 use wavepath::Film;
 use wavepath::Intersector;
 use wavepath::Scene;
 use wavepath::Settings;
+use wavepath::{Accumulator, Aov, Aux, Denoiser};
 use wavepath::{InvalidValue, Names, Request};
 
 /// The settings every render of a study starts from: the scene's defaults
@@ -49,6 +55,9 @@ pub struct StudyConfig {
     /// would take about twice as long).
     pub time_budget: f64,
     pub cache_dir: PathBuf,
+    /// Open Image Denoise, for sweeps that denoise ([`SweepKind::needs_denoiser`]; others
+    /// ignore it).
+    pub denoiser: Option<Arc<Denoiser>>,
 }
 
 /// One measured render.
@@ -59,10 +68,16 @@ pub struct Point {
     pub settings: Settings,
     /// Adaptive tolerance, if the render was adaptive.
     pub tolerance: Option<f32>,
+    /// Wall time: the render's, plus the denoising's for a denoised point.
     pub seconds: f64,
+    /// Of `seconds`, what denoising took (a denoised point only).
+    pub denoise_seconds: Option<f64>,
     pub rays: u64,
     pub invalid_samples: u64,
+    /// Against the reference; a denoised point's has no variance-based fields
+    /// ([`ErrorStats::has_variance`]).
     pub error: ErrorStats,
+    /// The image measured (denoised, for a denoised point).
     pub film: Film,
     /// Camera samples each pixel took.
     pub samples: Vec<u32>,
@@ -117,6 +132,11 @@ pub fn run(
     log: &dyn Fn(&str),
 ) -> Result<StudyResult> {
     let curves = curves(cfg.sweep, &cfg.base);
+    let denoiser = match (&cfg.denoiser, curves.iter().any(|c| matches!(c.ladder, Ladder::Denoised { .. }))) {
+        (None, true) => bail!("the {} sweep needs Open Image Denoise; {}", cfg.sweep.name(), wavepath::OIDN_HELP),
+        (d, true) => d.as_deref(),
+        (_, false) => None,
+    };
     let mut ref_base = cfg.base.clone();
     if cfg.sweep.needs_deep_reference() {
         ref_base.paths.max_depth = ref_base.paths.max_depth.max(sweep::DEEP);
@@ -138,9 +158,16 @@ pub fn run(
     } else {
         format!("reference: rendered in {:.2} s -> {}", reference_info.seconds, reference_info.path.display())
     });
-    // One untimed render first, so thread start-up and cold caches do not land on the
-    // first measured point.
-    let _ = wavepath::render_sums(scene, accel, &cfg.base, &|_| {})?;
+    // One untimed render first (and one untimed denoising), so thread start-up and cold
+    // caches do not land on the first measured point.
+    if let Some(d) = denoiser {
+        log(&format!("denoiser: Open Image Denoise, {}", d.library().display()));
+        let warm = curves[0].settings.clone().with(|s| s.sampling.spp = 1);
+        let (acc, _) = wavepath::render_sums(scene, accel, &warm, &|_| {})?;
+        denoise_film(d, &acc)?;
+    } else {
+        let _ = wavepath::render_sums(scene, accel, &cfg.base, &|_| {})?;
+    }
     let mut points = Vec::new();
     for (ci, c) in curves.iter().enumerate() {
         let runs: Vec<(Settings, Option<f32>)> = match &c.ladder {
@@ -161,9 +188,13 @@ pub fn run(
                     )
                 })
                 .collect(),
+            // Made from the renders of the curve it denoises, below.
+            Ladder::Denoised { .. } => continue,
         };
+        // The curve of this curve's renders denoised, if any.
+        let denoised = curves.iter().position(|d| d.ladder == Ladder::Denoised { of: ci });
         for (s, tolerance) in runs {
-            let p = measure(scene, accel, &s, tolerance, ci, &reference)?;
+            let (p, acc) = render_point(scene, accel, &s, tolerance, ci, &reference)?;
             log(&format!(
                 "{:<28} spp {:>5} {}{:>8.3} s  {:>10} rays  rmse {:.5}  relMSE {:.5}  ci95 {:.5}",
                 c.label,
@@ -175,8 +206,25 @@ pub fn run(
                 p.error.rel_mse,
                 p.error.ci95
             ));
-            let slow = p.seconds > cfg.time_budget;
+            let mut slow = p.seconds > cfg.time_budget;
+            let dp = match (denoised, denoiser) {
+                (Some(di), Some(d)) => Some(denoise_point(d, &p, &acc, di, &reference)?),
+                _ => None,
+            };
             points.push(p);
+            if let Some(dp) = dp {
+                log(&format!(
+                    "{:<28} spp {:>5} {:>8.3} s  (denoising {:.3} s)  rmse {:.5}  relMSE {:.5}  (biased)",
+                    curves[dp.curve].label,
+                    s.sampling.spp,
+                    dp.seconds,
+                    dp.denoise_seconds.unwrap_or(0.0),
+                    dp.error.rmse,
+                    dp.error.rel_mse
+                ));
+                slow |= dp.seconds > cfg.time_budget;
+                points.push(dp);
+            }
             if slow {
                 break;
             }
@@ -194,18 +242,68 @@ pub fn measure(
     curve: usize,
     reference: &Reference,
 ) -> Result<Point> {
+    Ok(render_point(scene, accel, s, tolerance, curve, reference)?.0)
+}
+
+/// [`measure`], keeping the render's sums (with the output variables `s` asks for).
+fn render_point(
+    scene: &Scene,
+    accel: &dyn Intersector,
+    s: &Settings,
+    tolerance: Option<f32>,
+    curve: usize,
+    reference: &Reference,
+) -> Result<(Point, Accumulator)> {
     let t0 = Instant::now();
     let (acc, stats) = wavepath::render_sums(scene, accel, s, &|_| {})?;
     let seconds = t0.elapsed().as_secs_f64();
-    Ok(Point {
+    let p = Point {
         curve,
         settings: s.clone(),
         tolerance,
         seconds,
+        denoise_seconds: None,
         rays: stats.total_rays(),
         invalid_samples: stats.invalid_samples,
         error: compare(&acc, reference),
         film: acc.to_film(),
         samples: acc.samples_taken(),
+    };
+    Ok((p, acc))
+}
+
+/// The render `raw` (whose sums are `acc`, kept with albedo and normal) denoised, as a point
+/// of curve `curve`: its time is the render's plus the denoising's (measured), its error
+/// against the same raw reference ([`compare_film`]: no variance-based fields).
+pub fn denoise_point(
+    denoiser: &Denoiser,
+    raw: &Point,
+    acc: &Accumulator,
+    curve: usize,
+    reference: &Reference,
+) -> Result<Point> {
+    let t0 = Instant::now();
+    let film = denoise_film(denoiser, acc)?;
+    let denoise_seconds = t0.elapsed().as_secs_f64();
+    Ok(Point {
+        curve,
+        seconds: raw.seconds + denoise_seconds,
+        denoise_seconds: Some(denoise_seconds),
+        error: compare_film(&film, reference, raw.error.mean_spp),
+        film,
+        ..raw.clone()
     })
+}
+
+/// The sums' picture denoised with their albedo and normal, prefiltered (they carry the
+/// render's noise), as `wavepath --denoise` does.
+fn denoise_film(denoiser: &Denoiser, acc: &Accumulator) -> Result<Film> {
+    // Without first-hit sums the albedo and normal images would be black.
+    if acc.aovs.is_empty() {
+        bail!("the render kept no albedo and normal for the denoiser");
+    }
+    let aovs = acc.aov_images(sweep::denoiser_aovs());
+    let find = |k: Aov| aovs.iter().find(|v| v.aov == k).map(|v| v.to_film());
+    let (albedo, normal) = (find(Aov::Albedo), find(Aov::Normal));
+    denoiser.denoise(&acc.to_film(), Aux { albedo: albedo.as_ref(), normal: normal.as_ref(), prefilter: true })
 }

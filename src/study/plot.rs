@@ -64,7 +64,11 @@ where
         .configure_mesh()
         .x_labels(12)
         .y_labels(16)
-        .x_desc("render time (s)")
+        .x_desc(if result.sweep.needs_denoiser() {
+            "render time (s), plus the denoising's for denoised images"
+        } else {
+            "render time (s)"
+        })
         .y_desc("RMSE vs reference (linear RGB)")
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
@@ -93,9 +97,20 @@ where
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
         chart.draw_series(series.into_iter().map(|p| Circle::new(p, 3, color.filled()))).map_err(err)?;
     }
+    // What the sweep's errors mean when not a plain render's (the denoise sweep's bias): the
+    // legend's last line, the legend in the lower left corner, where error-against-time
+    // curves do not go (the denoised curve starts at the denoising's time, upper right).
+    let note = result.sweep.note();
+    if let Some(note) = note {
+        chart
+            .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
+            .map_err(err)?
+            .label(note)
+            .legend(|(x, y)| EmptyElement::at((x, y)));
+    }
     chart
         .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
+        .position(if note.is_some() { SeriesLabelPosition::LowerLeft } else { SeriesLabelPosition::UpperRight })
         .background_style(WHITE.mix(0.85))
         .border_style(BLACK)
         .label_font(("sans-serif", 14))

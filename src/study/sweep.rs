@@ -3,6 +3,7 @@
 //! error against time shows which setting buys the most accuracy per second.
 
 use wavepath::Settings;
+use wavepath::{Aov, AovSet};
 use wavepath::{Roulette, RouletteKind, SamplerKind, Shading};
 
 /// The setting a study varies.
@@ -26,6 +27,9 @@ pub enum SweepKind {
     /// Light sampling combined with the BSDF's sample by MIS, against light sampling alone
     /// (`--no-mis`), each over the spp ladder.
     Mis,
+    /// The raw render against the same render denoised by Open Image Denoise (fed its
+    /// albedo and normal), over the spp ladder: two curves from one set of renders.
+    Denoise,
 }
 
 impl SweepKind {
@@ -39,7 +43,18 @@ impl SweepKind {
             SweepKind::Adaptive => "adaptive",
             SweepKind::Sampler => "sampler",
             SweepKind::Mis => "mis",
+            SweepKind::Denoise => "denoise",
         }
+    }
+
+    /// Whether the sweep denoises its renders (and so needs Open Image Denoise).
+    pub fn needs_denoiser(self) -> bool {
+        self == SweepKind::Denoise
+    }
+
+    /// What a reader of the sweep's plot, CSV and report must know about its errors.
+    pub fn note(self) -> Option<&'static str> {
+        self.needs_denoiser().then_some(DENOISED_NOTE)
     }
 
     /// Whether this sweep judges against full transport at [`DEEP`] bounces rather than the
@@ -55,6 +70,10 @@ pub const DEEP: u32 = 16;
 pub const ADAPTIVE_BATCH: u32 = 64;
 /// Tolerances of the adaptive sweep.
 pub const ADAPTIVE_TOLERANCES: [f32; 5] = [0.2, 0.1, 0.05, 0.02, 0.01];
+/// The denoise sweep's warning: a denoised image is judged against the converged raw
+/// reference (never a denoised one), and its error is mostly the denoiser's bias, which
+/// more samples shrink but no variance predicts.
+pub const DENOISED_NOTE: &str = "denoised: error against the converged raw reference (biased)";
 
 /// How a curve's points are made.
 #[derive(Clone, Debug, PartialEq)]
@@ -63,6 +82,9 @@ pub enum Ladder {
     Spp,
     /// Adaptive sampling at each tolerance, spp = the cap.
     Tolerances(Vec<f32>),
+    /// The renders of curve `of` denoised: no renders of its own; each point is one of that
+    /// curve's renders, denoised, its time the render's plus the denoising's.
+    Denoised { of: usize },
 }
 
 /// One curve of a sweep: a label, the settings it varies from the base, and its ladder.
@@ -129,6 +151,18 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
             curve("MIS (light + BSDF samples)".into(), "mis".into(), b().with(|s| s.paths.mis = true)),
             curve("light sampling alone (--no-mis)".into(), "no-mis".into(), b().with(|s| s.paths.mis = false)),
         ],
+        SweepKind::Denoise => {
+            let s = b().with(|s| s.image.aovs = s.image.aovs.union(denoiser_aovs()));
+            vec![
+                curve("raw".into(), "raw".into(), s.clone()),
+                Curve {
+                    label: "denoised (OIDN, albedo + normal)".into(),
+                    slug: "denoised".into(),
+                    settings: s,
+                    ladder: Ladder::Denoised { of: 0 },
+                },
+            ]
+        }
         SweepKind::Adaptive => vec![
             curve("fixed spp".into(), "fixed".into(), b()),
             Curve {
@@ -139,6 +173,11 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
             },
         ],
     }
+}
+
+/// The output variables the denoise sweep's renders keep for the denoiser.
+pub fn denoiser_aovs() -> AovSet {
+    AovSet::NONE.with(Aov::Albedo).with(Aov::Normal)
 }
 
 /// `b` at depth `m`, showing what a render at that depth shows.
@@ -188,7 +227,14 @@ mod tests {
     fn curves_change_the_roulette_only_where_they_sweep_it() {
         let base = Settings::for_dialect(wavepath::Dialect::Standard).with(|s| s.paths.max_depth = 5);
         assert_eq!(base.paths.roulette.kind, RouletteKind::Throughput);
-        for k in [SweepKind::Spp, SweepKind::LightSamples, SweepKind::Sampling, SweepKind::Adaptive, SweepKind::Mis] {
+        for k in [
+            SweepKind::Spp,
+            SweepKind::LightSamples,
+            SweepKind::Sampling,
+            SweepKind::Adaptive,
+            SweepKind::Mis,
+            SweepKind::Denoise,
+        ] {
             assert!(curves(k, &base).iter().all(|c| c.settings.paths.roulette == base.paths.roulette), "{k:?}");
         }
         for c in curves(SweepKind::Depth, &base) {
@@ -212,6 +258,9 @@ mod tests {
             SweepKind::Depth,
             SweepKind::Roulette,
             SweepKind::Adaptive,
+            SweepKind::Sampler,
+            SweepKind::Mis,
+            SweepKind::Denoise,
         ] {
             let c = curves(k, &base);
             assert!(!c.is_empty());
