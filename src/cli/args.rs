@@ -57,7 +57,10 @@ pub struct ViewArgs {
     #[arg(long, value_name = "DIR")]
     pub save_dir: Option<PathBuf>,
     /// The render flags (as for a render). `-s` is the samples-per-pixel cap at which the
-    /// view stops refining; with the default 1 it refines to 1024.
+    /// view stops refining; with the default 1 it refines to 1024. `--aov NAME`: the output
+    /// variable shown first (the page switches between them); `--denoise`: denoise from the
+    /// start; `--oidn PATH`: the denoiser's runtime (default: python3's pyoidn; without one
+    /// the page's denoise box is off).
     #[command(flatten)]
     pub render: RenderArgs,
 }

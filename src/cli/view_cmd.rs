@@ -5,7 +5,8 @@ use super::render_cmd::prepare_scene;
 use super::settings_from_args::settings;
 use anyhow::{Result, bail};
 use std::net::SocketAddr;
-use wavepath::{Bvh, Settings};
+use std::sync::Arc;
+use wavepath::{AovSet, Bvh, Denoiser, Settings};
 use wavepath_apps::view::{ViewOptions, Viewer};
 
 /// The samples-per-pixel cap when `-s` is left at its default of 1.
@@ -19,11 +20,18 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     {
         bail!("{}: --save-dir is not a folder", d.display());
     }
+    // The page shows one output variable at a time: `--aov NAME` is the one shown first.
+    if a.render.aov.len() > 1 {
+        bail!("--aov: the viewer shows one output variable at a time (its page switches between them)");
+    }
+    let denoiser = denoiser(a)?;
     let scene = super::with_spinner("loading", || prepare_scene(&a.render))?;
     let mut s = settings(&a.render, Settings::for_scene(&scene))?;
     if a.render.spp == 1 {
         s.sampling.spp = DEFAULT_CAP;
     }
+    // The session keeps first-hit sums only while its page shows a variable or denoises.
+    s.image.aovs = AovSet::NONE;
     super::check_build_memory(&scene, s.accel.bvh.leaves, a.render.max_memory)?;
     let bvh =
         super::with_spinner("building the BVH", || Bvh::build_with(&scene, s.accel.bvh).with_isa(s.execution.isa));
@@ -33,6 +41,9 @@ pub fn run(a: &ViewArgs) -> Result<()> {
         scene_path: a.render.scene.as_ref().map(|p| p.display().to_string()),
         envmap_path: a.render.envmap.as_ref().map(|p| p.display().to_string()),
         sampler: s.sampling.sampler.name().to_string(),
+        denoiser,
+        show: a.render.aov.first().copied(),
+        denoise: a.render.denoise,
     };
     let viewer = Viewer::bind(&scene, s.clone(), &opts)?;
     // The URL on stdout (scripts and tests read it); everything else on stderr.
@@ -51,4 +62,22 @@ pub fn run(a: &ViewArgs) -> Result<()> {
     // The render thread has been joined. Connections whose clients stopped reading may still
     // block their writers (and the server's drop on them): the process ends without waiting.
     std::process::exit(0)
+}
+
+/// Open Image Denoise for the page's denoise box: the runtime `--oidn` names (which must
+/// load), else the pyoidn of python3 if there is one. Without one the viewer runs with the box
+/// off, unless `--denoise` asked for it from the start.
+fn denoiser(a: &ViewArgs) -> Result<Option<Arc<Denoiser>>> {
+    let found = wavepath_apps::oidn_runtime::find_oidn(a.render.oidn.as_deref()).and_then(|p| Denoiser::load(&p));
+    match found {
+        Ok(d) => {
+            eprintln!("[wavepath view] denoiser: {}", d.library().display());
+            Ok(Some(Arc::new(d)))
+        }
+        Err(e) if a.render.oidn.is_some() || a.render.denoise => Err(e),
+        Err(e) => {
+            eprintln!("[wavepath view] denoising off: {e:#}");
+            Ok(None)
+        }
+    }
 }

@@ -52,6 +52,13 @@ pub fn reproduce(st: &ViewState, opts: &ViewOptions) -> serde_json::Value {
     if let (true, Some(e)) = (st.environment, &opts.envmap_path) {
         args.push(format!("-e {}", quote(e)));
     }
+    // The variable shown is written beside the picture; the picture denoised as shown.
+    if let Some(a) = st.look.show {
+        args.push(format!("--aov {}", a.name()));
+    }
+    if st.look.denoise {
+        args.push("--denoise".into());
+    }
     args.push(format!("-c {CAMERA_FILE} -f view.png"));
     serde_json::json!({
         "command": args.join(" "),

@@ -4,7 +4,7 @@
 //! (`wavepath::Field`, `wavepath::Shading`'s names), so a value the command line or Python
 //! refuses is refused here with the same message, under the control's name.
 
-use wavepath::{Field, Shading};
+use wavepath::{Aov, Field, Shading};
 
 /// One change a client asks for.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -34,6 +34,30 @@ pub enum Change {
     /// The BVH view: outline the boxes at this depth (`None`: off).
     BvhDepth(Option<u32>),
     Resolution(usize, usize),
+    /// What the image shows: the picture (`None`) or one output variable of the same render.
+    Show(Option<Aov>),
+    /// Denoise the picture's frames (refused by the server when it has no denoiser).
+    Denoise(bool),
+}
+
+/// `show`'s name for the picture itself.
+pub const PICTURE: &str = "picture";
+
+/// The picture or the output variable named `v` (`show=`).
+fn show(v: &str) -> Result<Option<Aov>, String> {
+    if v.trim().eq_ignore_ascii_case(PICTURE) {
+        return Ok(None);
+    }
+    v.parse::<Aov>().map(Some).map_err(|e| {
+        let names: Vec<&str> = std::iter::once(PICTURE).chain(e.names().iter().copied()).collect();
+        let (last, rest) = names.split_last().expect("names");
+        format!("show must be {} or {last}, got '{v}'", rest.join(", "))
+    })
+}
+
+/// The name `show=` takes for `aov` (`None`: the picture).
+pub fn show_name(aov: Option<Aov>) -> &'static str {
+    aov.map_or(PICTURE, Aov::name)
 }
 
 /// Largest image side a client may ask for: below the engine's limit, since the viewer
@@ -145,6 +169,8 @@ pub fn parse(key: &str, v: &str) -> Result<Change, String> {
             let (w, h) = resolution(v)?;
             Change::Resolution(w, h)
         }
+        "show" => Change::Show(show(v)?),
+        "denoise" => Change::Denoise(flag(key, v)?),
         _ => return Err(format!("unknown control '{key}'")),
     })
 }
@@ -170,6 +196,7 @@ pub fn parse_query(query: &str) -> Result<Vec<Change>, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use wavepath::Choice;
 
     #[test]
     fn values_are_bounded_and_non_numbers_refused() {
@@ -177,6 +204,12 @@ mod tests {
         assert_eq!(parse_query("spp=64&m=5&shading=direct").unwrap().len(), 3);
         assert_eq!(parse("res", "640x480"), Ok(Change::Resolution(640, 480)));
         assert_eq!(parse("bvh", "off"), Ok(Change::BvhDepth(None)));
+        assert_eq!(parse("show", "picture"), Ok(Change::Show(None)));
+        assert_eq!(parse("show", "Normal"), Ok(Change::Show(Some(Aov::Normal))));
+        assert_eq!(parse("denoise", "1"), Ok(Change::Denoise(true)));
+        for a in Aov::ALL {
+            assert_eq!(parse("show", a.name()), Ok(Change::Show(Some(*a))));
+        }
         for (k, v) in [
             ("spp", "0"),
             ("spp", "1e9"),
@@ -194,6 +227,8 @@ mod tests {
             ("focus", "2,0.5"),
             ("hemisphere", "maybe"),
             ("shading", "wireframe"),
+            ("show", "beauty"),
+            ("denoise", "yes"),
             ("rm -rf", "/"),
         ] {
             let e = parse(k, v).unwrap_err();
@@ -215,6 +250,10 @@ mod tests {
         for (k, v, field) in [("spp", 0, Field::Spp), ("m", -1, Field::MaxDepth), ("l", 0, Field::LightSamples)] {
             assert_eq!(refused(k, &v.to_string()), field.whole(k, v).unwrap_err().to_string());
         }
+        assert_eq!(
+            refused("show", "beauty"),
+            "show must be picture, albedo, normal, depth, position or variance, got 'beauty'"
+        );
         // The viewer's own limit, below the engine's.
         assert_eq!(refused("res", "5000x10"), "res 5000x10 is larger than the viewer's 4096x4096");
     }

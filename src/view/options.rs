@@ -1,8 +1,10 @@
 //! How a viewer is started: where it listens, where it may write, what its command line
-//! reproduces.
+//! reproduces, the denoiser it has and what it shows first.
 
 use std::net::SocketAddr;
 use std::path::PathBuf;
+use std::sync::Arc;
+use wavepath::{Aov, Denoiser};
 
 /// How the viewer is reached and what it may write.
 #[derive(Clone, Debug)]
@@ -15,4 +17,11 @@ pub struct ViewOptions {
     pub envmap_path: Option<String>,
     /// Sampler name as the command line spells it.
     pub sampler: String,
+    /// Open Image Denoise, when a runtime was found (`None`: the page's denoise box is off
+    /// and requests to denoise are refused).
+    pub denoiser: Option<Arc<Denoiser>>,
+    /// What the image shows at start: the picture (`None`) or an output variable.
+    pub show: Option<Aov>,
+    /// Denoise the picture from the start (needs `denoiser`).
+    pub denoise: bool,
 }

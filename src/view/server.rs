@@ -2,9 +2,9 @@
 //! control, image, save and command endpoints. Nothing a client sends names a file: saves go
 //! to the folder given on the command line under names the server makes.
 
-use super::controls::parse_query;
+use super::controls::{Change, parse_query, show_name};
 use super::options::ViewOptions;
-use super::session::{Frame, Session};
+use super::session::{Frame, Look, NO_DENOISER, Session};
 use anyhow::{Context, Result};
 use base64::Engine;
 use std::io::Write;
@@ -35,7 +35,9 @@ impl Viewer {
     pub fn bind(scene: &Scene, settings: wavepath::Settings, opts: &ViewOptions) -> Result<Viewer> {
         let server = Server::http(opts.listen).map_err(|e| anyhow::anyhow!("cannot listen on {}: {e}", opts.listen))?;
         let addr = server.server_addr().to_ip().context("the server has no IP address")?;
-        Ok(Viewer { server: Arc::new(server), addr, session: Session::new(scene, settings) })
+        let look = Look { show: opts.show, denoise: opts.denoise };
+        let session = Session::new(scene, settings, opts.denoiser.clone(), look);
+        Ok(Viewer { server: Arc::new(server), addr, session })
     }
 
     /// Serves requests and renders until the session is stopped; the render thread is
@@ -90,6 +92,9 @@ fn handle(req: Request, path: &str, session: &Session, bvh: &Bvh, opts: &ViewOpt
             req.respond(Response::from_string(PAGE).with_header(header("Content-Type", "text/html; charset=utf-8")))
         }
         ("/control", true) => match parse_query(&query) {
+            Ok(changes) if session.denoiser.is_none() && changes.contains(&Change::Denoise(true)) => {
+                req.respond(text(400, NO_DENOISER))
+            }
             Ok(changes) => {
                 session.apply(&changes, bvh);
                 let g = session.state.lock().unwrap().generation;
@@ -122,7 +127,7 @@ fn handle(req: Request, path: &str, session: &Session, bvh: &Bvh, opts: &ViewOpt
             match latest() {
                 Some(f) => {
                     let ext = if path.ends_with("png") { "png" } else { "exr" };
-                    match encode_file(&f, ext) {
+                    match file_bytes(&f, ext) {
                         Ok(bytes) => req.respond(Response::from_data(bytes).with_header(header(
                             "Content-Type",
                             if ext == "png" { "image/png" } else { "image/x-exr" },
@@ -143,8 +148,19 @@ fn handle(req: Request, path: &str, session: &Session, bvh: &Bvh, opts: &ViewOpt
                 _ => return req.respond(text(400, "save: expected format=png or format=exr")),
             };
             let Some(f) = latest() else { return req.respond(text(404, "no frame yet")) };
-            let name = format!("wavepath-view-{:06}-{}spp.{ext}", f.seq, f.spp);
-            match write_image(&f.film, &dir.join(&name), wavepath::Tonemap::Srgb) {
+            let what = if f.show.is_none() && !f.denoised { String::new() } else { format!("-{}", f.label()) };
+            let name = format!("wavepath-view-{:06}-{}spp{what}.{ext}", f.seq, f.spp);
+            let written = match (f.show, ext) {
+                // A variable's PNG is the image shown (its values mapped for display).
+                (Some(_), "png") => {
+                    let tmp = dir.join(format!("{name}.tmp"));
+                    std::fs::write(&tmp, f.display_png())
+                        .and_then(|()| std::fs::rename(&tmp, dir.join(&name)))
+                        .map_err(anyhow::Error::from)
+                }
+                _ => write_image(&f.film, &dir.join(&name), wavepath::Tonemap::Srgb),
+            };
+            match written {
                 Ok(()) => req.respond(text(200, &name)),
                 Err(e) => req.respond(text(500, &format!("{e:#}"))),
             }
@@ -174,6 +190,7 @@ fn frame_json(f: &Frame, image: bool) -> serde_json::Value {
     let mut v = serde_json::json!({
         "seq": f.seq, "generation": f.generation, "width": f.film.width, "height": f.film.height,
         "spp": f.spp, "converged": f.converged, "coarse": f.coarse, "mime": f.mime(), "info": f.info,
+        "show": show_name(f.show), "denoised": f.denoised,
     });
     if image {
         v["image"] = base64::engine::general_purpose::STANDARD.encode(f.image()).into();
@@ -181,8 +198,12 @@ fn frame_json(f: &Frame, image: bool) -> serde_json::Value {
     v
 }
 
-/// The frame's linear image as a PNG (sRGB) or EXR file's bytes.
-fn encode_file(f: &Frame, ext: &str) -> Result<Vec<u8>> {
+/// The frame's image as a PNG or EXR file's bytes: the picture's PNG sRGB-encoded, a
+/// variable's the image shown; an EXR the linear values (the picture, or the variable's).
+fn file_bytes(f: &Frame, ext: &str) -> Result<Vec<u8>> {
+    if f.show.is_some() && ext == "png" {
+        return Ok(f.display_png());
+    }
     let dir = std::env::temp_dir().join(format!("wavepath-view-{}", std::process::id()));
     std::fs::create_dir_all(&dir)?;
     let path = dir.join(format!("image-{}.{ext}", f.seq));

@@ -1,13 +1,14 @@
 //! `wavepath view` driven as a user drives it: the binary serves on a free port; these tests
 //! speak HTTP to it (plain sockets), change the camera and settings, read frames, compare the
 //! converged image with the offline render of the same samples, run the command it gives,
-//! send it bad input, and stop it with Ctrl-C. The browser test opens the page in headless
-//! Chromium and drives it through the DevTools protocol.
+//! send it bad input, and stop it with Ctrl-C; it shows each output variable and, with Open
+//! Image Denoise, the denoised picture. The browser test opens the page in headless Chromium
+//! and drives it through the DevTools protocol.
 
 use crate::common::{temp_dir, wavepath_bin};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -19,9 +20,15 @@ struct View {
 
 impl View {
     fn start(args: &[&str]) -> View {
+        View::start_with(args, &[])
+    }
+
+    /// As [`start`](Self::start), with these environment variables.
+    fn start_with(args: &[&str], env: &[(&str, &str)]) -> View {
         let mut child = Command::new(wavepath_bin())
             .arg("view")
             .args(args)
+            .envs(env.iter().copied())
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
@@ -151,6 +158,37 @@ fn assert_same_image(a: &[f32], b: &[f32], what: &str) {
 }
 
 const SMALL: &[&str] = &["-r", "64", "48", "-s", "64", "-m", "3", "-t", "2"];
+
+/// Open Image Denoise for these tests: WAVEPATH_OIDN (CI sets it to pyoidn's folder; then it
+/// must work), else the pyoidn of python3, else none: the denoising checks are skipped with a
+/// line saying so (a machine without pyoidn passes).
+fn oidn_runtime() -> Option<PathBuf> {
+    if let Some(p) = std::env::var_os("WAVEPATH_OIDN") {
+        return Some(PathBuf::from(p));
+    }
+    let out = Command::new("python3")
+        .args(["-c", "import importlib.util as u; print(u.find_spec('pyoidn').submodule_search_locations[0])"])
+        .stdin(Stdio::null())
+        .stderr(Stdio::null())
+        .output()
+        .ok()?;
+    let folder = PathBuf::from(String::from_utf8(out.stdout).ok()?.trim());
+    let found = (out.status.success() && folder.is_dir()).then_some(folder);
+    if found.is_none() {
+        println!(
+            "no Open Image Denoise (WAVEPATH_OIDN unset, no pyoidn for python3): the denoising checks are skipped"
+        );
+    }
+    found
+}
+
+/// Mean squared error of `a` against `b`, values clamped to [0, 1] (as displayed: a rare
+/// bright sample counts as a white pixel, not as its radiance).
+fn displayed_mse(a: &[f32], b: &[f32]) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let c = |x: f32| x.clamp(0.0, 1.0) as f64;
+    a.iter().zip(b).map(|(&x, &y)| (c(x) - c(y)).powi(2)).sum::<f64>() / a.len() as f64
+}
 
 /// The converged frame is the offline render (the same sample indices, summed in batches);
 /// after a camera move the coarse frame comes first, then the image refines to the cap; the
@@ -310,6 +348,151 @@ fn view_refuses_bad_requests_and_serves_several_clients() {
     assert!(view.interrupt().contains("stopped"));
 }
 
+/// Each output variable is shown from the same canvas: the first one restarts the render
+/// with a canvas that keeps first-hit sums, the others (and the picture again) only show the
+/// sums another way, and the next camera move drops them. Each frame has the variable's
+/// values (albedo in [0, 1], unit normals, depths, positions, variances) and its display
+/// image. An unknown name is refused in one line; without a denoiser the page says how to
+/// get one and a request to denoise is refused in one line.
+#[test]
+fn view_shows_each_output_variable_and_refuses_what_it_cannot_show() {
+    // No python3 on the PATH: no pyoidn, so no denoiser whatever this machine has.
+    // The whole frame of the Cornell box (red and blue walls, spheres), not its centre.
+    let args = [SMALL, &["--fov", "frame"]].concat();
+    let view = View::start_with(&args, &[("PATH", "/nonexistent")]);
+    let first = view.wait(1, |v| v["converged"] == true);
+    assert_eq!((first["show"].as_str(), first["info"]["first_hits"].as_bool()), (Some("picture"), Some(false)));
+    let (_, picture) = view.get("/image.exr");
+    let picture = exr_pixels(&picture);
+    let (_, picture_png) = view.get("/frame");
+    let mut current = first["generation"].as_u64().unwrap();
+    for name in ["albedo", "normal", "depth", "position", "variance"] {
+        let g = generation(&view.post(&format!("/control?show={name}")).1);
+        // Only the first variable restarts the render (the canvas then keeps first hits).
+        assert_eq!(g, if name == "albedo" { current + 1 } else { current }, "{name}");
+        current = g;
+        let f = view.wait(g, |v| v["show"] == name && v["converged"] == true);
+        assert_eq!(f["info"]["first_hits"], true, "{name}");
+        assert!(f["info"]["display"].as_str().is_some_and(|d| !d.is_empty()), "{name}: {}", f["info"]);
+        let (s, exr) = view.get("/image.exr");
+        assert_eq!(s, 200);
+        let values = exr_pixels(&exr);
+        assert_eq!(values.len(), picture.len(), "{name}");
+        assert!(values.iter().all(|x| x.is_finite()), "{name}: non-finite values");
+        let (lo, hi) = values.iter().fold((f32::MAX, f32::MIN), |(a, b), &x| (a.min(x), b.max(x)));
+        let mean = values.iter().map(|&x| x as f64).sum::<f64>() / values.len() as f64;
+        let off_picture = values.iter().zip(&picture).map(|(a, b)| (a - b).abs() as f64).sum::<f64>() / mean.max(1e-9);
+        println!("{name}: values in [{lo:.4}, {hi:.4}], mean {mean:.4}; display: {}", f["info"]["display"]);
+        assert!(off_picture > 0.05 * values.len() as f64, "{name}: the same as the picture");
+        match name {
+            "albedo" => assert!(lo >= 0.0 && hi <= 1.0 && mean > 0.05, "albedo outside [0, 1] or black"),
+            "normal" => {
+                assert!(lo >= -1.0 && hi <= 1.0, "normal components outside [-1, 1]");
+                // Means of unit normals (zero where the camera ray escapes): no longer than 1,
+                // most of those of surfaces close to it.
+                let lengths: Vec<f32> =
+                    values.chunks(3).map(|n| (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt()).collect();
+                let surfaces = lengths.iter().filter(|&&l| l > 0.01).count();
+                assert!(lengths.iter().all(|&l| l <= 1.0 + 1e-3) && surfaces > lengths.len() / 4);
+                let unit = lengths.iter().filter(|&&l| l > 0.99).count();
+                println!("normals: {surfaces} of {} pixels see surfaces, {unit} of them unit normals", lengths.len());
+                assert!(unit * 2 > surfaces, "normals not unit");
+            }
+            "depth" => assert!(lo >= 0.0 && hi > 0.0 && values.chunks(3).all(|d| d[0] == d[1] && d[1] == d[2])),
+            "position" => assert!(hi > lo, "one position everywhere"),
+            "variance" => assert!(lo >= 0.0 && hi > 0.0, "no variance at 64 spp"),
+            _ => unreachable!(),
+        }
+        // The image shown: the image's size, not the picture's, not flat.
+        let (s, png) = view.get("/frame");
+        assert_eq!(s, 200);
+        assert_ne!(png, picture_png, "{name}: the picture's image");
+        let shown = image::load_from_memory(&png).unwrap().into_rgb8();
+        assert_eq!(shown.dimensions(), (64, 48));
+        let colours: std::collections::BTreeSet<[u8; 3]> = shown.pixels().map(|p| p.0).collect();
+        assert!(colours.len() > 10, "{name}: {} colours", colours.len());
+    }
+    // Back to the picture: no restart, the same converged picture (the sums are kept until
+    // the next change restarts the render, which then keeps none).
+    let g = generation(&view.post("/control?show=picture").1);
+    assert_eq!(g, current);
+    view.wait(g, |v| v["show"] == "picture" && v["converged"] == true);
+    let (_, again) = view.get("/image.exr");
+    assert_same_image(&exr_pixels(&again), &picture, "the picture after the variables");
+    let g = generation(&view.post("/control?orbit=0.1,0").1);
+    let moved = view.wait(g, |v| v["converged"] == true);
+    assert_eq!(moved["info"]["first_hits"], false, "a picture's render keeps first hits");
+
+    // Refused in one line each: an unknown name, and denoising without a denoiser (whose
+    // absence the page's figures carry, with how to get one).
+    let (s, e) = view.post("/control?show=beauty");
+    assert_eq!((s, e.trim()), (400, "show must be picture, albedo, normal, depth, position or variance, got 'beauty'"));
+    let (s, e) = view.post("/control?denoise=1");
+    assert_eq!(s, 400, "{e}");
+    assert!(e.trim().lines().count() == 1 && e.contains("pip install pyoidn"), "{e}");
+    assert_eq!(moved["info"]["denoiser"]["available"], false);
+    assert!(moved["info"]["denoiser"]["help"].as_str().unwrap().contains("pip install pyoidn"));
+    let err = view.interrupt();
+    assert!(err.contains("denoising off") && err.contains("pyoidn"), "{err}");
+
+    // A runtime named on the command line must load: else the viewer does not start.
+    let r = Command::new(wavepath_bin()).args(["view", "--oidn", "/nonexistent/oidn"]).args(&args).output().unwrap();
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success() && err.trim().lines().count() == 1 && err.contains("/nonexistent/oidn"), "{err}");
+}
+
+/// With Open Image Denoise, the refining picture is denoised now and then and the final one
+/// always; at a few samples per pixel the denoised picture is much closer to the converged one
+/// than the raw picture of the same samples is.
+#[test]
+fn view_denoises_the_picture_with_a_runtime() {
+    let Some(oidn) = oidn_runtime() else { return };
+    let oidn = oidn.to_str().unwrap();
+    let size = ["-r", "128", "96", "-s", "1024", "-m", "3", "-t", "2", "--fov", "frame"];
+    let view = View::start(&[&size[..], &["--oidn", oidn, "--denoise"]].concat());
+    // Frames of the first view from the stream: refining ones denoised (after the first pass)
+    // and the final one, each with the denoiser's time in its figures.
+    let mut events = view.events();
+    let mut refining = 0;
+    let last = loop {
+        let f = next_frame(&mut events);
+        if f["denoised"] == true {
+            assert!(f["info"]["denoise_s"].as_f64().unwrap() > 0.0, "{}", f["info"]);
+            if f["converged"] == true {
+                break f;
+            }
+            refining += 1;
+        }
+    };
+    println!("{refining} denoised refining frames, the final one in {} s", last["info"]["denoise_s"]);
+    // A render that refines for a second has frames well after its first pass (at least
+    // one goes out every REFINE_GAP), and the denoiser is free for the first of them.
+    let render_s = last["info"]["render_s"].as_f64().unwrap();
+    assert!(refining >= 1 || render_s < 1.0, "no refining frame was denoised in {render_s} s");
+    // The converged raw picture (denoise off: the same sums shown as they are, no restart).
+    let g = generation(&view.post("/control?denoise=0").1);
+    assert_eq!(g, last["generation"].as_u64().unwrap());
+    view.wait(g, |v| v["converged"] == true && v["denoised"] == false);
+    let (_, reference) = view.get("/image.exr");
+    let reference = exr_pixels(&reference);
+    // Eight samples per pixel, denoised and raw.
+    let g = generation(&view.post("/control?spp=8&denoise=1").1);
+    let denoised_frame = view.wait(g, |v| v["converged"] == true && v["denoised"] == true && v["spp"] == 8);
+    let (_, denoised) = view.get("/image.exr");
+    view.post("/control?denoise=0");
+    view.wait(g, |v| v["converged"] == true && v["denoised"] == false && v["spp"] == 8);
+    let (_, raw) = view.get("/image.exr");
+    let (denoised, raw) = (exr_pixels(&denoised), exr_pixels(&raw));
+    let (e_raw, e_denoised) = (displayed_mse(&raw, &reference), displayed_mse(&denoised, &reference));
+    println!(
+        "8 spp against 1024 spp: MSE raw {e_raw:.5}, denoised {e_denoised:.5} ({:.1}x lower; denoised in {} s)",
+        e_raw / e_denoised,
+        denoised_frame["info"]["denoise_s"]
+    );
+    assert!(e_denoised * 3.0 < e_raw, "denoised MSE {e_denoised} against raw {e_raw}");
+    assert!(view.interrupt().contains("denoiser:"));
+}
+
 /// The page in a real browser (headless Chromium, Debian's `chromium`): frames arrive, an
 /// orbit drag and a wheel zoom each change the image, it converges, and the screenshot is
 /// not blank. The screenshot is kept in the test's temporary folder.
@@ -320,14 +503,22 @@ fn page_in_a_real_browser_orbits_zooms_and_converges() {
         .find(|c| Command::new(c).arg("--version").output().is_ok_and(|o| o.status.success()))
         .expect("Chromium is needed for the browser test (Debian's `chromium`; .ci/run installs it)");
     let dir = temp_dir("view-browser");
-    let view = View::start(&["-r", "160", "120", "-s", "32", "-m", "3", "-t", "2"]);
+    let oidn = oidn_runtime();
+    let mut args = vec!["-r", "160", "120", "-s", "32", "-m", "3", "-t", "2", "--fov", "frame"];
+    if let Some(p) = &oidn {
+        args.extend(["--oidn", p.to_str().unwrap()]);
+    }
+    let view = View::start(&args);
     let browser = crate::common::cdp::Browser::launch(chromium, &dir);
     let mut page = browser.open(&format!("http://{}/", view.addr));
     let state = |page: &mut crate::common::cdp::Page| {
         // 'null' until the page has loaded.
         page.eval(
             "typeof viewer === 'undefined' ? 'null' : \
-             JSON.stringify({f: viewer.frames, s: viewer.seq, c: viewer.converged, m: viewer.mean(), e: viewer.errors, rs: events.readyState, t: document.getElementById('error').textContent})",
+             JSON.stringify({f: viewer.frames, s: viewer.seq, c: viewer.converged, m: viewer.mean(), e: viewer.errors, rs: events.readyState, t: document.getElementById('error').textContent, \
+             sh: viewer.show, dn: viewer.denoised, fig: document.getElementById('figures').textContent, \
+             box: document.getElementById('denoise').disabled, note: document.getElementById('denoise-note').textContent, \
+             sel: document.getElementById('show').value})",
         )
     };
     let wait = |page: &mut crate::common::cdp::Page, what: &str, ok: &dyn Fn(&serde_json::Value) -> bool| {
@@ -359,6 +550,29 @@ fn page_in_a_real_browser_orbits_zooms_and_converges() {
     let distinct: std::collections::BTreeSet<[u8; 3]> = shot.pixels().map(|p| p.0).collect();
     assert!(distinct.len() > 50, "the screenshot has {} colours: blank", distinct.len());
     assert!(Path::new(&dir.join("view.png")).is_file());
+
+    // An output variable picked in the page's select: its image, named in the figures.
+    page.eval("(() => { const s = document.getElementById('show'); s.value = 'normal'; s.dispatchEvent(new Event('change')); })()");
+    let normal = wait(&mut page, "the normals", &|v| v["sh"] == "normal" && v["c"] == true);
+    assert!(normal["fig"].as_str().unwrap().contains("normal") && normal["sel"] == "normal", "{normal}");
+    assert!((normal["m"].as_f64().unwrap() - zoomed["m"].as_f64().unwrap()).abs() > 1.0, "{zoomed} -> {normal}");
+    std::fs::write(dir.join("view-normal.png"), page.screenshot()).unwrap();
+    // The denoiser: with a runtime, ticking the box on the picture shows it denoised (the
+    // figures give its time); without, the box is disabled and the page says how to get one.
+    page.eval("(() => { const s = document.getElementById('show'); s.value = 'picture'; s.dispatchEvent(new Event('change')); })()");
+    wait(&mut page, "the picture again", &|v| v["sh"] == "picture" && v["c"] == true);
+    if oidn.is_some() {
+        page.eval("document.getElementById('denoise').click()");
+        let denoised = wait(&mut page, "the denoised picture", &|v| v["dn"] == true && v["c"] == true);
+        assert!(denoised["fig"].as_str().unwrap().contains("denoised in"), "{denoised}");
+        std::fs::write(dir.join("view-denoised.png"), page.screenshot()).unwrap();
+    } else {
+        let v = wait(&mut page, "the disabled denoise box", &|v| v["box"] == true);
+        assert!(v["note"].as_str().unwrap().contains("pip install pyoidn"), "{v}");
+        std::fs::write(dir.join("view-no-denoiser.png"), page.screenshot()).unwrap();
+    }
+    assert_eq!(wait(&mut page, "no errors", &|_| true)["e"], 0, "the page reported errors");
+    println!("screenshots in {}", dir.display());
     drop(page);
     drop(browser);
     view.interrupt();
