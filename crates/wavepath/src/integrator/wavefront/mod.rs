@@ -19,7 +19,7 @@
 //! Results do not depend on the thread count: every random number comes from (seed, pixel,
 //! sample, depth), every sum runs in slot order.
 
-mod aov;
+pub mod aov;
 pub mod compact;
 pub mod generate;
 mod handout;
@@ -253,6 +253,7 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
     st.camera = n as u64;
     let mut clock = lap(clock, &mut st.stages.generate);
     let aovs = !out.aovs.is_empty();
+    let hits_in_lanes = aov_hits_in_lanes(t, job.lanes);
     if aovs {
         q.aov.start(n);
     }
@@ -267,10 +268,11 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
         first = false;
         clock = lap(clock, &mut st.stages.traverse);
         if aovs {
-            aov::record(t, &q.paths, &mut q.aov);
+            aov::record(t, &q.paths, &mut q.aov, hits_in_lanes);
             clock = lap(clock, &mut st.stages.aov);
         }
-        shade::shade(t, job.lanes, &mut q.paths, &mut q.shadow, &mut q.kinds);
+        let records = (aovs && hits_in_lanes).then_some(&mut q.aov);
+        shade::shade(t, job.lanes, &mut q.paths, &mut q.shadow, &mut q.kinds, records);
         clock = lap(clock, &mut st.stages.shade);
         if t.rules.features.direct {
             shadow::shadow(t, accel, &q.shadow, &mut q.occluded, &mut q.paths.radiance, &mut st.counters);
@@ -304,6 +306,12 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
         }
     }
     st
+}
+
+/// Whether shade records the output variables of the hits (the lanes reconstruct every group's
+/// points, and every hit leaves its vertex): the AOV stage then records escaped rays only.
+fn aov_hits_in_lanes(t: &Transport, lanes: Lanes) -> bool {
+    lanes.shade.is_some() && !lanes::soa::whole_vertices(t) && (t.rules.features.direct || t.rules.features.indirect)
 }
 
 #[inline]

@@ -19,14 +19,24 @@ use crate::integrator::Transport;
 /// [`super::lanes::escaped`].
 /// Each path's shadow rays stay in the order it made them, so its radiance is the same bits
 /// whatever the grouping.
-pub fn shade(t: &Transport, lanes: Lanes, q: &mut PathQueue, shadow: &mut ShadowQueue, kinds: &mut Kinds) {
+///
+/// `aovs`: the output variables' records, when the hits' are made here, from the points the
+/// lanes reconstruct (the frame loop decides).
+pub fn shade(
+    t: &Transport,
+    lanes: Lanes,
+    q: &mut PathQueue,
+    shadow: &mut ShadowQueue,
+    kinds: &mut Kinds,
+    aovs: Option<&mut super::aov::AovRecords>,
+) {
     let Some(width) = lanes.shade else {
         return shade_scalar(t, q, shadow);
     };
     shadow.clear();
     kinds.sort(t, q);
     super::lanes::escaped::shade_escaped(width, t, q, &kinds.escaped);
-    super::lanes::hits::shade_hits(width, t, q, &kinds.hits, shadow);
+    super::lanes::hits::shade_hits(width, t, q, &kinds.hits, shadow, aovs);
 }
 
 /// A wave's paths by what shades them, as index lists into the path queue.
@@ -166,7 +176,7 @@ mod tests {
             traverse::traverse(&accel, &mut q, &mut TraceCounters::default());
             escaped += (0..q.len()).filter(|&i| q.hit[i].is_none() && q.depth[i] > 0).count();
             let mut qs = q.clone();
-            shade(&t, lanes, &mut q, &mut sl, &mut kinds);
+            shade(&t, lanes, &mut q, &mut sl, &mut kinds, None);
             shade_by_transport(&t, &mut qs, &mut ss);
             assert_eq!(q.ray, qs.ray);
             assert_eq!(q.throughput, qs.throughput);

@@ -189,7 +189,8 @@ fn variance_is_zero_without_noise_and_matches_a_known_estimator() {
 
 #[test]
 fn output_variables_are_the_same_bits_for_any_thread_count_and_instruction_set() {
-    // Glass, a mirror and a glossy sphere on a diffuse floor: delta chains of both kinds.
+    // Glass, a mirror, a glossy, a metallic-roughness and a rough conductor sphere on a diffuse
+    // floor: delta chains of both kinds, and every model the lanes record from their points.
     let mut scene = floor_scene();
     scene.materials.extend([
         Material {
@@ -201,11 +202,21 @@ fn output_variables_are_the_same_bits_for_any_thread_count_and_instruction_set()
             bsdf: Bsdf::Phong { diffuse: KD, specular: Vec3::splat(0.3), shininess: 40.0 },
             ..Material::diffuse("glossy", Vec3::ONE)
         },
+        Material {
+            bsdf: Bsdf::MetallicRoughness { base: KD, metallic: 0.4, roughness: 0.3 },
+            ..Material::diffuse("pbr", Vec3::ONE)
+        },
+        Material {
+            bsdf: Bsdf::Microfacet { alpha: 0.2, eta: vec3(0.2, 0.9, 1.1), k: vec3(3.9, 2.4, 2.2) },
+            ..Material::diffuse("gold", Vec3::ONE)
+        },
     ]);
     scene.spheres = vec![
         Sphere { center: vec3(-0.6, 0.3, 0.0), radius: 0.3, material: 1 },
         Sphere { center: vec3(0.0, 0.3, -0.3), radius: 0.3, material: 2 },
         Sphere { center: vec3(0.6, 0.3, 0.0), radius: 0.3, material: 3 },
+        Sphere { center: vec3(-0.3, 0.2, 0.5), radius: 0.2, material: 4 },
+        Sphere { center: vec3(0.3, 0.2, 0.5), radius: 0.2, material: 5 },
     ];
     let base = settings(W, H, 6, 8).with(|s| s.image.aovs = all());
     let first = render(&scene, &base);

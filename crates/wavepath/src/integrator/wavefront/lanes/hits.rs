@@ -19,6 +19,7 @@ use super::soa::{Points, Rays, Surfaces, get, surface_points, whole_vertices};
 use super::width::{LaneKernel, ShadeWidth};
 use crate::bsdf::{Dielectric, Glossy, Lambert, Layered, Microfacet, Mirror, Model, Pbr};
 use crate::geometry::Hit;
+use crate::integrator::wavefront::aov::AovRecords;
 use crate::integrator::wavefront::one_path;
 use crate::integrator::wavefront::queues::{PathQueue, ShadowQueue};
 use crate::integrator::{Transport, Vertex};
@@ -56,18 +57,21 @@ macro_rules! lane_models {
             }
         })*
 
-        /// Shades each model's hits (`lists`, by [`list_of`]) in lanes.
+        /// Shades each model's hits (`lists`, by [`list_of`]) in lanes; with `aovs`, records the
+        /// output variables of the hits whose samples wait for them.
         pub fn shade_hits(
             width: ShadeWidth,
             t: &Transport,
             q: &mut PathQueue,
             lists: &[Vec<u32>; MODELS],
             shadow: &mut ShadowQueue,
+            mut aovs: Option<&mut AovRecords>,
         ) {
             let mut k = 0;
             $(
                 if !lists[k].is_empty() {
-                    width.dispatch(Hits::<$model> { t, q: &mut *q, idx: &lists[k], shadow: &mut *shadow, model: std::marker::PhantomData });
+                    let aovs = aovs.as_deref_mut();
+                    width.dispatch(Hits::<$model> { t, q: &mut *q, idx: &lists[k], shadow: &mut *shadow, aovs, model: std::marker::PhantomData });
                 }
                 k += 1;
             )*
@@ -127,14 +131,15 @@ struct Hits<'a, 's, M> {
     q: &'a mut PathQueue,
     idx: &'a [u32],
     shadow: &'a mut ShadowQueue,
+    aovs: Option<&'a mut AovRecords>,
     model: std::marker::PhantomData<M>,
 }
 
 impl<M: OfModel> LaneKernel for Hits<'_, '_, M> {
     #[inline(always)]
     fn run<H: Hasher, const L: usize>(self, h: H) {
-        let Hits { t, q, idx, shadow, .. } = self;
-        shade_groups::<M, H, L>(h, t, q, idx, shadow)
+        let Hits { t, q, idx, shadow, aovs, .. } = self;
+        shade_groups::<M, H, L>(h, t, q, idx, shadow, aovs)
     }
 }
 
@@ -147,6 +152,7 @@ fn shade_groups<M: OfModel, H: Hasher, const L: usize>(
     q: &mut PathQueue,
     idx: &[u32],
     shadow: &mut ShadowQueue,
+    mut aovs: Option<&mut AovRecords>,
 ) {
     let mut g = Group::<M, L>::new();
     let mut gather = Gather::<L>::new(t);
@@ -155,9 +161,9 @@ fn shade_groups<M: OfModel, H: Hasher, const L: usize>(
     for chunk in idx.chunks(L) {
         g.clear();
         let keys = if gather.whole {
-            gather.gather::<M, true>(t, q, chunk, &mut g)
+            gather.gather::<M, true>(t, q, chunk, &mut g, None)
         } else {
-            gather.gather::<M, false>(t, q, chunk, &mut g)
+            gather.gather::<M, false>(t, q, chunk, &mut g, aovs.as_deref_mut())
         };
         if !g.sends() {
             continue;
@@ -191,6 +197,8 @@ struct Gather<'t, const L: usize> {
     spheres: bool,
     /// Each lane's hit, material and emission seen (points in lanes only).
     hits: [(Hit, usize, Vec3); L],
+    /// Each lane's material (points in lanes only).
+    materials: [usize; L],
 }
 
 impl<'t, const L: usize> Gather<'t, L> {
@@ -202,12 +210,14 @@ impl<'t, const L: usize> Gather<'t, L> {
             normals: t.scene.mesh.normals.as_deref(),
             spheres: !t.scene.spheres.is_empty(),
             hits: [none; L],
+            materials: [0; L],
         }
     }
 
     /// The paths of `chunk` arrive, one at a time; those that go on into `g`, their models
     /// made from their vertices (`WHOLE`: `Transport::vertex`; else reconstructed in lanes).
-    /// Each lane's path key.
+    /// Each lane's path key. With `aovs` (points in lanes only), the lanes whose samples wait
+    /// for their output variables record them from the group's points.
     #[inline(always)]
     fn gather<M: OfModel, const WHOLE: bool>(
         &mut self,
@@ -215,6 +225,7 @@ impl<'t, const L: usize> Gather<'t, L> {
         q: &mut PathQueue,
         chunk: &[u32],
         g: &mut Group<M, L>,
+        aovs: Option<&mut AovRecords>,
     ) -> [u64; L] {
         let leaves = t.rules.features.direct || t.rules.features.indirect;
         let mut keys = [0u64; L];
@@ -236,6 +247,7 @@ impl<'t, const L: usize> Gather<'t, L> {
                 // material alone makes it.
                 g.push_path(t, q, i, M::at_material(t, a.material));
                 self.surf.set(t, self.normals, j, &q.ray[i], &hit);
+                self.materials[j] = a.material;
                 if !M::FROM_MATERIAL {
                     self.hits[j] = (hit, a.material, a.emission);
                 }
@@ -246,6 +258,19 @@ impl<'t, const L: usize> Gather<'t, L> {
             // lanes are not relief-mapped (copying the points into vertices lane by lane
             // was 8% of the Lambertian kind's stage).
             surface_points(&self.surf, self.normals.is_some(), self.spheres, &mut g.pts);
+            if let Some(r) = aovs {
+                for j in 0..g.n {
+                    let i = g.path[j];
+                    let slot = q.slot[i] as usize;
+                    if r.pending(slot) {
+                        let (m, t_hit) = (self.materials[j], q.hit[i].map_or(0.0, |h| h.t));
+                        // `Transport::model_at` for a surface without textures or colours.
+                        let albedo = t.materials.models[m].oriented(g.pts.front[j]).albedo_estimate();
+                        let (p, ns) = (get(&g.pts.p, j), get(&g.pts.ns, j));
+                        r.record_hit(slot, q.depth[i], t_hit, q.ray[i].dir, p, ns, albedo);
+                    }
+                }
+            }
             if !M::FROM_MATERIAL {
                 for j in 0..g.n {
                     let (hit, m, emission) = &self.hits[j];
