@@ -10,11 +10,14 @@ use crate::cpu::Isa;
 use crate::film::AovImage;
 use crate::render::{RenderOutput, render_with_progress};
 use crate::sampling::SamplerKind;
+use crate::scene::Texture;
+use crate::scene::texture::{Filter, TextureImage, Wrap};
 use crate::scene::{Bsdf, Camera, Environment, Material, Mesh, Scene, Sphere};
 use crate::settings::{Aov, AovSet, IntegratorKind, Settings};
 use crate::tests::common::meshgen::quad;
 use crate::tests::common::render::settings;
-use glam::{Vec3, vec3};
+use glam::{Vec2, Vec3, vec3};
+use std::sync::Arc;
 
 const W: usize = 32;
 const H: usize = 24;
@@ -107,21 +110,45 @@ fn a_lambertian_plane_gives_its_albedo_normal_depth_and_position() {
 
 #[test]
 fn a_mirror_shows_the_albedo_and_normal_of_what_it_reflects() {
-    // The camera at z = 2 looks at a mirror on z = 0; behind the camera, on z = 5, a wall whose
-    // left half (x < 0) is red and right half blue: each pixel's reflected ray reaches the
-    // half on its own side.
+    // The camera at z = 2 looks at a mirror on z = 0; behind the camera, on z = 5, a textured
+    // wall: a 2x1 image, red on the left (x < 0) and blue on the right, nearest texel. Each
+    // pixel's reflected ray reaches the half on its own side, so its albedo is that texel's.
     let (red, blue) = (vec3(0.9, 0.1, 0.1), vec3(0.1, 0.2, 0.8));
     let mut mesh = Mesh::default();
     quad(&mut mesh, [vec3(-3.0, -3.0, 0.0), vec3(3.0, -3.0, 0.0), vec3(3.0, 3.0, 0.0), vec3(-3.0, 3.0, 0.0)], 0);
-    quad(&mut mesh, [vec3(-20.0, -20.0, 5.0), vec3(0.0, -20.0, 5.0), vec3(0.0, 20.0, 5.0), vec3(-20.0, 20.0, 5.0)], 1);
-    quad(&mut mesh, [vec3(0.0, -20.0, 5.0), vec3(20.0, -20.0, 5.0), vec3(20.0, 20.0, 5.0), vec3(0.0, 20.0, 5.0)], 2);
+    quad(
+        &mut mesh,
+        [vec3(-20.0, -20.0, 5.0), vec3(20.0, -20.0, 5.0), vec3(20.0, 20.0, 5.0), vec3(-20.0, 20.0, 5.0)],
+        1,
+    );
+    mesh.uvs = Some(vec![
+        Vec2::ZERO,
+        Vec2::ZERO,
+        Vec2::ZERO,
+        Vec2::ZERO,
+        Vec2::new(0.0, 0.0),
+        Vec2::new(1.0, 0.0),
+        Vec2::new(1.0, 1.0),
+        Vec2::new(0.0, 1.0),
+    ]);
+    let image = TextureImage { width: 2, height: 1, texels: vec![red, blue] };
+    let texture = Texture {
+        path: "wall.png".into(),
+        image: Some(Arc::new(image)),
+        wrap: [Wrap::ClampToEdge; 2],
+        filter: Filter::Nearest,
+        flip_v: false,
+        factor: Vec3::ONE,
+        transform: glam::Affine2::IDENTITY,
+    };
+    let wall = Material { albedo_texture: Some(texture), ..Material::diffuse("wall", Vec3::splat(0.5)) };
     let mirror = Material { bsdf: Bsdf::Mirror { reflectance: Vec3::ONE }, ..Material::diffuse("mirror", Vec3::ONE) };
     let mut camera = Camera::look_at(vec3(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y, 50.0, W as f32 / H as f32);
     camera.nclip = 0.01;
     let scene = Scene {
         name: "mirror".into(),
         mesh,
-        materials: vec![mirror, Material::diffuse("red", red), Material::diffuse("blue", blue)],
+        materials: vec![mirror, wall],
         camera,
         env: Environment::Constant(Vec3::ONE),
         ..Scene::default()
