@@ -326,23 +326,6 @@ fn a_study_of_an_obj_file_uses_the_render_commands_roulette() {
     assert_eq!(r.reference_settings.paths.roulette, rendered);
 }
 
-/// The Open Image Denoise runtime of the denoise sweep's test: `WAVEPATH_OIDN` when set (the
-/// study must then load it), else the `pyoidn` package `python3` finds (the engine's test
-/// helper `oidn_for_tests` looks it up the same way); `None`, said, when there is neither.
-fn oidn_for_tests() -> Option<PathBuf> {
-    if let Some(path) = std::env::var_os("WAVEPATH_OIDN") {
-        return Some(PathBuf::from(path));
-    }
-    let out = std::process::Command::new("python3")
-        .args(["-c", "import importlib.util as u; print(u.find_spec('pyoidn').submodule_search_locations[0])"])
-        .stdin(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .output()
-        .ok()?;
-    let folder = PathBuf::from(String::from_utf8(out.stdout).ok()?.trim());
-    (out.status.success() && folder.is_dir()).then_some(folder)
-}
-
 /// The fields of one CSV line: commas inside double quotes are part of a field.
 fn csv_fields(line: &str) -> Vec<String> {
     let (mut fields, mut field, mut quoted) = (Vec::new(), String::new(), false);
@@ -364,10 +347,7 @@ fn csv_fields(line: &str) -> Vec<String> {
 /// variance-based error; the CSV, the plot and the report say the denoised error is biased.
 #[test]
 fn denoise_sweep_draws_raw_and_denoised_from_the_same_renders() {
-    let Some(oidn) = oidn_for_tests() else {
-        println!("no Open Image Denoise (WAVEPATH_OIDN unset, no pyoidn for python3): denoise sweep test skipped");
-        return;
-    };
+    let Some(oidn) = crate::common::oidn_for_tests("denoise sweep test") else { return };
     let out = temp_dir("study-denoise");
     let mut args: Vec<std::ffi::OsString> =
         ["study", "--sweep", "denoise", "-r", "64", "48", "--max-spp", "32", "--ref-spp", "1024"]

@@ -8,7 +8,7 @@
 use crate::common::{temp_dir, wavepath_bin};
 use std::io::{BufRead, BufReader, Read, Write};
 use std::net::TcpStream;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
@@ -158,29 +158,6 @@ fn assert_same_image(a: &[f32], b: &[f32], what: &str) {
 }
 
 const SMALL: &[&str] = &["-r", "64", "48", "-s", "64", "-m", "3", "-t", "2"];
-
-/// Open Image Denoise for these tests: WAVEPATH_OIDN (CI sets it to pyoidn's folder; then it
-/// must work), else the pyoidn of python3, else none: the denoising checks are skipped with a
-/// line saying so (a machine without pyoidn passes).
-fn oidn_runtime() -> Option<PathBuf> {
-    if let Some(p) = std::env::var_os("WAVEPATH_OIDN") {
-        return Some(PathBuf::from(p));
-    }
-    let out = Command::new("python3")
-        .args(["-c", "import importlib.util as u; print(u.find_spec('pyoidn').submodule_search_locations[0])"])
-        .stdin(Stdio::null())
-        .stderr(Stdio::null())
-        .output()
-        .ok()?;
-    let folder = PathBuf::from(String::from_utf8(out.stdout).ok()?.trim());
-    let found = (out.status.success() && folder.is_dir()).then_some(folder);
-    if found.is_none() {
-        println!(
-            "no Open Image Denoise (WAVEPATH_OIDN unset, no pyoidn for python3): the denoising checks are skipped"
-        );
-    }
-    found
-}
 
 /// Mean squared error of `a` against `b`, values clamped to [0, 1] (as displayed: a rare
 /// bright sample counts as a white pixel, not as its radiance).
@@ -446,7 +423,7 @@ fn view_shows_each_output_variable_and_refuses_what_it_cannot_show() {
 /// than the raw picture of the same samples is.
 #[test]
 fn view_denoises_the_picture_with_a_runtime() {
-    let Some(oidn) = oidn_runtime() else { return };
+    let Some(oidn) = crate::common::oidn_for_tests("the denoising checks") else { return };
     let oidn = oidn.to_str().unwrap();
     let size = ["-r", "128", "96", "-s", "1024", "-m", "3", "-t", "2", "--fov", "frame"];
     let view = View::start(&[&size[..], &["--oidn", oidn, "--denoise"]].concat());
@@ -503,7 +480,7 @@ fn page_in_a_real_browser_orbits_zooms_and_converges() {
         .find(|c| Command::new(c).arg("--version").output().is_ok_and(|o| o.status.success()))
         .expect("Chromium is needed for the browser test (Debian's `chromium`; .ci/run installs it)");
     let dir = temp_dir("view-browser");
-    let oidn = oidn_runtime();
+    let oidn = crate::common::oidn_for_tests("the denoising checks");
     let mut args = vec!["-r", "160", "120", "-s", "32", "-m", "3", "-t", "2", "--fov", "frame"];
     if let Some(p) = &oidn {
         args.extend(["--oidn", p.to_str().unwrap()]);

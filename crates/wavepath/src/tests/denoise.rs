@@ -2,7 +2,7 @@
 //! the file; with a runtime (`WAVEPATH_OIDN`, else the `pyoidn` package of `python3` on the
 //! PATH), a noisy synthetic image comes out much closer to the clean one, finite, same size.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::sync::OnceLock;
 use std::time::Instant;
 
@@ -12,37 +12,16 @@ use crate::denoise::{Aux, Denoiser, OIDN_HELP};
 use crate::film::Film;
 use crate::tests::common::{Xorshift, temp_dir};
 
-/// The runtime the real-denoiser tests use: `WAVEPATH_OIDN` when set (it must load), else the
-/// `pyoidn` package `python3` finds (the lookup of the applications' `find_oidn`, repeated
-/// here since the engine cannot call them); `None`, said once, when there is neither.
+/// The runtime the real-denoiser tests use ([`oidn_for_tests`](crate::tests::common::oidn_for_tests)),
+/// loaded once: when `WAVEPATH_OIDN` is set it must load.
 fn oidn_for_tests() -> Option<&'static Denoiser> {
     static RUNTIME: OnceLock<Option<Denoiser>> = OnceLock::new();
     RUNTIME
         .get_or_init(|| {
-            if let Some(path) = std::env::var_os("WAVEPATH_OIDN") {
-                return Some(Denoiser::load(Path::new(&path)).unwrap_or_else(|e| panic!("WAVEPATH_OIDN: {e}")));
-            }
-            let found = pyoidn_folder().map(|folder| Denoiser::load(&folder).expect("pyoidn is installed"));
-            if found.is_none() {
-                println!(
-                    "no Open Image Denoise (WAVEPATH_OIDN unset, no pyoidn for python3): real-denoiser tests skipped"
-                );
-            }
-            found
+            let path = crate::tests::common::oidn_for_tests("real-denoiser tests")?;
+            Some(Denoiser::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display())))
         })
         .as_ref()
-}
-
-/// The folder of the `pyoidn` package of `python3` on the PATH, as `find_oidn` asks for it.
-fn pyoidn_folder() -> Option<PathBuf> {
-    let out = std::process::Command::new("python3")
-        .args(["-c", "import importlib.util as u; print(u.find_spec('pyoidn').submodule_search_locations[0])"])
-        .stdin(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .output()
-        .ok()?;
-    let folder = PathBuf::from(String::from_utf8(out.stdout).ok()?.trim());
-    (out.status.success() && folder.is_dir()).then_some(folder)
 }
 
 fn load_error(path: &Path) -> String {

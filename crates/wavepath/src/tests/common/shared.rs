@@ -141,3 +141,27 @@ pub fn temp_dir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// The Open Image Denoise runtime the real-denoiser tests use: `WAVEPATH_OIDN` when set (CI
+/// sets it to pyoidn's folder: the tests must then load it), else the folder of the `pyoidn`
+/// package of `python3` on the PATH (as `find_oidn` asks for it), else `None`, said on one
+/// line naming `what` is skipped, so that a machine without pyoidn passes.
+pub fn oidn_for_tests(what: &str) -> Option<PathBuf> {
+    if let Some(path) = std::env::var_os("WAVEPATH_OIDN") {
+        return Some(PathBuf::from(path));
+    }
+    let found = (|| {
+        let out = std::process::Command::new("python3")
+            .args(["-c", "import importlib.util as u; print(u.find_spec('pyoidn').submodule_search_locations[0])"])
+            .stdin(std::process::Stdio::null())
+            .stderr(std::process::Stdio::null())
+            .output()
+            .ok()?;
+        let folder = PathBuf::from(String::from_utf8(out.stdout).ok()?.trim());
+        (out.status.success() && folder.is_dir()).then_some(folder)
+    })();
+    if found.is_none() {
+        println!("no Open Image Denoise (WAVEPATH_OIDN unset, no pyoidn for python3): {what} skipped");
+    }
+    found
+}
