@@ -80,15 +80,22 @@ impl WithKernels for ClosestBatch<'_> {
                 };
                 alone = if packet { 0 } else { alone + 1 };
                 if packet {
-                    let mut rays = [rs[slot[k] as usize]; COHERENT];
-                    for (r, &i) in rays.iter_mut().zip(&slot[k..k + len]) {
-                        *r = rs[i as usize];
-                    }
-                    let mut out = [None; COHERENT];
                     let f = Frustum::of(slot[k..k + len].iter().map(|&i| &prep[i as usize]));
-                    Walker::new(bvh, isa, &mut *stack, &mut *counters).coherent(&rays[..len], &f, &mut out[..len]);
-                    for (&i, h) in slot[k..k + len].iter().zip(out) {
-                        hs[i as usize] = h;
+                    let mut w = Walker::new(bvh, isa, &mut *stack, &mut *counters);
+                    let first = slot[k] as usize;
+                    if slot[k + len - 1] as usize == first + len - 1 {
+                        // Rays next to each other (camera rays): traced where they are.
+                        w.coherent(&rs[first..first + len], &f, &mut hs[first..first + len]);
+                    } else {
+                        let mut rays = [rs[first]; COHERENT];
+                        for (r, &i) in rays.iter_mut().zip(&slot[k..k + len]) {
+                            *r = rs[i as usize];
+                        }
+                        let mut out = [None; COHERENT];
+                        w.coherent(&rays[..len], &f, &mut out[..len]);
+                        for (&i, h) in slot[k..k + len].iter().zip(out) {
+                            hs[i as usize] = h;
+                        }
                     }
                 } else if bvh.cached {
                     let mut w = Walker::new(bvh, isa, &mut *stack, &mut *counters);

@@ -38,6 +38,20 @@ impl Best {
         }
     }
 
+    /// The hit on `prim` at `t` (`u`, `v`), or nothing found yet within `[tmin, t]` where
+    /// `prim` is `u32::MAX`.
+    #[inline(always)]
+    pub fn found_or_new(t: f32, prim: u32, u: f32, v: f32) -> Best {
+        Best { t, end: range_end(t), prim, u, v, found: prim != u32::MAX }
+    }
+
+    /// `(t, prim, u, v)`, `prim` `u32::MAX` where nothing was found: what
+    /// [`Best::found_or_new`] takes.
+    #[inline(always)]
+    pub fn parts(&self) -> (f32, u32, f32, f32) {
+        (self.t, if self.found { self.prim } else { u32::MAX }, self.u, self.v)
+    }
+
     #[inline(always)]
     pub fn hit(&self) -> Option<Hit> {
         self.found.then_some(Hit { t: self.t, prim: self.prim, u: self.u, v: self.v })
