@@ -85,8 +85,9 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<Rays>> {
         counters.rays += m as u64;
         // Each ray's closest hit so far, one array per field (its distance is `closest`).
         let mut found = Found::NONE;
-        // The rays' shears are set up at the first leaf, eight at a time.
-        let mut shears: Option<[PacketShear; GROUPS]> = None;
+        // The rays' shears are set up at the first leaf, eight at a time, each with whether
+        // all its rays share the axes of the first (a pixel block's rays nearly always do).
+        let mut shears: Option<[(PacketShear, bool); GROUPS]> = None;
         // And their box-test values, eight rays at a time, at the first node the packet enters
         // (many packets of camera rays enter the root's box and none of its children).
         let mut boxes: Option<[PacketBoxRays; GROUPS]> = None;
@@ -145,19 +146,21 @@ impl<K: PacketTest> Walker<'_, K, &mut BigStack<Rays>> {
                 tests += (todo.count_ones() as usize * count) as u64;
                 // (Not in a closure: one compiled out of line would leave the AVX2 context.)
                 if shears.is_none() {
-                    let mut p = [PacketShear::EMPTY; GROUPS];
-                    for (g, p) in p.iter_mut().enumerate() {
-                        *p = isa.packet_shear(eighth(rays, g));
+                    let mut p = [(PacketShear::EMPTY, false); GROUPS];
+                    for (g, (p, all)) in p.iter_mut().enumerate() {
+                        let group = eighth(rays, g);
+                        *p = isa.packet_shear(group);
+                        *all = p.rows[..group.len()].iter().all(|r| *r == p.rows[0]);
                     }
                     shears = Some(p);
                 }
                 let Some(shears) = &shears else { unreachable!("set above") };
-                for (h, p) in shears.iter().enumerate() {
+                for (h, (p, all)) in shears.iter().enumerate() {
                     let lanes = todo >> (PACKET * h) & 0xff;
                     if lanes != 0 {
                         leaf_rays(
                             t,
-                            Leaf { blk, count, p, rays: &rays[PACKET * h..] },
+                            Leaf { blk, count, p, all_shared: *all, rays: &rays[PACKET * h..] },
                             lanes,
                             &mut found,
                             &mut closest,
@@ -194,6 +197,8 @@ struct Leaf<'a> {
     blk: &'a Tri4,
     count: usize,
     p: &'a PacketShear,
+    /// Whether every ray of `p` has the axes of its lane 0.
+    all_shared: bool,
     rays: &'a [Ray],
 }
 
@@ -267,23 +272,29 @@ fn leaf_rays<K: PacketTest>(
     closest: &mut [f32; COHERENT],
     h: usize,
 ) {
-    let Leaf { blk, count, p, rays } = leaf;
+    let Leaf { blk, count, p, all_shared, rays } = leaf;
     let at = PACKET * h;
-    let lead = lanes.trailing_zeros() as usize;
-    let mut shared = true;
-    let mut rest = lanes;
-    while rest != 0 {
-        shared &= p.rows[rest.trailing_zeros() as usize] == p.rows[lead];
-        rest &= rest - 1;
-    }
-    let mut lead_shear = *p;
+    // The kernel reads the axes of lane 0: where not all rays share them, those of the first
+    // ray here go there in a copy of the set-up, if these rays share them.
+    let copy;
+    let (shared, lead_shear) = if all_shared {
+        (true, p)
+    } else {
+        let lead = lanes.trailing_zeros() as usize;
+        let mut shared = true;
+        let mut rest = lanes;
+        while rest != 0 {
+            shared &= p.rows[rest.trailing_zeros() as usize] == p.rows[lead];
+            rest &= rest - 1;
+        }
+        copy = PacketShear { rows: [p.rows[lead]; PACKET], ..*p };
+        (shared, &copy)
+    };
     if shared {
-        // The kernel reads the axes of lane 0.
-        lead_shear.rows[0] = p.rows[lead];
         for lane in 0..count {
             let mut cand = lanes;
             if blk.tri_lanes >> lane & 1 != 0 {
-                let Some(r) = t.isa.tri_rays(blk, lane, &lead_shear, eighth_of(closest, h)) else {
+                let Some(r) = t.isa.tri_rays(blk, lane, lead_shear, eighth_of(closest, h)) else {
                     break;
                 };
                 let exact = t.kept(r.exact & lanes, blk.ids[lane], &r, rays);
