@@ -88,6 +88,20 @@ impl Isa {
     }
 }
 
+/// Starts loading the cache line holding `x` into every cache level: a hint that never
+/// faults and changes no value (nothing off x86-64).
+#[inline(always)]
+pub fn prefetch<T>(x: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch is a hint that never faults; SSE (which has the instruction) is part
+    // of x86-64.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((x as *const T).cast::<i8>())
+    };
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = x;
+}
+
 /// Proof that the CPU has SSE4.1 (constructed only after detection).
 #[derive(Clone, Copy, Debug)]
 pub struct Sse(());

@@ -155,6 +155,15 @@ impl EnvMap {
         (t.rgb, Self::solid_angle_pdf(t.pdf_uv, sin_theta))
     }
 
+    /// Starts loading texel `index` (an escaped ray's, found well before it is read: a map's
+    /// texels are megabytes and escaped rays point anywhere).
+    #[inline(always)]
+    pub fn prefetch(&self, index: usize) {
+        if let Some(t) = self.texels.get(index) {
+            crate::cpu::prefetch(t);
+        }
+    }
+
     /// Radiance toward `d` (unit) and the solid-angle density with which
     /// a light sample ([`draw`](Self::draw)) draws it.
     #[inline]

@@ -35,8 +35,11 @@ pub fn shade(
     };
     shadow.clear();
     kinds.sort(t, q);
-    super::lanes::escaped::shade_escaped(width, t, q, &kinds.escaped);
+    // The escaped paths' texels are found first and read last, the hits shaded in between
+    // (each kind touches only its own paths, so the order changes no bits).
+    super::lanes::escaped::look_ahead(width, t, q, &kinds.escaped, &mut kinds.texels);
     super::lanes::hits::shade_hits(width, t, q, &kinds.hits, shadow, aovs);
+    super::lanes::escaped::shade_escaped(width, t, q, &kinds.escaped, &kinds.texels);
 }
 
 /// A wave's paths by what shades them, as index lists into the path queue.
@@ -46,6 +49,9 @@ pub struct Kinds {
     pub hits: [Vec<u32>; lanes::hits::MODELS],
     /// Escaped paths (the environment, light from infinity): their own lane kernel.
     pub escaped: Vec<u32>,
+    /// The environment map's texel toward each escaped path (index, sine of its polar
+    /// angle), found ahead of the reads.
+    pub texels: Vec<(usize, f32)>,
 }
 
 impl Kinds {

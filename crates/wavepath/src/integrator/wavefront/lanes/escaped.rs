@@ -2,7 +2,8 @@
 //! AVX-512: what a camera ray sees of the environment, and the light from infinity a
 //! BSDF-sampled ray finds, weighed by MIS against the infinite light's own samples
 //! ([`Transport::arrival`]). The environment map's texel toward each ray is found in lanes
-//! and read one lane at a time (radiance and density side by side: one load); the selection
+//! and started loading before the hits are shaded ([`look_ahead`]), and read one lane at a
+//! time after them (radiance and density side by side: one load); the selection
 //! between the cases, the constant sky, the map mixture's density and the power heuristic run in a loop
 //! over the lanes that vectorises, through the functions the one-path code calls
 //! ([`found_at_infinity`],
@@ -24,16 +25,60 @@ use crate::lights::{LightSet, SampledLight};
 use crate::sampling::rng8::Hasher;
 use glam::Vec3;
 
+/// Finds the environment map's texel toward each escaped path of `idx` (in lanes) and starts
+/// loading it: `texels[k]` is path `idx[k]`'s texel index and the sine of its polar angle.
+/// Empty where [`shade_escaped`] reads no texel. Done before the hits are shaded, so that
+/// the texels (random reads all over a map of megabytes) arrive while they are: an
+/// environment-lit scan's shade stage spent a third of its time waiting for them.
+pub fn look_ahead(width: ShadeWidth, t: &Transport, q: &PathQueue, idx: &[u32], texels: &mut Vec<(usize, f32)>) {
+    texels.clear();
+    if t.lights.area_arrivals || t.lights.set.infinite.map.is_none() {
+        return;
+    }
+    width.dispatch(LookAhead { t, q, idx, texels })
+}
+
+/// [`look_ahead`]'s arguments, run at the chosen width.
+struct LookAhead<'a, 's> {
+    t: &'a Transport<'s>,
+    q: &'a PathQueue,
+    idx: &'a [u32],
+    texels: &'a mut Vec<(usize, f32)>,
+}
+
+impl LaneKernel for LookAhead<'_, '_> {
+    #[inline(always)]
+    fn run<H: Hasher, const L: usize>(self, _: H) {
+        let LookAhead { t, q, idx, texels } = self;
+        let Some(m) = t.lights.set.infinite.map.as_deref() else { return };
+        for chunk in idx.chunks(L) {
+            let mut dir = [[0.0f32; L]; 3];
+            for (j, &i) in chunk.iter().enumerate() {
+                put(&mut dir, j, q.ray[i as usize].dir);
+            }
+            let mut index = [0usize; L];
+            let mut sin_theta = [0.0f32; L];
+            for j in 0..L {
+                (index[j], sin_theta[j]) = m.index_of(get(&dir, j));
+            }
+            for j in 0..chunk.len() {
+                m.prefetch(index[j]);
+                texels.push((index[j], sin_theta[j]));
+            }
+        }
+    }
+}
+
 /// Shades the escaped paths `idx`: `alive` cleared, the environment or the light from
-/// infinity added.
-pub fn shade_escaped(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+/// infinity added. `texels`: [`look_ahead`]'s.
+pub fn shade_escaped(width: ShadeWidth, t: &Transport, q: &mut PathQueue, idx: &[u32], texels: &[(usize, f32)]) {
     if t.lights.area_arrivals {
         for &i in idx {
             one_path::arrive(t, q, i as usize);
         }
         return;
     }
-    width.dispatch(Escaped { t, q, idx })
+    width.dispatch(Escaped { t, q, idx, texels })
 }
 
 /// [`shade_escaped`]'s arguments, run at the chosen width.
@@ -41,17 +86,18 @@ struct Escaped<'a, 's> {
     t: &'a Transport<'s>,
     q: &'a mut PathQueue,
     idx: &'a [u32],
+    texels: &'a [(usize, f32)],
 }
 
 impl LaneKernel for Escaped<'_, '_> {
     #[inline(always)]
     fn run<H: Hasher, const L: usize>(self, _: H) {
-        escaped_groups::<L>(self.t, self.q, self.idx)
+        escaped_groups::<L>(self.t, self.q, self.idx, self.texels)
     }
 }
 
 #[inline(always)]
-fn escaped_groups<const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32]) {
+fn escaped_groups<const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32], texels: &[(usize, f32)]) {
     let sees_emission = t.rules.counts_emission();
     let arrivals = t.rules.features.non_diffuse || t.rules.mis;
     let set = &t.lights.set;
@@ -66,7 +112,7 @@ fn escaped_groups<const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32])
     };
     let mis = t.lights.infinite.is_some();
     let (background, sky) = (set.background, set.infinite.sky());
-    for chunk in idx.chunks(L) {
+    for (c, chunk) in idx.chunks(L).enumerate() {
         let mut dir = [[0.0f32; L]; 3];
         let mut n = [[0.0f32; L]; 3];
         let mut pdf = [0.0f32; L];
@@ -94,16 +140,14 @@ fn escaped_groups<const L: usize>(t: &Transport, q: &mut PathQueue, idx: &[u32])
             continue;
         }
         if let Some(m) = map {
-            // The texels toward every lane in lanes, then one read per lane that needs it.
-            let mut index = [0usize; L];
-            let mut sin_theta = [0.0f32; L];
-            for j in 0..L {
-                (index[j], sin_theta[j]) = m.index_of(get(&dir, j));
-            }
+            // The texels toward every lane, found (and started loading) ahead, then one read
+            // per lane that needs it.
+            let texels = &texels[c * L..c * L + chunk.len()];
             for j in 0..chunk.len() {
                 let found = arrives[j] && pdf[j] != 0.0 && counts[j];
                 if camera[j] || found {
-                    let (l, p) = m.at_index(index[j], sin_theta[j]);
+                    let (index, sin_theta) = texels[j];
+                    let (l, p) = m.at_index(index, sin_theta);
                     put(&mut mapped, j, l);
                     if found && pdf[j] != f32::INFINITY && mis {
                         mapped_pdf[j] = p;
