@@ -28,8 +28,9 @@ use glam::Vec3;
 /// Finds the environment map's texel toward each escaped path of `idx` (in lanes) and starts
 /// loading it: `texels[k]` is path `idx[k]`'s texel index and the sine of its polar angle.
 /// Empty where [`shade_escaped`] reads no texel. Done before the hits are shaded, so that
-/// the texels (random reads all over a map of megabytes) arrive while they are: an
-/// environment-lit scan's shade stage spent a third of its time waiting for them.
+/// the texels (random reads all over a map of megabytes) arrive while they are: on an
+/// environment-lit scan those reads held 46% of the lane kernel's samples, and reading them
+/// after the hits took 3-4% off the shade stage.
 pub fn look_ahead(width: ShadeWidth, t: &Transport, q: &PathQueue, idx: &[u32], texels: &mut Vec<(usize, f32)>) {
     texels.clear();
     if t.lights.area_arrivals || t.lights.set.infinite.map.is_none() {
