@@ -92,14 +92,21 @@ impl Isa {
 /// faults and changes no value (nothing off x86-64).
 #[inline(always)]
 pub fn prefetch<T>(x: &T) {
+    prefetch_at((x as *const T).cast::<u8>())
+}
+
+/// [`prefetch`] of the cache line at `p`, which need not be a valid address (a node or leaf
+/// the traversal may read soon).
+#[inline(always)]
+pub fn prefetch_at(p: *const u8) {
     #[cfg(target_arch = "x86_64")]
-    // SAFETY: a prefetch is a hint that never faults; SSE (which has the instruction) is part
-    // of x86-64.
+    // SAFETY: a prefetch is a hint that never faults, whatever the address; SSE (which has
+    // the instruction) is part of x86-64.
     unsafe {
-        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>((x as *const T).cast::<i8>())
+        std::arch::x86_64::_mm_prefetch::<{ std::arch::x86_64::_MM_HINT_T0 }>(p.cast::<i8>())
     };
     #[cfg(not(target_arch = "x86_64"))]
-    let _ = x;
+    let _ = p;
 }
 
 /// Proof that the CPU has SSE4.1 (constructed only after detection).

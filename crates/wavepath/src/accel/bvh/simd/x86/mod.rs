@@ -250,9 +250,7 @@ impl PacketTest for Avx2 {
 fn prefetch_lines(p: *const u8) {
     let mut off = 0;
     while off < PREFETCH_BYTES {
-        // SAFETY: a prefetch is a hint that never faults, whatever the address; SSE (which
-        // has the instruction) is part of x86-64.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(p.wrapping_add(off).cast::<i8>()) };
+        crate::cpu::prefetch_at(p.wrapping_add(off));
         off += 64;
     }
 }
