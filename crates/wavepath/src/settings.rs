@@ -39,11 +39,33 @@ pub enum IntegratorKind {
     Wavefront,
     /// The simple recursive single-ray reference.
     Recursive,
+    /// Light tracing alone: paths from the lights, splatted where the camera sees them.
+    Light,
+    /// Bidirectional path tracing: camera and light subpaths joined by every connection.
+    Bdpt,
+    /// Vertex connection and merging: BDPT plus merging with light vertices nearby.
+    Vcm,
+}
+
+impl IntegratorKind {
+    /// The bidirectional mode this integrator runs, if it is one.
+    pub fn bidirectional(self) -> Option<crate::integrator::bidir::Mode> {
+        use crate::integrator::bidir::Mode;
+        match self {
+            IntegratorKind::Wavefront | IntegratorKind::Recursive => None,
+            IntegratorKind::Light => Some(Mode::Light),
+            IntegratorKind::Bdpt => Some(Mode::Bdpt),
+            IntegratorKind::Vcm => Some(Mode::Vcm),
+        }
+    }
 }
 
 crate::choice::named!(IntegratorKind, "integrator", {
-    Wavefront => "wavefront", "structure-of-arrays queues through generate, traverse, shade, shadow, compact";
-    Recursive => "recursive", "the simple recursive single-ray reference";
+    Wavefront => "wavefront" | "path", "the path tracer: structure-of-arrays queues through generate, traverse, shade, shadow, compact";
+    Recursive => "recursive", "the path tracer's simple recursive single-ray reference";
+    Light => "light", "light tracing alone: paths from the lights splatted onto the film (a reference for caustics)";
+    Bdpt => "bdpt", "bidirectional path tracing: camera and light paths joined by every connection, weighted by MIS";
+    Vcm => "vcm", "vertex connection and merging: bdpt plus merging with nearby light vertices (caustics seen in mirrors and glass)";
 });
 
 /// An image-space rectangle to render (`-p X Y DX DY`), in pixels, bottom-left origin.

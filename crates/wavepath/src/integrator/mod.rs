@@ -13,7 +13,7 @@ pub mod area;
 pub mod emitter_filter;
 pub mod layers;
 pub mod light_ray;
-mod material;
+pub(crate) mod material;
 pub mod plan;
 
 // The parts of a `Transport`, each a type of its own that a stage (a lane kernel) reads.
@@ -23,6 +23,7 @@ pub mod material_table;
 pub mod rules;
 pub mod streams;
 
+pub mod bidir;
 pub mod recursive;
 pub mod wavefront;
 

@@ -5,6 +5,7 @@ use crate::sampling::warp;
 use crate::scene::Scene;
 use crate::scene::texture::{Texture, Wrap, wrap_index};
 use glam::{Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
 
 /// All emissive triangles of a mesh as one light, a triangle chosen in proportion to its
 /// power (area x mean emitted illuminance) and a point uniformly on it, so a dim emitter
@@ -172,6 +173,30 @@ impl EmissiveTriangles {
             }
             None => self.emission[i],
         }
+    }
+}
+
+impl EmissiveTriangles {
+    /// Densities of a light point on mesh triangle `prim` reached
+    /// along `-w` (`w` leaves the light): per unit area (the triangle's share of the
+    /// light's samples) and, times the cosine-weighted direction's, per area and solid
+    /// angle. `None` for a triangle this light does not draw or a side it does not emit.
+    pub fn emission_pdfs(&self, prim: u32, w: Vec3) -> Option<(f32, f32)> {
+        let i = self.prims.binary_search(&prim).ok()?;
+        let tri = &self.triangles[i];
+        let c = w.dot(tri.n);
+        let cos = if tri.one_sided { c } else { c.abs() };
+        if cos <= 0.0 {
+            return None;
+        }
+        let pdf_a = self.density[i];
+        let sides = if tri.one_sided { 1.0 } else { 0.5 };
+        Some((pdf_a, pdf_a * cos * FRAC_1_PI * sides))
+    }
+
+    /// The light's total power per pi (sum of area x emitted illuminance).
+    pub fn total_power(&self) -> f32 {
+        self.cdf.last().copied().unwrap_or(0.0)
     }
 }
 

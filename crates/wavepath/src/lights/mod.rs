@@ -11,6 +11,7 @@
 //!   (the CS184 Cornell boxes pair an area light with an emissive quad that only the camera
 //!   and hemisphere-sampling rays see; sampling both would count that light twice).
 
+pub mod emission;
 mod emissive;
 mod infinite;
 

@@ -6,6 +6,7 @@ pub use normals::render_normals;
 
 use crate::accel::Intersector;
 use crate::film::{Accumulator, AovImage, Film, PixelSums};
+use crate::integrator::bidir::render_bidir_into;
 use crate::integrator::plan::{Extent, RenderPlan};
 use crate::integrator::recursive::render_recursive_into;
 use crate::integrator::wavefront::{RenderJob, WaveWorkers, render_wavefront_into};
@@ -236,6 +237,17 @@ impl Canvas {
             ),
             IntegratorKind::Recursive => {
                 render_recursive_into(plan.transport(), settings, accel, progress, stop, &mut self.sums)
+            }
+            kind @ (IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm) => {
+                if settings.image.aovs.traced() {
+                    anyhow::bail!(
+                        "{} records no first hits: --aov {} needs the wavefront integrator",
+                        kind.name(),
+                        settings.image.aovs
+                    );
+                }
+                let mode = kind.bidirectional().expect("a bidirectional integrator");
+                render_bidir_into(plan.transport(), settings, accel, mode, progress, stop, &mut self.sums)?
             }
         };
         done.ok_or_else(|| anyhow::Error::new(Interrupted))

@@ -21,6 +21,15 @@ pub struct StageTimes {
     pub shadow: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub compact: Option<f64>,
+    /// Bidirectional transport: tracing light subpaths (their camera connections included).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub light_paths: Option<f64>,
+    /// Bidirectional transport: the hash grid over light vertices (merging).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub merge_grid: Option<f64>,
+    /// Bidirectional transport: tracing camera subpaths and joining them to light.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub camera_paths: Option<f64>,
 }
 
 impl StageTimes {
@@ -37,6 +46,9 @@ impl StageTimes {
             ("shade", self.shade),
             ("shadow", self.shadow),
             ("compact", self.compact),
+            ("light_paths", self.light_paths),
+            ("merge_grid", self.merge_grid),
+            ("camera_paths", self.camera_paths),
         ]
         .into_iter()
         .filter_map(|(n, t)| t.map(|t| (n, t)))
@@ -55,6 +67,9 @@ impl StageTimes {
         self.shadow = sum(self.shadow, o.shadow);
         self.compact = sum(self.compact, o.compact);
         self.aov = sum(self.aov, o.aov);
+        self.light_paths = sum(self.light_paths, o.light_paths);
+        self.merge_grid = sum(self.merge_grid, o.merge_grid);
+        self.camera_paths = sum(self.camera_paths, o.camera_paths);
     }
 }
 

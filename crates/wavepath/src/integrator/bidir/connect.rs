@@ -1,0 +1,164 @@
+//! The strategies that join a camera subpath to light: a light subpath's vertex seen by
+//! the camera (light tracing), a camera vertex seen by a light sample, two subpaths'
+//! vertices joined by a segment (connection), and a camera vertex gathering the light
+//! vertices near it (merging). Each returns its contribution already weighted.
+
+use super::Bidir;
+use super::walk::{LightVertex, PathState, evaluate, mis};
+use crate::accel::TraceCounters;
+use crate::geometry::Ray;
+use crate::geometry::offset::{offset_origin, shadow_tmax};
+use crate::integrator::material::ShadingFrame;
+use crate::integrator::{Vertex, light_numbers};
+use crate::sampling::Numbers;
+use glam::Vec3;
+
+/// Whether the segment from surface point `v` toward `q` (error bound `q_error`) is free.
+fn unoccluded(b: &Bidir, v: &Vertex, q: Vec3, q_error: Vec3, counters: &mut TraceCounters) -> bool {
+    let origin = offset_origin(v.p, v.p_error, v.ng, q - v.p);
+    let Some(dir) = (q - origin).try_normalize() else { return false };
+    let tmax = shadow_tmax(origin, q, q_error);
+    tmax > 0.0 && !b.accel.any_hit(&Ray { origin, dir, tmin: 0.0, tmax }, counters)
+}
+
+impl Bidir<'_, '_> {
+    /// Light tracing: the light vertex `lv` seen by the camera. The pixel it lands on and
+    /// the weighted contribution to that pixel's sum.
+    pub fn connect_to_camera(&self, lv: &LightVertex, counters: &mut TraceCounters) -> Option<(usize, Vec3)> {
+        let pr = self.camera.project(lv.v.p)?;
+        let w = pr.to_camera;
+        if !lv.v.consistent(w) {
+            return None;
+        }
+        let e = evaluate(&lv.sh, w);
+        if e.f == Vec3::ZERO {
+            return None;
+        }
+        let cos_geo = w.dot(lv.v.ng).abs();
+        let dist2 = pr.dist * pr.dist;
+        let camera_pdf_w = self.camera.pdf_w(pr.cos_camera);
+        let camera_pdf_a = camera_pdf_w * cos_geo / dist2;
+        let weight = if self.mode.light_tracing_only() {
+            1.0
+        } else {
+            let w_light =
+                mis(camera_pdf_a / self.light_paths) * (self.iter.mis_vm + lv.d_vcm + lv.d_vc * mis(e.pdf_rev));
+            1.0 / (w_light + 1.0)
+        };
+        // The film's importance per pixel area, W = pdf_w: the contribution is
+        // throughput f cos W / dist^2 over the light paths drawn per pixel sample.
+        let c = lv.throughput * e.f * (weight * lv.adjoint_cos(w) * camera_pdf_w / (dist2 * self.light_paths));
+        if !c.is_finite() || c == Vec3::ZERO {
+            return None;
+        }
+        let target_error = lv.v.p_error;
+        let origin = self.camera_pos();
+        let dir = (lv.v.p - origin) / pr.dist;
+        let tmax = shadow_tmax(origin, lv.v.p, target_error);
+        let ray = Ray { origin, dir, tmin: 0.0, tmax };
+        (!self.accel.any_hit(&ray, counters)).then_some((pr.pixel, c))
+    }
+
+    /// A light sample of the camera vertex `v` (the next event), weighted against reaching
+    /// the light by the BSDF, by light paths and by merging.
+    pub fn connect_to_light(
+        &self,
+        state: &PathState,
+        v: &Vertex,
+        sh: &ShadingFrame,
+        mut rng: impl Numbers,
+        counters: &mut TraceCounters,
+    ) -> Vec3 {
+        let (i, pick) = self.pick_light(rng.next_f32());
+        let light = &self.transport.lights.set.lights[i];
+        let u = light_numbers(&mut rng, light);
+        let Some(il) = light.illuminate(v.p, u, &self.sphere) else { return Vec3::ZERO };
+        if !v.consistent(il.wi) {
+            return Vec3::ZERO;
+        }
+        let e = evaluate(sh, il.wi);
+        if e.f == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let cos_geo = il.wi.dot(v.ng).abs();
+        let w_light = if il.delta { 0.0 } else { mis(e.pdf_fwd / (pick * il.direct_pdf_w)) };
+        let w_camera = mis(il.emission_pdf_w * cos_geo / (il.direct_pdf_w * il.cos_light))
+            * (self.iter.mis_vm + state.d_vcm + state.d_vc * mis(e.pdf_rev));
+        let weight = 1.0 / (w_light + 1.0 + w_camera);
+        let c = il.radiance * e.f * (weight * e.cos_shading / (pick * il.direct_pdf_w));
+        if !c.is_finite() || c == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let free = match il.target {
+            Some(q) => unoccluded(self, v, q, light.point_error(), counters),
+            None => {
+                let origin = offset_origin(v.p, v.p_error, v.ng, il.wi);
+                !self.accel.any_hit(&Ray { origin, dir: il.wi, tmin: 0.0, tmax: f32::INFINITY }, counters)
+            }
+        };
+        if free { c } else { Vec3::ZERO }
+    }
+
+    /// The camera vertex `v` joined to the light vertex `lv` by one segment.
+    pub fn connect_vertices(
+        &self,
+        state: &PathState,
+        v: &Vertex,
+        sh: &ShadingFrame,
+        lv: &LightVertex,
+        counters: &mut TraceCounters,
+    ) -> Vec3 {
+        let d = lv.v.p - v.p;
+        let dist2 = d.length_squared();
+        let dist = dist2.sqrt();
+        let w = d / dist;
+        if !(dist2 > 0.0 && dist2.is_finite() && v.consistent(w) && lv.v.consistent(-w)) {
+            return Vec3::ZERO;
+        }
+        let ec = evaluate(sh, w);
+        if ec.f == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let el = evaluate(&lv.sh, -w);
+        if el.f == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let (cos_camera, cos_light) = (w.dot(v.ng).abs(), w.dot(lv.v.ng).abs());
+        let camera_pdf_a = ec.pdf_fwd * cos_light / dist2;
+        let light_pdf_a = el.pdf_fwd * cos_camera / dist2;
+        let w_light = mis(camera_pdf_a) * (self.iter.mis_vm + lv.d_vcm + lv.d_vc * mis(el.pdf_rev));
+        let w_camera = mis(light_pdf_a) * (self.iter.mis_vm + state.d_vcm + state.d_vc * mis(ec.pdf_rev));
+        let weight = 1.0 / (w_light + 1.0 + w_camera);
+        let g = ec.cos_shading * lv.adjoint_cos(-w) / dist2;
+        let c = lv.throughput * ec.f * el.f * (weight * g);
+        if !c.is_finite() || c == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        if unoccluded(self, v, lv.v.p, lv.v.p_error, counters) { c } else { Vec3::ZERO }
+    }
+
+    /// Merging: the light vertices within the radius of camera vertex `v`, each weighted
+    /// against the connections that make the same path, density-estimated over the disk.
+    pub fn merge(&self, state: &PathState, v: &Vertex, sh: &ShadingFrame, light: &super::LightPaths) -> Vec3 {
+        let Some(grid) = &light.grid else { return Vec3::ZERO };
+        let mut sum = Vec3::ZERO;
+        grid.query(v.p, &light.positions, |i| {
+            let lv = &light.vertices[i];
+            if lv.len + state.len > self.max_len || lv.v.ng.dot(v.ng) <= 0.0 {
+                return;
+            }
+            let e = evaluate(sh, lv.wo);
+            if e.f == Vec3::ZERO || !v.consistent(lv.wo) {
+                return;
+            }
+            let w_light = lv.d_vcm * self.iter.mis_vc + lv.d_vm * mis(e.pdf_fwd);
+            let w_camera = state.d_vcm * self.iter.mis_vc + state.d_vm * mis(e.pdf_rev);
+            let weight = 1.0 / (w_light + 1.0 + w_camera);
+            let c = lv.throughput * e.f * weight;
+            if c.is_finite() {
+                sum += c;
+            }
+        });
+        sum * self.iter.vm_normalization
+    }
+}

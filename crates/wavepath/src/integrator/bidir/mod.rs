@@ -1,0 +1,519 @@
+//! Bidirectional transport: paths started at the lights as well as at the camera, joined
+//! by every strategy — light tracing (a light vertex seen by the camera), light sampling,
+//! connections between vertices of the two subpaths (BDPT), and merging a camera vertex
+//! with the light vertices near it (vertex connection and merging, VCM) — each weighted by
+//! multiple importance sampling so that a path's weights add to one.
+//!
+//! This is the reference form, one subpath at a time per thread, rows in parallel, as
+//! [`recursive`](super::recursive) is for the path tracer. A render is a series of
+//! iterations, one per sample index: first one light subpath per pixel (its vertices kept,
+//! its camera hits splatted), then one camera subpath per pixel, which joins the light
+//! subpath of the same (pixel, sample) and, for VCM, merges with all of that iteration's
+//! light vertices. Splats are gathered per row and added in row order before the camera
+//! pass, so the image does not depend on the thread count. A pixel's sample is its camera
+//! path plus what that iteration's light paths splatted onto it: iterations are
+//! independent samples, and the pixel's variance is measured as for the path tracer.
+
+mod connect;
+pub mod grid;
+pub mod importance;
+mod walk;
+
+use super::Transport;
+use crate::accel::{Intersector, TraceCounters};
+use crate::film::Accumulator;
+use crate::geometry::Ray;
+use crate::geometry::offset::offset_origin;
+use crate::lights::emission::SceneSphere;
+use crate::lights::{SampledLight, Seen};
+use crate::settings::Settings;
+use crate::stats::RenderStats;
+use glam::Vec3;
+use grid::HashGrid;
+use importance::Importance;
+use rayon::prelude::*;
+use std::f32::consts::{FRAC_1_PI, PI};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Instant;
+use walk::{LightVertex, PathState, Side, mis};
+
+/// First vertex-stream depth of light subpaths: their numbers never meet a camera
+/// subpath's (depths 0..max depth), whatever the depth.
+const LIGHT_STREAMS: u32 = 1 << 20;
+/// Merge radius of the first iteration, as a fraction of the scene's bounding radius.
+const RADIUS_FACTOR: f32 = 0.003;
+/// How fast the merge radius shrinks: r_i = r_0 (i + 1)^((alpha - 1) / 2), which makes
+/// merging consistent (bias and variance both vanish) for alpha in (0, 1).
+const RADIUS_ALPHA: f32 = 0.75;
+
+/// Which strategies run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Mode {
+    /// Light tracing alone: light subpaths seen by the camera, and the emitters the camera
+    /// sees directly; no weights.
+    Light,
+    /// Every connection strategy (BDPT).
+    Bdpt,
+    /// Connections and merges (VCM).
+    Vcm,
+}
+
+impl Mode {
+    fn light_tracing_only(self) -> bool {
+        self == Mode::Light
+    }
+    fn connects(self) -> bool {
+        self != Mode::Light
+    }
+    fn merges(self) -> bool {
+        self == Mode::Vcm
+    }
+}
+
+/// The multiple importance sampling factors of one iteration (they depend on its radius).
+#[derive(Clone, Copy, Debug, Default)]
+struct IterFactors {
+    mis_vm: f32,
+    mis_vc: f32,
+    vm_normalization: f32,
+    radius: f32,
+}
+
+/// One iteration's light subpaths.
+pub struct LightPaths {
+    vertices: Vec<LightVertex>,
+    positions: Vec<Vec3>,
+    /// `starts[p]..starts[p + 1]`: pixel p's subpath in `vertices`.
+    starts: Vec<u32>,
+    grid: Option<HashGrid>,
+}
+
+/// Everything the strategies read.
+pub struct Bidir<'t, 'a> {
+    transport: &'t Transport<'a>,
+    accel: &'t dyn Intersector,
+    mode: Mode,
+    camera: Importance,
+    sphere: SceneSphere,
+    /// Light choice: each light's probability and their running sum.
+    pick: Vec<f32>,
+    cdf: Vec<f32>,
+    /// Most edges a full path may have.
+    max_len: u32,
+    /// Light subpaths per iteration (one per pixel).
+    light_paths: f32,
+    iter: IterFactors,
+    width: usize,
+}
+
+/// Why bidirectional transport cannot render `transport`'s scene under `settings`, in one
+/// line; `None` when it can.
+pub fn unsupported(transport: &Transport, settings: &Settings) -> Option<String> {
+    let name = settings.execution.integrator.name();
+    if !transport.camera.pinhole() {
+        return Some(format!(
+            "{name} connects light paths to a pinhole camera; this camera has a lens or is orthographic (use --integrator path)"
+        ));
+    }
+    if settings.sampling.adaptive.is_some() {
+        return Some(format!(
+            "{name} splats light paths onto other pixels, so a pixel's own samples do not measure its error: adaptive sampling (-a) needs --integrator path"
+        ));
+    }
+    let (w, h) = (settings.image.width, settings.image.height);
+    if settings.region() != (crate::settings::Cell { x: 0, y: 0, w, h }) {
+        return Some(format!(
+            "{name} splats light paths anywhere on the image, so it renders whole images only (not a cell, -p); split by samples instead"
+        ));
+    }
+    if transport.lights.set.lights.iter().any(|l| matches!(l, SampledLight::Infinite(_))) {
+        return Some(format!(
+            "{name} does not yet start light paths at light from infinity (an environment or hemisphere light); use --integrator path"
+        ));
+    }
+    if transport.materials.layers.volumes {
+        return Some(format!("{name} does not yet carry light through absorbing volumes; use --integrator path"));
+    }
+    if settings.paths.shading != crate::settings::Shading::Global || !transport.rules.accumulate {
+        return Some(format!(
+            "{name} renders global illumination with every bounce counted; direct-only or single-bounce shading needs --integrator path"
+        ));
+    }
+    None
+}
+
+impl<'t, 'a> Bidir<'t, 'a> {
+    fn new(transport: &'t Transport<'a>, accel: &'t dyn Intersector, settings: &Settings, mode: Mode) -> Option<Self> {
+        let (w, h) = (settings.image.width, settings.image.height);
+        let camera = Importance::new(&transport.camera, w, h)?;
+        let sphere = match transport.scene.bounds() {
+            Some((lo, hi)) => SceneSphere { center: 0.5 * (lo + hi), radius: (0.5 * (hi - lo).length()).max(1e-6) },
+            None => SceneSphere { center: Vec3::ZERO, radius: 1.0 },
+        };
+        let powers: Vec<f32> = transport.lights.set.lights.iter().map(|l| l.power(&sphere)).collect();
+        let total: f32 = powers.iter().sum();
+        let n = powers.len().max(1) as f32;
+        let pick: Vec<f32> = powers.iter().map(|&p| if total > 0.0 { p / total } else { 1.0 / n }).collect();
+        let cdf = pick
+            .iter()
+            .scan(0.0, |s, &p| {
+                *s += p;
+                Some(*s)
+            })
+            .collect();
+        Some(Bidir {
+            transport,
+            accel,
+            mode,
+            camera,
+            sphere,
+            pick,
+            cdf,
+            max_len: transport.rules.max_depth + 1,
+            light_paths: (w * h) as f32,
+            iter: IterFactors::default(),
+            width: w,
+        })
+    }
+
+    /// The factors of iteration (sample index) `i`.
+    fn at_iteration(&mut self, i: u32) {
+        let r0 = RADIUS_FACTOR * self.sphere.radius;
+        let radius = r0 * ((i + 1) as f32).powf(0.5 * (RADIUS_ALPHA - 1.0));
+        let eta = PI * radius * radius * self.light_paths;
+        self.iter = IterFactors {
+            mis_vm: if self.mode.merges() { mis(eta) } else { 0.0 },
+            mis_vc: if self.mode.merges() { mis(1.0 / eta) } else { 0.0 },
+            vm_normalization: 1.0 / eta,
+            radius,
+        };
+    }
+
+    /// A light chosen by power with `u`: its index and probability.
+    #[inline]
+    fn pick_light(&self, u: f32) -> (usize, f32) {
+        let x = u * self.cdf.last().copied().unwrap_or(0.0);
+        let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len().saturating_sub(1));
+        (i, self.pick.get(i).copied().unwrap_or(0.0))
+    }
+
+    fn camera_pos(&self) -> Vec3 {
+        self.transport.camera.camera.position
+    }
+
+    /// Traces the light subpath of (pixel, sample): its stored vertices go to `out`, its
+    /// splats (pixel, value) to `splats`.
+    fn light_path(
+        &self,
+        pixel: u32,
+        sample: u32,
+        out: &mut Vec<LightVertex>,
+        splats: &mut Vec<(u32, Vec3)>,
+        st: &mut Counts,
+    ) {
+        let lights = &self.transport.lights.set.lights;
+        if lights.is_empty() {
+            return;
+        }
+        let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS);
+        let (i, pick) = self.pick_light(rng.at(0).next_f32());
+        if pick <= 0.0 || pick.is_nan() {
+            return;
+        }
+        let (a, b) = rng.at(1).next_2d();
+        let (c, d) = rng.at(2).next_2d();
+        let e = rng.at(3).next_f32();
+        let Some(em) = lights[i].emit([a, b, c, d, e], &self.sphere) else { return };
+        let emission_pdf_w = em.pdf_pos * em.pdf_dir * pick;
+        let direct_pdf_a = em.pdf_pos * pick;
+        let d_vc = if em.delta_pos || em.delta_dir { 0.0 } else { mis(em.cos / emission_pdf_w) };
+        let origin = if em.normal == Vec3::ZERO || em.delta_dir {
+            em.pos
+        } else {
+            offset_origin(em.pos, em.pos_error, em.normal, em.dir)
+        };
+        let mut state = PathState {
+            ray: Ray { origin, dir: em.dir, tmin: 0.0, tmax: f32::INFINITY },
+            throughput: em.weight / pick,
+            len: 0,
+            d_vcm: mis(direct_pdf_a / emission_pdf_w),
+            d_vc,
+            d_vm: d_vc * self.iter.mis_vc,
+            infinite_start: em.delta_dir,
+            falloff_free: em.falloff_free,
+        };
+        loop {
+            st.light_rays += 1;
+            let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else { break };
+            let v = self.transport.vertex(&state.ray, &hit);
+            state.arrive(&v, hit.t);
+            if !state.throughput.is_finite() {
+                break;
+            }
+            let sh = self.transport.shading(&v, state.ray.dir);
+            if sh.kind != crate::bsdf::Kind::Delta {
+                let lv = LightVertex {
+                    v,
+                    sh,
+                    wo: -state.ray.dir,
+                    throughput: state.throughput,
+                    len: state.len,
+                    d_vcm: state.d_vcm,
+                    d_vc: state.d_vc,
+                    d_vm: state.d_vm,
+                };
+                if state.len < self.max_len {
+                    st.shadow += 1;
+                    if let Some((p, c)) = self.connect_to_camera(&lv, &mut st.trace) {
+                        splats.push((p as u32, c));
+                    }
+                }
+                if self.mode.connects() {
+                    out.push(lv);
+                }
+            }
+            if state.len + 2 > self.max_len {
+                break;
+            }
+            let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS + state.len);
+            if !self.scatter(&mut state, &v, &sh, rng, Side::Light) {
+                break;
+            }
+        }
+    }
+
+    /// The densities with which light paths and light samples reach the emitting point
+    /// `hit` of the camera ray `ray`: per unit area and per area and solid angle (light
+    /// choice included); `None` when no light draws that point (its emission is found only
+    /// by the camera's side).
+    fn emitter_pdfs(&self, ray: &Ray, hit: &crate::geometry::Hit) -> Option<(f32, f32)> {
+        for (i, light) in self.transport.lights.set.lights.iter().enumerate() {
+            let pick = self.pick[i];
+            match light {
+                SampledLight::Emissive(e) => {
+                    if let Some((a, w)) = e.emission_pdfs(hit.prim, -ray.dir) {
+                        return Some((pick * a, pick * w));
+                    }
+                }
+                SampledLight::Area { normal, area, .. } => {
+                    let seen = Seen::Hit { t: hit.t, emitter: None };
+                    if light.radiance_pdf(ray.origin, *normal, ray.dir, seen).is_some() {
+                        let cos = -ray.dir.dot(*normal);
+                        let a = pick / area;
+                        return Some((a, a * cos * FRAC_1_PI));
+                    }
+                }
+                _ => {}
+            }
+        }
+        None
+    }
+
+    /// The camera subpath of (x, y, sample), joined to light: what it adds to the pixel.
+    fn camera_path(&self, x: u32, y: u32, sample: u32, light: &LightPaths, st: &mut Counts) -> Vec3 {
+        let (w, h) = (self.width, self.light_paths as usize / self.width);
+        let pixel = y * w as u32 + x;
+        let key = self.transport.streams.path_key(pixel, sample);
+        // Always jittered over the pixel (the light paths' importance covers the whole
+        // pixel), whatever the sample count.
+        let ray = self.transport.camera.ray(x, y, w, h, self.transport.streams.pattern.vertex(key, 0), 2);
+        let cos = self.camera.cos_of(ray.dir);
+        let camera_pdf_w = self.camera.pdf_w(cos);
+        let mut state = PathState {
+            ray,
+            throughput: Vec3::ONE,
+            len: 0,
+            d_vcm: mis(self.light_paths / camera_pdf_w),
+            d_vc: 0.0,
+            d_vm: 0.0,
+            infinite_start: false,
+            falloff_free: false,
+        };
+        let own = &light.vertices[light.starts[pixel as usize] as usize..light.starts[pixel as usize + 1] as usize];
+        let mut l = Vec3::ZERO;
+        loop {
+            if state.len == 0 {
+                st.camera += 1;
+            } else {
+                st.extension += 1;
+            }
+            let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else {
+                if state.len == 0 {
+                    l += self.transport.lights.set.background;
+                }
+                break;
+            };
+            let v = self.transport.vertex(&state.ray, &hit);
+            let ray = state.ray;
+            state.arrive(&v, hit.t);
+            if v.emission != Vec3::ZERO {
+                if state.len == 1 {
+                    l += state.throughput * v.emission;
+                } else if !self.mode.light_tracing_only() {
+                    let weight = match self.emitter_pdfs(&ray, &hit) {
+                        Some((direct_pdf_a, emission_pdf_w)) => {
+                            let w_camera = mis(direct_pdf_a) * state.d_vcm + mis(emission_pdf_w) * state.d_vc;
+                            1.0 / (1.0 + w_camera)
+                        }
+                        None => 1.0,
+                    };
+                    let c = state.throughput * v.emission * weight;
+                    if c.is_finite() {
+                        l += c;
+                    }
+                }
+            }
+            if self.mode.light_tracing_only() || state.len >= self.max_len {
+                break;
+            }
+            let sh = self.transport.shading(&v, ray.dir);
+            let rng = self.transport.streams.sampler(pixel, sample, state.len - 1);
+            if sh.kind != crate::bsdf::Kind::Delta {
+                if state.len < self.max_len && !self.transport.lights.set.lights.is_empty() {
+                    st.shadow += 1;
+                    let c = self.connect_to_light(&state, &v, &sh, rng.at(super::DIM_DIRECT), &mut st.trace);
+                    l += state.throughput * c;
+                }
+                for lv in own.iter().filter(|lv| lv.len + state.len < self.max_len) {
+                    st.shadow += 1;
+                    l += state.throughput * self.connect_vertices(&state, &v, &sh, lv, &mut st.trace);
+                }
+                if self.mode.merges() {
+                    l += state.throughput * self.merge(&state, &v, &sh, light);
+                }
+            }
+            if !self.scatter(&mut state, &v, &sh, rng, Side::Camera) {
+                break;
+            }
+        }
+        l
+    }
+}
+
+/// One row's light subpaths: their vertices, where each pixel's ends, their splats
+/// (pixel, value) and what they traced.
+type LightRow = (Vec<LightVertex>, Vec<u32>, Vec<(u32, Vec3)>, Counts);
+
+#[derive(Clone, Copy, Default)]
+struct Counts {
+    trace: TraceCounters,
+    camera: u64,
+    extension: u64,
+    shadow: u64,
+    light_rays: u64,
+}
+
+impl Counts {
+    fn add(&mut self, o: &Counts) {
+        self.trace.add(&o.trace);
+        self.camera += o.camera;
+        self.extension += o.extension;
+        self.shadow += o.shadow;
+        self.light_rays += o.light_rays;
+    }
+}
+
+/// Renders the samples `settings` asks for with bidirectional transport `mode` into `acc`
+/// (the whole image: [`unsupported`] says what it refuses). `None` once `stop` is set
+/// (checked between iterations).
+pub fn render_bidir_into(
+    transport: &Transport,
+    settings: &Settings,
+    accel: &dyn Intersector,
+    mode: Mode,
+    progress: &(dyn Fn(u64) + Sync),
+    stop: &AtomicBool,
+    acc: &mut Accumulator,
+) -> anyhow::Result<Option<RenderStats>> {
+    if let Some(why) = unsupported(transport, settings) {
+        anyhow::bail!(why);
+    }
+    let start = Instant::now();
+    let (w, h) = (settings.image.width, settings.image.height);
+    let Some(mut bidir) = Bidir::new(transport, accel, settings, mode) else {
+        anyhow::bail!("{}: the camera cannot be inverted", settings.execution.integrator.name());
+    };
+    let mut counts = Counts::default();
+    let (mut light_s, mut camera_s, mut grid_s) = (0.0, 0.0, 0.0);
+    let (first, end) = settings.sample_span();
+    for sample in first..end {
+        if stop.load(Ordering::Relaxed) {
+            return Ok(None);
+        }
+        bidir.at_iteration(sample);
+        let b = &bidir;
+        let t0 = Instant::now();
+        let rows: Vec<LightRow> = (0..h)
+            .into_par_iter()
+            .map(|y| {
+                let (mut out, mut ends, mut splats, mut st) =
+                    (Vec::new(), Vec::with_capacity(w), Vec::new(), Counts::default());
+                for x in 0..w {
+                    b.light_path((y * w + x) as u32, sample, &mut out, &mut splats, &mut st);
+                    ends.push(out.len() as u32);
+                }
+                (out, ends, splats, st)
+            })
+            .collect();
+        light_s += t0.elapsed().as_secs_f64();
+        let t1 = Instant::now();
+        let mut light = LightPaths { vertices: Vec::new(), positions: Vec::new(), starts: vec![0], grid: None };
+        for (out, ends, _, st) in &rows {
+            let base = light.vertices.len() as u32;
+            light.starts.extend(ends.iter().map(|e| base + e));
+            light.vertices.extend_from_slice(out);
+            counts.add(st);
+        }
+        if mode.merges() {
+            light.positions = light.vertices.iter().map(|v| v.v.p).collect();
+            light.grid = Some(HashGrid::new(&light.positions, bidir.iter.radius));
+        }
+        grid_s += t1.elapsed().as_secs_f64();
+        // This iteration's splats, added in row order: the same sums for any thread count.
+        let mut splat = vec![Vec3::ZERO; w * h];
+        for (_, _, splats, _) in &rows {
+            for &(p, c) in splats {
+                splat[p as usize] += c;
+            }
+        }
+        let b = &bidir;
+        let t2 = Instant::now();
+        let camera_counts: Vec<Counts> = acc
+            .pixels
+            .par_chunks_mut(w)
+            .enumerate()
+            .map(|(y, row)| {
+                let mut st = Counts::default();
+                for (x, out) in row.iter_mut().enumerate() {
+                    // One sample of the pixel: its camera path and what this iteration's
+                    // light paths splatted onto it (independent across iterations, so the
+                    // pixel's sample variance stays the variance of its estimate).
+                    let l = b.camera_path(x as u32, y as u32, sample, &light, &mut st);
+                    out.add(l + splat[y * w + x]);
+                }
+                progress(w as u64);
+                st
+            })
+            .collect();
+        camera_s += t2.elapsed().as_secs_f64();
+        for st in &camera_counts {
+            counts.add(st);
+        }
+    }
+    let mut stats = RenderStats {
+        counters: counts.trace,
+        camera_rays: counts.camera,
+        extension_rays: counts.extension + counts.light_rays,
+        shadow_rays: counts.shadow,
+        ..Default::default()
+    };
+    stats.stages.light_paths = Some(light_s);
+    stats.stages.camera_paths = Some(camera_s);
+    if mode.merges() {
+        stats.stages.merge_grid = Some(grid_s);
+    }
+    stats.render_s = start.elapsed().as_secs_f64();
+    stats.invalid_samples = acc.invalid_samples_in(settings.region());
+    stats.samples_per_pixel = acc.samples_taken_in(settings.region());
+    Ok(Some(stats))
+}
