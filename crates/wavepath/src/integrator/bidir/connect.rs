@@ -3,10 +3,11 @@
 //! vertices joined by a segment (connection), and a camera vertex gathering the light
 //! vertices near it (merging). Each returns its contribution already weighted.
 
-use super::Bidir;
+use super::{Bidir, IterFactors};
 use super::walk::{LightVertex, PathState, evaluate, mis};
 use crate::accel::TraceCounters;
 use crate::geometry::Ray;
+use crate::lights::emission::Illumination;
 use crate::geometry::offset::{offset_origin, shadow_tmax};
 use crate::integrator::material::ShadingFrame;
 use crate::integrator::{Vertex, light_numbers};
@@ -41,9 +42,7 @@ impl Bidir<'_, '_> {
         let weight = if self.mode.light_tracing_only() {
             1.0
         } else {
-            let w_light =
-                mis(camera_pdf_a / self.light_paths) * (self.iter.mis_vm + lv.d_vcm + lv.d_vc * mis(e.pdf_rev));
-            1.0 / (w_light + 1.0)
+            camera_weight(lv.quantities(), camera_pdf_a, self.light_paths, e.pdf_rev, &self.iter)
         };
         // The film's importance per pixel area, W = pdf_w: the contribution is
         // throughput f cos W / dist^2 over the light paths drawn per pixel sample.
@@ -81,10 +80,7 @@ impl Bidir<'_, '_> {
             return Vec3::ZERO;
         }
         let cos_geo = il.wi.dot(v.ng).abs();
-        let w_light = if il.delta { 0.0 } else { mis(e.pdf_fwd / (pick * il.direct_pdf_w)) };
-        let w_camera = mis(il.emission_pdf_w * cos_geo / (il.direct_pdf_w * il.cos_light))
-            * (self.iter.mis_vm + state.d_vcm + state.d_vc * mis(e.pdf_rev));
-        let weight = 1.0 / (w_light + 1.0 + w_camera);
+        let weight = light_sample_weight(state.quantities(), &il, pick, cos_geo, e.pdf_fwd, e.pdf_rev, &self.iter);
         let c = il.radiance * e.f * (weight * e.cos_shading / (pick * il.direct_pdf_w));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
@@ -126,9 +122,7 @@ impl Bidir<'_, '_> {
         let (cos_camera, cos_light) = (w.dot(v.ng).abs(), w.dot(lv.v.ng).abs());
         let camera_pdf_a = ec.pdf_fwd * cos_light / dist2;
         let light_pdf_a = el.pdf_fwd * cos_camera / dist2;
-        let w_light = mis(camera_pdf_a) * (self.iter.mis_vm + lv.d_vcm + lv.d_vc * mis(el.pdf_rev));
-        let w_camera = mis(light_pdf_a) * (self.iter.mis_vm + state.d_vcm + state.d_vc * mis(ec.pdf_rev));
-        let weight = 1.0 / (w_light + 1.0 + w_camera);
+        let weight = connection_weight(state.quantities(), lv.quantities(), camera_pdf_a, light_pdf_a, ec.pdf_rev, el.pdf_rev, &self.iter);
         let g = ec.cos_shading * lv.adjoint_cos(-w) / dist2;
         let c = lv.throughput * ec.f * el.f * (weight * g);
         if !c.is_finite() || c == Vec3::ZERO {
@@ -151,9 +145,7 @@ impl Bidir<'_, '_> {
             if e.f == Vec3::ZERO || !v.consistent(lv.wo) {
                 return;
             }
-            let w_light = lv.d_vcm * self.iter.mis_vc + lv.d_vm * mis(e.pdf_fwd);
-            let w_camera = state.d_vcm * self.iter.mis_vc + state.d_vm * mis(e.pdf_rev);
-            let weight = 1.0 / (w_light + 1.0 + w_camera);
+            let weight = merge_weight(state.quantities(), lv.quantities(), e.pdf_fwd, e.pdf_rev, &self.iter);
             let c = lv.throughput * e.f * weight;
             if c.is_finite() {
                 sum += c;
@@ -161,4 +153,75 @@ impl Bidir<'_, '_> {
         });
         sum * self.iter.vm_normalization
     }
+}
+
+// The weights, each from the two subpaths' running quantities at the join and the
+// densities of the join itself (Georgiev et al. 2012, the technical report's section on
+// the recursive form); `cam` and `light` are the subpaths' (d_vcm, d_vc, d_vm). Each is 1 / (sum over the path's strategies of (their density /
+// this one's)^2); a strategy's terms are zero where it cannot make the path.
+
+/// A camera subpath (`cam`) whose last segment found a light point drawn (by light sampling and
+/// by light paths) with densities `direct_pdf_a` (area) and `emission_pdf_w` (area x
+/// solid angle), light choice included.
+#[inline]
+pub fn hit_weight(cam: [f32; 3], direct_pdf_a: f32, emission_pdf_w: f32) -> f32 {
+    let w_camera = mis(direct_pdf_a) * cam[0] + mis(emission_pdf_w) * cam[1];
+    1.0 / (1.0 + w_camera)
+}
+
+/// A light sample `il` (light chosen with probability `pick`) of the camera vertex whose
+/// BSDF draws its direction with density `pdf_fwd` and the path's arriving direction from
+/// it with `pdf_rev`; `cos_geo`: |cos| of the direction at the vertex.
+#[inline]
+pub fn light_sample_weight(
+    cam: [f32; 3],
+    il: &Illumination,
+    pick: f32,
+    cos_geo: f32,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+    f: &IterFactors,
+) -> f32 {
+    let w_light = if il.delta { 0.0 } else { mis(pdf_fwd / (pick * il.direct_pdf_w)) };
+    let w_camera = mis(il.emission_pdf_w * cos_geo / (il.direct_pdf_w * il.cos_light))
+        * (f.mis_vm + cam[0] + cam[1] * mis(pdf_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// A camera vertex (`cam`) joined to a light vertex (`light`): `camera_pdf_a` is the camera
+/// vertex's BSDF density of the light vertex (area), `light_pdf_a` the light vertex's of
+/// the camera vertex; `camera_pdf_rev`, `light_pdf_rev` each vertex's density (solid
+/// angle) of its own subpath's arriving direction, from the joining one.
+#[inline]
+pub fn connection_weight(
+    cam: [f32; 3],
+    light: [f32; 3],
+    camera_pdf_a: f32,
+    light_pdf_a: f32,
+    camera_pdf_rev: f32,
+    light_pdf_rev: f32,
+    f: &IterFactors,
+) -> f32 {
+    let w_light = mis(camera_pdf_a) * (f.mis_vm + light[0] + light[1] * mis(light_pdf_rev));
+    let w_camera = mis(light_pdf_a) * (f.mis_vm + cam[0] + cam[1] * mis(camera_pdf_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// Light tracing: a light vertex (`light`) seen by the camera, which draws it with density
+/// `camera_pdf_a` (area, per pixel area of the film) among `light_paths` light subpaths;
+/// `pdf_rev`: the vertex's density of its arriving direction from the camera's.
+#[inline]
+pub fn camera_weight(light: [f32; 3], camera_pdf_a: f32, light_paths: f32, pdf_rev: f32, f: &IterFactors) -> f32 {
+    let w_light = mis(camera_pdf_a / light_paths) * (f.mis_vm + light[0] + light[1] * mis(pdf_rev));
+    1.0 / (w_light + 1.0)
+}
+
+/// A camera vertex (`cam`) merged with a light vertex (`light`) on it: the camera vertex's BSDF
+/// density of the light's arriving direction `pdf_fwd`, and of its own arriving direction
+/// from that one `pdf_rev`.
+#[inline]
+pub fn merge_weight(cam: [f32; 3], light: [f32; 3], pdf_fwd: f32, pdf_rev: f32, f: &IterFactors) -> f32 {
+    let w_light = light[0] * f.mis_vc + light[2] * mis(pdf_fwd);
+    let w_camera = cam[0] * f.mis_vc + cam[2] * mis(pdf_rev);
+    1.0 / (w_light + 1.0 + w_camera)
 }

@@ -14,12 +14,12 @@
 //! path plus what that iteration's light paths splatted onto it: iterations are
 //! independent samples, and the pixel's variance is measured as for the path tracer.
 
-mod connect;
+pub mod connect;
 pub mod grid;
 pub mod importance;
-mod walk;
+pub mod walk;
 
-use super::Transport;
+use super::{Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::Accumulator;
 use crate::geometry::Ray;
@@ -72,11 +72,28 @@ impl Mode {
 
 /// The multiple importance sampling factors of one iteration (they depend on its radius).
 #[derive(Clone, Copy, Debug, Default)]
-struct IterFactors {
-    mis_vm: f32,
-    mis_vc: f32,
-    vm_normalization: f32,
-    radius: f32,
+pub struct IterFactors {
+    /// Merging's density over a connection's, squared (0 without merging).
+    pub mis_vm: f32,
+    /// A connection's density over merging's, squared (0 without merging).
+    pub mis_vc: f32,
+    /// 1 / (pi r^2 light paths): merging's density estimate.
+    pub vm_normalization: f32,
+    pub radius: f32,
+}
+
+impl IterFactors {
+    /// The factors of an iteration whose merge radius is `radius` with `light_paths` light
+    /// subpaths; `merges` false: connections alone (BDPT).
+    pub fn new(radius: f32, light_paths: f32, merges: bool) -> IterFactors {
+        let eta = PI * radius * radius * light_paths;
+        IterFactors {
+            mis_vm: if merges { mis(eta) } else { 0.0 },
+            mis_vc: if merges { mis(1.0 / eta) } else { 0.0 },
+            vm_normalization: 1.0 / eta,
+            radius,
+        }
+    }
 }
 
 /// One iteration's light subpaths.
@@ -180,13 +197,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
     fn at_iteration(&mut self, i: u32) {
         let r0 = RADIUS_FACTOR * self.sphere.radius;
         let radius = r0 * ((i + 1) as f32).powf(0.5 * (RADIUS_ALPHA - 1.0));
-        let eta = PI * radius * radius * self.light_paths;
-        self.iter = IterFactors {
-            mis_vm: if self.mode.merges() { mis(eta) } else { 0.0 },
-            mis_vc: if self.mode.merges() { mis(1.0 / eta) } else { 0.0 },
-            vm_normalization: 1.0 / eta,
-            radius,
-        };
+        self.iter = IterFactors::new(radius, self.light_paths, self.mode.merges());
     }
 
     /// A light chosen by power with `u`: its index and probability.
@@ -241,6 +252,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             d_vm: d_vc * self.iter.mis_vc,
             infinite_start: em.delta_dir,
             falloff_free: em.falloff_free,
+            after_delta: false,
         };
         loop {
             st.light_rays += 1;
@@ -282,31 +294,43 @@ impl<'t, 'a> Bidir<'t, 'a> {
         }
     }
 
-    /// The densities with which light paths and light samples reach the emitting point
-    /// `hit` of the camera ray `ray`: per unit area and per area and solid angle (light
-    /// choice included); `None` when no light draws that point (its emission is found only
-    /// by the camera's side).
-    fn emitter_pdfs(&self, ray: &Ray, hit: &crate::geometry::Hit) -> Option<(f32, f32)> {
+    /// The light a camera subpath's segment `ray` (reaching `hit` at vertex `v`, or nothing)
+    /// finds, weighted against the strategies that draw the same light point from the
+    /// light's side. As the path tracer counts it: an area light wherever the segment crosses
+    /// it (area lights are not geometry), an emissive triangle that is a light where the
+    /// segment hits it, and the emission of a surface that is no light (an emissive quad
+    /// beside an area light) only after a delta bounce, at full weight.
+    fn found_light(&self, state: &PathState, ray: &Ray, hit: Option<(&crate::geometry::Hit, &Vertex)>) -> Vec3 {
+        let weight = |direct_pdf_a: f32, emission_pdf_w: f32| connect::hit_weight(state.quantities(), direct_pdf_a, emission_pdf_w);
+        let seen = match hit {
+            Some((h, _)) => Seen::Hit { t: h.t, emitter: None },
+            None => Seen::Miss,
+        };
+        let emission = hit.map_or(Vec3::ZERO, |(_, v)| v.emission);
+        let (mut l, mut area_found, mut owned) = (Vec3::ZERO, false, false);
         for (i, light) in self.transport.lights.set.lights.iter().enumerate() {
             let pick = self.pick[i];
             match light {
-                SampledLight::Emissive(e) => {
-                    if let Some((a, w)) = e.emission_pdfs(hit.prim, -ray.dir) {
-                        return Some((pick * a, pick * w));
+                SampledLight::Area { normal, area, .. } => {
+                    if let Some((le, _)) = light.radiance_pdf(ray.origin, *normal, ray.dir, seen) {
+                        area_found = true;
+                        let a = pick / area;
+                        l += le * weight(a, a * -ray.dir.dot(*normal) * FRAC_1_PI);
                     }
                 }
-                SampledLight::Area { normal, area, .. } => {
-                    let seen = Seen::Hit { t: hit.t, emitter: None };
-                    if light.radiance_pdf(ray.origin, *normal, ray.dir, seen).is_some() {
-                        let cos = -ray.dir.dot(*normal);
-                        let a = pick / area;
-                        return Some((a, a * cos * FRAC_1_PI));
+                SampledLight::Emissive(e) if emission != Vec3::ZERO => {
+                    if let Some((a, w)) = hit.and_then(|(h, _)| e.emission_pdfs(h.prim, -ray.dir)) {
+                        owned = true;
+                        l += emission * weight(pick * a, pick * w);
                     }
                 }
                 _ => {}
             }
         }
-        None
+        if !owned && !area_found && state.after_delta {
+            l += emission;
+        }
+        if l.is_finite() { l } else { Vec3::ZERO }
     }
 
     /// The camera subpath of (x, y, sample), joined to light: what it adds to the pixel.
@@ -328,6 +352,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             d_vm: 0.0,
             infinite_start: false,
             falloff_free: false,
+            after_delta: false,
         };
         let own = &light.vertices[light.starts[pixel as usize] as usize..light.starts[pixel as usize + 1] as usize];
         let mut l = Vec3::ZERO;
@@ -340,28 +365,20 @@ impl<'t, 'a> Bidir<'t, 'a> {
             let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else {
                 if state.len == 0 {
                     l += self.transport.lights.set.background;
+                } else if !self.mode.light_tracing_only() {
+                    // The segment may cross an area light on its way out.
+                    state.len += 1;
+                    l += state.throughput * self.found_light(&state, &state.ray, None);
                 }
                 break;
             };
             let v = self.transport.vertex(&state.ray, &hit);
             let ray = state.ray;
             state.arrive(&v, hit.t);
-            if v.emission != Vec3::ZERO {
-                if state.len == 1 {
-                    l += state.throughput * v.emission;
-                } else if !self.mode.light_tracing_only() {
-                    let weight = match self.emitter_pdfs(&ray, &hit) {
-                        Some((direct_pdf_a, emission_pdf_w)) => {
-                            let w_camera = mis(direct_pdf_a) * state.d_vcm + mis(emission_pdf_w) * state.d_vc;
-                            1.0 / (1.0 + w_camera)
-                        }
-                        None => 1.0,
-                    };
-                    let c = state.throughput * v.emission * weight;
-                    if c.is_finite() {
-                        l += c;
-                    }
-                }
+            if state.len == 1 {
+                l += state.throughput * v.emission;
+            } else if !self.mode.light_tracing_only() {
+                l += state.throughput * self.found_light(&state, &ray, Some((&hit, &v)));
             }
             if self.mode.light_tracing_only() || state.len >= self.max_len {
                 break;

@@ -11,7 +11,7 @@
 //! with the geometric normal's cosine everywhere, so both sides compute the same numbers
 //! for one path and the weights of its strategies add to one.
 
-use super::Bidir;
+use super::{Bidir, IterFactors};
 use crate::bsdf::{Kind, Model, to_local};
 use crate::geometry::Ray;
 use crate::geometry::offset::offset_origin;
@@ -50,6 +50,8 @@ pub struct PathState {
     /// A light path from a CS184 point or spot light (no falloff): its first segment's
     /// throughput takes that segment's squared length.
     pub falloff_free: bool,
+    /// The last vertex scattered by a delta lobe (mirror, smooth glass).
+    pub after_delta: bool,
 }
 
 /// A vertex of a light subpath kept for connections and merges.
@@ -68,6 +70,12 @@ pub struct LightVertex {
 }
 
 impl LightVertex {
+    /// (d_vcm, d_vc, d_vm), as the weights read them.
+    #[inline]
+    pub fn quantities(&self) -> [f32; 3] {
+        [self.d_vcm, self.d_vc, self.d_vm]
+    }
+
     /// The cosine at this vertex of a connection leaving along `w`, as the adjoint sees it:
     /// Veach's shading-normal correction |wo.ns| |w.ng| / |wo.ng| in place of |w.ns|, so that
     /// light tracing through interpolated normals agrees with the path tracer.
@@ -103,14 +111,26 @@ pub fn evaluate(sh: &ShadingFrame, w: Vec3) -> Evaluated {
 }
 
 impl PathState {
+    /// (d_vcm, d_vc, d_vm), as the weights read them.
+    #[inline]
+    pub fn quantities(&self) -> [f32; 3] {
+        [self.d_vcm, self.d_vc, self.d_vm]
+    }
+
     /// Accounts for the segment just traced to `v` (at distance `t`): the densities of the
     /// vertex it reached convert from solid angle to area there.
     #[inline]
     pub fn arrive(&mut self, v: &Vertex, t: f32) {
+        self.arrive_at(self.ray.dir.dot(v.ng).abs(), t);
+    }
+
+    /// [`arrive`](Self::arrive) at a vertex whose geometric normal is at `cos` to the
+    /// segment.
+    #[inline]
+    pub fn arrive_at(&mut self, cos: f32, t: f32) {
         if self.len > 0 || !self.infinite_start {
             self.d_vcm *= mis(t * t);
         }
-        let cos = self.ray.dir.dot(v.ng).abs();
         let inv = 1.0 / mis(cos);
         self.d_vcm *= inv;
         self.d_vc *= inv;
@@ -125,6 +145,27 @@ impl PathState {
             self.d_vcm = f32::MAX;
             self.d_vc = if self.d_vc == 0.0 { 0.0 } else { f32::MAX };
             self.d_vm = if self.d_vm == 0.0 { 0.0 } else { f32::MAX };
+        }
+    }
+}
+
+impl PathState {
+    /// Accounts for the direction the subpath leaves its vertex by: `cos_out` its |cos| to
+    /// the geometric normal, `pdf` its density (solid angle; a delta lobe's probability),
+    /// `pdf_rev` the density of the opposite sampling (from the leaving direction back
+    /// along the arriving one).
+    #[inline]
+    pub fn leave(&mut self, cos_out: f32, pdf: f32, pdf_rev: f32, delta: bool, f: &IterFactors) {
+        if delta {
+            // A delta vertex: neither side can join or merge here, its densities cancel.
+            self.d_vcm = 0.0;
+            self.d_vc *= mis(cos_out);
+            self.d_vm *= mis(cos_out);
+        } else {
+            let r = mis(cos_out / pdf);
+            self.d_vc = r * (self.d_vc * mis(pdf_rev) + self.d_vcm + f.mis_vm);
+            self.d_vm = r * (self.d_vm * mis(pdf_rev) + self.d_vcm * f.mis_vc + 1.0);
+            self.d_vcm = mis(1.0 / pdf);
         }
     }
 }
@@ -156,17 +197,9 @@ impl Bidir<'_, '_> {
                 weight *= d.eta * d.eta;
             }
         }
-        if s.delta || sh.kind == Kind::Delta {
-            state.d_vcm = 0.0;
-            state.d_vc *= mis(cos_out);
-            state.d_vm *= mis(cos_out);
-        } else {
-            let pdf_rev = sh.model.pdf(s.wi, sh.wo);
-            let r = mis(cos_out / s.pdf);
-            state.d_vc = r * (state.d_vc * mis(pdf_rev) + state.d_vcm + self.iter.mis_vm);
-            state.d_vm = r * (state.d_vm * mis(pdf_rev) + state.d_vcm * self.iter.mis_vc + 1.0);
-            state.d_vcm = mis(1.0 / s.pdf);
-        }
+        state.after_delta = s.delta || sh.kind == Kind::Delta;
+        let pdf_rev = if state.after_delta { 0.0 } else { sh.model.pdf(s.wi, sh.wo) };
+        state.leave(cos_out, s.pdf, pdf_rev, state.after_delta, &self.iter);
         state.throughput *= weight;
         if !state.throughput.is_finite() || state.throughput == Vec3::ZERO {
             return false;

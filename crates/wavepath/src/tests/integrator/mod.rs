@@ -4,6 +4,7 @@
 
 mod agree_controls;
 mod analytic;
+mod bidir;
 mod aov;
 mod effects;
 pub mod emitter_filter;
