@@ -89,5 +89,7 @@ choice! {
         /// Each render raw and denoised (Open Image Denoise, albedo + normal), both against
         /// the raw reference (the denoised error is biased).
         Denoise,
+        /// The path tracer against BDPT and VCM (--integrator path|bdpt|vcm).
+        Integrator,
     }
 }

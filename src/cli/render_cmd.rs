@@ -75,6 +75,7 @@ pub fn run(a: &RenderArgs) -> Result<()> {
     for e in &effects.on {
         eprintln!("[wavepath] Effect on: {} ({})", e.name, e.reason);
     }
+    eprintln!("[wavepath] Integrator: {} ({})", effects.integrator.name, effects.integrator.reason);
     if s.cs184.light_pdf {
         eprintln!(
             "[wavepath] --cs184-light-pdf: area-light samples use the course renderer's pdf, dist / (area cos): \

@@ -4,7 +4,7 @@
 
 use wavepath::Settings;
 use wavepath::{Aov, AovSet};
-use wavepath::{Roulette, RouletteKind, SamplerKind, Shading};
+use wavepath::{IntegratorKind, Roulette, RouletteKind, SamplerKind, Shading};
 
 /// The setting a study varies.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,6 +30,9 @@ pub enum SweepKind {
     /// The raw render against the same render denoised by Open Image Denoise (fed its
     /// albedo and normal), over the spp ladder: two curves from one set of renders.
     Denoise,
+    /// The path tracer against bidirectional path tracing and vertex connection and
+    /// merging (`--integrator path|bdpt|vcm`), each over the spp ladder.
+    Integrator,
 }
 
 impl SweepKind {
@@ -44,6 +47,7 @@ impl SweepKind {
             SweepKind::Sampler => "sampler",
             SweepKind::Mis => "mis",
             SweepKind::Denoise => "denoise",
+            SweepKind::Integrator => "integrator",
         }
     }
 
@@ -151,6 +155,17 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
             curve("MIS (light + BSDF samples)".into(), "mis".into(), b().with(|s| s.paths.mis = true)),
             curve("light sampling alone (--no-mis)".into(), "no-mis".into(), b().with(|s| s.paths.mis = false)),
         ],
+        SweepKind::Integrator => [
+            (IntegratorKind::Wavefront, "path tracer"),
+            (IntegratorKind::Bdpt, "bidirectional (BDPT)"),
+            (IntegratorKind::Vcm, "connection and merging (VCM)"),
+        ]
+        .iter()
+        .map(|&(k, what)| {
+            let name = if k == IntegratorKind::Wavefront { "path" } else { k.name() };
+            curve(format!("--integrator {name}: {what}"), name.into(), b().with(|s| s.execution.integrator = k))
+        })
+        .collect(),
         SweepKind::Denoise => {
             let s = b().with(|s| s.image.aovs = s.image.aovs.union(denoiser_aovs()));
             vec![

@@ -35,6 +35,8 @@ def test_defaults_are_the_command_lines(cli, tmp_path):
         (dict(roulette="throughput", max_depth=6, rr_depth=2), ["--roulette", "throughput", "-m", 6, "--rr-depth", 2]),
         (dict(hemisphere=True, mis=False, max_depth=1), ["-H", "--no-mis", "-m", 1]),
         (dict(integrator="recursive", max_depth=3), ["--integrator", "recursive", "-m", 3]),
+        (dict(integrator="bdpt", max_depth=3), ["--integrator", "bdpt", "-m", 3]),
+        (dict(integrator="vcm", max_depth=3), ["--integrator", "vcm", "-m", 3]),
         (dict(adaptive=(4, 0.05), spp=16, max_depth=2), ["-a", 4, 0.05, "-s", 16, "-m", 2]),
         (dict(shading="normals"), ["--shading", "normals"]),
         (dict(isa="scalar", max_depth=2), ["--isa", "scalar", "-m", 2]),

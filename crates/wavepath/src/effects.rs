@@ -11,7 +11,7 @@ use crate::scene::{Camera, Environment, Light, Scene};
 use crate::settings::{RouletteKind, Settings, Shading};
 
 /// One effect that is on, and the reason it is on.
-#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Eq, serde::Serialize)]
 pub struct Effect {
     pub name: &'static str,
     pub reason: String,
@@ -65,6 +65,8 @@ pub struct Effects {
     pub mis: bool,
     /// Every flag was forced on by `--all-effects`.
     pub forced: bool,
+    /// Which light transport runs and why (the log's "Integrator" line).
+    pub integrator: Effect,
     /// The effects that are on, in a fixed order, with their reasons.
     pub on: Vec<Effect>,
 }
@@ -354,6 +356,35 @@ fn mis_reason(f: &Facts) -> Option<String> {
     Some(format!("{what}: light and BSDF samples combined at diffuse surfaces (--no-mis: light sampling alone)"))
 }
 
+/// The light transport the render runs, and the reason: what `--integrator` asks for, and
+/// for the path tracer whether the scene has caustic paths (light from a small emitter
+/// through a mirror, glass or glossy surface onto a diffuse one), which bidirectional
+/// transport finds far better per sample. It is not chosen for them yet: at equal error it
+/// is not faster than the path tracer on the harness's caustic scene (docs/decisions.md,
+/// "Bidirectional transport").
+fn integrator_choice(f: &Facts) -> Effect {
+    use crate::settings::IntegratorKind as K;
+    let kind = f.settings.execution.integrator;
+    let specular = f.mirrors + f.glasses + f.metals + f.pbr + f.phong;
+    let small_lights = f.scene.lights.iter().any(|l| l.kind() != "hemisphere") || f.emissive_triangles > 0;
+    let reason = match kind {
+        K::Wavefront if f.lit && specular > 0 && small_lights => format!(
+            "path tracer: {specular} mirror, glass or glossy material(s) can carry light from small emitters onto \
+             diffuse surfaces (caustics), which --integrator bdpt or vcm finds better per sample, but not yet \
+             faster at equal error"
+        ),
+        K::Wavefront => {
+            "path tracer: no caustic paths (no mirror, glass or glossy surface lit by a small emitter)".into()
+        }
+        K::Recursive => "--integrator recursive: the path tracer's single-ray reference".into(),
+        K::Light => "--integrator light: light tracing alone (surfaces seen through mirrors or glass stay dark)".into(),
+        K::Bdpt => "--integrator bdpt: camera and light subpaths joined by every connection, weighted by MIS".into(),
+        K::Vcm => "--integrator vcm: bdpt plus merging with nearby light vertices, weighted by MIS".into(),
+    };
+    let name = if kind == K::Wavefront { "path" } else { kind.name() };
+    Effect { name, reason }
+}
+
 impl Effects {
     /// Runs the table: each rule in order, its flag set and its reason listed when it is on.
     pub fn of(scene: &Scene, settings: &Settings) -> Effects {
@@ -374,6 +405,7 @@ impl Effects {
             e.mis = true;
             e.on.push(Effect { name: "mis", reason });
         }
+        e.integrator = integrator_choice(&facts);
         e
     }
 

@@ -277,10 +277,11 @@ impl Request {
             }
             s.image.cell = Some(cell);
         }
-        if s.image.aovs.traced() && s.execution.integrator == IntegratorKind::Recursive {
+        if s.image.aovs.traced() && s.execution.integrator != IntegratorKind::Wavefront {
             return Err(InvalidValue(format!(
-                "the output variables {} need the wavefront integrator: the recursive reference records no first hits",
-                s.image.aovs
+                "the output variables {} need the wavefront integrator: {} records no first hits",
+                s.image.aovs,
+                s.execution.integrator.name()
             )));
         }
         if !s.image.aovs.is_empty() && s.paths.shading == Shading::Normals {

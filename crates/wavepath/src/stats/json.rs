@@ -18,7 +18,7 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
         "height": s.image.height,
         "spp": s.sampling.spp,
         "sampler": s.sampling.sampler.name(),
-        "integrator": s.execution.integrator.name(),
+        "integrator": effects.integrator,
         "roulette": roulette_json(&s.paths.roulette),
         "dialect": scene.source.dialect.name(),
         "reader": scene.source.reader,

@@ -3,14 +3,14 @@
 //! vertices joined by a segment (connection), and a camera vertex gathering the light
 //! vertices near it (merging). Each returns its contribution already weighted.
 
-use super::{Bidir, IterFactors};
 use super::walk::{LightVertex, PathState, evaluate, mis};
+use super::{Bidir, IterFactors};
 use crate::accel::TraceCounters;
 use crate::geometry::Ray;
-use crate::lights::emission::Illumination;
 use crate::geometry::offset::{offset_origin, shadow_tmax};
 use crate::integrator::material::ShadingFrame;
 use crate::integrator::{Vertex, light_numbers};
+use crate::lights::emission::Illumination;
 use crate::sampling::Numbers;
 use glam::Vec3;
 
@@ -122,7 +122,15 @@ impl Bidir<'_, '_> {
         let (cos_camera, cos_light) = (w.dot(v.ng).abs(), w.dot(lv.v.ng).abs());
         let camera_pdf_a = ec.pdf_fwd * cos_light / dist2;
         let light_pdf_a = el.pdf_fwd * cos_camera / dist2;
-        let weight = connection_weight(state.quantities(), lv.quantities(), camera_pdf_a, light_pdf_a, ec.pdf_rev, el.pdf_rev, &self.iter);
+        let weight = connection_weight(
+            state.quantities(),
+            lv.quantities(),
+            camera_pdf_a,
+            light_pdf_a,
+            ec.pdf_rev,
+            el.pdf_rev,
+            &self.iter,
+        );
         let g = ec.cos_shading * lv.adjoint_cos(-w) / dist2;
         let c = lv.throughput * ec.f * el.f * (weight * g);
         if !c.is_finite() || c == Vec3::ZERO {
@@ -137,7 +145,7 @@ impl Bidir<'_, '_> {
         let Some(grid) = &light.grid else { return Vec3::ZERO };
         let mut sum = Vec3::ZERO;
         grid.query(v.p, &light.positions, |i| {
-            let lv = &light.vertices[i];
+            let lv = light.vertex(i);
             if lv.len + state.len > self.max_len || lv.v.ng.dot(v.ng) <= 0.0 {
                 return;
             }

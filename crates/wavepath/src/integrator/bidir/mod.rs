@@ -96,13 +96,39 @@ impl IterFactors {
     }
 }
 
-/// One iteration's light subpaths.
-pub struct LightPaths {
+/// One row's light subpaths (buffers kept from iteration to iteration).
+#[derive(Default)]
+struct LightRow {
     vertices: Vec<LightVertex>,
+    /// `ends[x - 1]..ends[x]`: pixel x's subpath in `vertices` (from 0 for x = 0).
+    ends: Vec<u32>,
+    /// (pixel, value) of the row's light paths' camera connections.
+    splats: Vec<(u32, Vec3)>,
+    counts: Counts,
+}
+
+/// One iteration's light subpaths, by row, and for merging their vertices in one list.
+pub struct LightPaths<'r> {
+    rows: &'r [LightRow],
+    /// Merging: every vertex's position, its (row, index), and the grid over them.
     positions: Vec<Vec3>,
-    /// `starts[p]..starts[p + 1]`: pixel p's subpath in `vertices`.
-    starts: Vec<u32>,
+    index: Vec<(u32, u32)>,
     grid: Option<HashGrid>,
+}
+
+impl LightPaths<'_> {
+    /// Pixel (x, y)'s light subpath.
+    fn of(&self, x: usize, y: usize) -> &[LightVertex] {
+        let row = &self.rows[y];
+        let start = if x == 0 { 0 } else { row.ends[x - 1] as usize };
+        &row.vertices[start..row.ends[x] as usize]
+    }
+
+    /// The vertex at position `i` of the merging list.
+    fn vertex(&self, i: usize) -> &LightVertex {
+        let (r, k) = self.index[i];
+        &self.rows[r as usize].vertices[k as usize]
+    }
 }
 
 /// Everything the strategies read.
@@ -301,7 +327,9 @@ impl<'t, 'a> Bidir<'t, 'a> {
     /// segment hits it, and the emission of a surface that is no light (an emissive quad
     /// beside an area light) only after a delta bounce, at full weight.
     fn found_light(&self, state: &PathState, ray: &Ray, hit: Option<(&crate::geometry::Hit, &Vertex)>) -> Vec3 {
-        let weight = |direct_pdf_a: f32, emission_pdf_w: f32| connect::hit_weight(state.quantities(), direct_pdf_a, emission_pdf_w);
+        let weight = |direct_pdf_a: f32, emission_pdf_w: f32| {
+            connect::hit_weight(state.quantities(), direct_pdf_a, emission_pdf_w)
+        };
         let seen = match hit {
             Some((h, _)) => Seen::Hit { t: h.t, emitter: None },
             None => Seen::Miss,
@@ -354,7 +382,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             falloff_free: false,
             after_delta: false,
         };
-        let own = &light.vertices[light.starts[pixel as usize] as usize..light.starts[pixel as usize + 1] as usize];
+        let own = light.of(x as usize, y as usize);
         let mut l = Vec3::ZERO;
         loop {
             if state.len == 0 {
@@ -407,10 +435,6 @@ impl<'t, 'a> Bidir<'t, 'a> {
     }
 }
 
-/// One row's light subpaths: their vertices, where each pixel's ends, their splats
-/// (pixel, value) and what they traced.
-type LightRow = (Vec<LightVertex>, Vec<u32>, Vec<(u32, Vec3)>, Counts);
-
 #[derive(Clone, Copy, Default)]
 struct Counts {
     trace: TraceCounters,
@@ -453,6 +477,8 @@ pub fn render_bidir_into(
     let mut counts = Counts::default();
     let (mut light_s, mut camera_s, mut grid_s) = (0.0, 0.0, 0.0);
     let (first, end) = settings.sample_span();
+    let mut rows: Vec<LightRow> = (0..h).map(|_| LightRow::default()).collect();
+    let mut splat = vec![Vec3::ZERO; w * h];
     for sample in first..end {
         if stop.load(Ordering::Relaxed) {
             return Ok(None);
@@ -460,36 +486,34 @@ pub fn render_bidir_into(
         bidir.at_iteration(sample);
         let b = &bidir;
         let t0 = Instant::now();
-        let rows: Vec<LightRow> = (0..h)
-            .into_par_iter()
-            .map(|y| {
-                let (mut out, mut ends, mut splats, mut st) =
-                    (Vec::new(), Vec::with_capacity(w), Vec::new(), Counts::default());
-                for x in 0..w {
-                    b.light_path((y * w + x) as u32, sample, &mut out, &mut splats, &mut st);
-                    ends.push(out.len() as u32);
-                }
-                (out, ends, splats, st)
-            })
-            .collect();
+        rows.par_iter_mut().enumerate().for_each(|(y, row)| {
+            row.vertices.clear();
+            row.ends.clear();
+            row.splats.clear();
+            row.counts = Counts::default();
+            for x in 0..w {
+                b.light_path((y * w + x) as u32, sample, &mut row.vertices, &mut row.splats, &mut row.counts);
+                row.ends.push(row.vertices.len() as u32);
+            }
+        });
         light_s += t0.elapsed().as_secs_f64();
         let t1 = Instant::now();
-        let mut light = LightPaths { vertices: Vec::new(), positions: Vec::new(), starts: vec![0], grid: None };
-        for (out, ends, _, st) in &rows {
-            let base = light.vertices.len() as u32;
-            light.starts.extend(ends.iter().map(|e| base + e));
-            light.vertices.extend_from_slice(out);
-            counts.add(st);
+        let mut light = LightPaths { rows: &rows, positions: Vec::new(), index: Vec::new(), grid: None };
+        for row in &rows {
+            counts.add(&row.counts);
         }
         if mode.merges() {
-            light.positions = light.vertices.iter().map(|v| v.v.p).collect();
+            for (r, row) in rows.iter().enumerate() {
+                light.positions.extend(row.vertices.iter().map(|v| v.v.p));
+                light.index.extend((0..row.vertices.len() as u32).map(|k| (r as u32, k)));
+            }
             light.grid = Some(HashGrid::new(&light.positions, bidir.iter.radius));
         }
         grid_s += t1.elapsed().as_secs_f64();
         // This iteration's splats, added in row order: the same sums for any thread count.
-        let mut splat = vec![Vec3::ZERO; w * h];
-        for (_, _, splats, _) in &rows {
-            for &(p, c) in splats {
+        splat.fill(Vec3::ZERO);
+        for row in &rows {
+            for &(p, c) in &row.splats {
                 splat[p as usize] += c;
             }
         }

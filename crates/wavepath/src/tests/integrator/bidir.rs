@@ -112,10 +112,11 @@ fn images_do_not_depend_on_the_thread_count() {
 #[test]
 fn refusals_are_one_line() {
     let scene = crate::load::default_scene();
-    let cases: [(&str, Box<dyn Fn(&mut Settings)>); 3] = [
-        ("adaptive", Box::new(|s: &mut Settings| s.sampling.adaptive = Some((8, 0.05)))),
-        ("cell", Box::new(|s: &mut Settings| s.image.cell = Some(crate::settings::Cell { x: 0, y: 0, w: 8, h: 8 }))),
-        ("direct", Box::new(|s: &mut Settings| s.paths.shading = crate::settings::Shading::Direct)),
+    type Change = fn(&mut Settings);
+    let cases: [(&str, Change); 3] = [
+        ("adaptive", |s| s.sampling.adaptive = Some((8, 0.05))),
+        ("cell", |s| s.image.cell = Some(crate::settings::Cell { x: 0, y: 0, w: 8, h: 8 })),
+        ("direct", |s| s.paths.shading = crate::settings::Shading::Direct),
     ];
     for (what, change) in cases {
         let mut s = settings(2, 4);
@@ -229,7 +230,11 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
         let expect = |q: f32| (q as f64).powi(2) / total;
         let mut sum = 0.0;
         for (s, (&q, &w)) in connections.iter().zip(&got_connections).enumerate() {
-            assert!((w as f64 - expect(q)).abs() < 1e-3 * expect(q), "merging {merging}, s = {s}: {w} vs {}", expect(q));
+            assert!(
+                (w as f64 - expect(q)).abs() < 1e-3 * expect(q),
+                "merging {merging}, s = {s}: {w} vs {}",
+                expect(q)
+            );
             sum += w as f64;
         }
         if merging {

@@ -4,8 +4,8 @@
 
 mod agree_controls;
 mod analytic;
-mod bidir;
 mod aov;
+mod bidir;
 mod effects;
 pub mod emitter_filter;
 mod emitter_sides;
