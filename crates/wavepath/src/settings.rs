@@ -47,19 +47,6 @@ pub enum IntegratorKind {
     Vcm,
 }
 
-impl IntegratorKind {
-    /// The bidirectional mode this integrator runs, if it is one.
-    pub fn bidirectional(self) -> Option<crate::integrator::bidir::Mode> {
-        use crate::integrator::bidir::Mode;
-        match self {
-            IntegratorKind::Wavefront | IntegratorKind::Recursive => None,
-            IntegratorKind::Light => Some(Mode::Light),
-            IntegratorKind::Bdpt => Some(Mode::Bdpt),
-            IntegratorKind::Vcm => Some(Mode::Vcm),
-        }
-    }
-}
-
 crate::choice::named!(IntegratorKind, "integrator", {
     Wavefront => "wavefront" | "path", "the path tracer: structure-of-arrays queues through generate, traverse, shade, shadow, compact";
     Recursive => "recursive", "the path tracer's simple recursive single-ray reference";

@@ -246,7 +246,7 @@ impl Canvas {
                         settings.image.aovs
                     );
                 }
-                let mode = kind.bidirectional().expect("a bidirectional integrator");
+                let mode = crate::integrator::bidir::Mode::of(kind).expect("a bidirectional integrator");
                 render_bidir_into(plan.transport(), settings, accel, mode, progress, stop, &mut self.sums)?
             }
         };

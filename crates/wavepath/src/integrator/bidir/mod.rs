@@ -59,6 +59,17 @@ pub enum Mode {
 }
 
 impl Mode {
+    /// The mode `--integrator` names, if it is a bidirectional one.
+    pub fn of(kind: crate::settings::IntegratorKind) -> Option<Mode> {
+        use crate::settings::IntegratorKind as K;
+        match kind {
+            K::Wavefront | K::Recursive => None,
+            K::Light => Some(Mode::Light),
+            K::Bdpt => Some(Mode::Bdpt),
+            K::Vcm => Some(Mode::Vcm),
+        }
+    }
+
     fn light_tracing_only(self) -> bool {
         self == Mode::Light
     }
@@ -177,9 +188,9 @@ pub fn unsupported(transport: &Transport, settings: &Settings) -> Option<String>
     if transport.materials.layers.volumes {
         return Some(format!("{name} does not yet carry light through absorbing volumes; use --integrator path"));
     }
-    if settings.paths.shading != crate::settings::Shading::Global || !transport.rules.accumulate {
+    if !transport.rules.accumulate {
         return Some(format!(
-            "{name} renders global illumination with every bounce counted; direct-only or single-bounce shading needs --integrator path"
+            "{name} counts every bounce up to the depth; the last bounce alone (-o 0) needs --integrator path"
         ));
     }
     None

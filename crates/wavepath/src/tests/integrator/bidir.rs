@@ -116,7 +116,7 @@ fn refusals_are_one_line() {
     let cases: [(&str, Change); 3] = [
         ("adaptive", |s| s.sampling.adaptive = Some((8, 0.05))),
         ("cell", |s| s.image.cell = Some(crate::settings::Cell { x: 0, y: 0, w: 8, h: 8 })),
-        ("direct", |s| s.paths.shading = crate::settings::Shading::Direct),
+        ("last bounce", |s| s.paths.accumulate = false),
     ];
     for (what, change) in cases {
         let mut s = settings(2, 4);
