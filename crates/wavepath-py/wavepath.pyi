@@ -127,6 +127,7 @@ class Scene:
         fov: Optional[Literal["cs184", "frame"]] = None,
         lens_radius: Optional[float] = None,
         focal_distance: Optional[float] = None,
+        light_paths: Optional[float] = None,
         aovs: Optional[Sequence[Literal["albedo", "normal", "depth", "position", "variance"]]] = None,
         denoise: bool = False,
         oidn: Optional[Union[str, PathLike[str]]] = None,
@@ -144,7 +145,7 @@ class Scene:
         Each option is the command-line flag of the same meaning (spp -s, light_samples -l,
         max_depth -m, accumulate -o (False: only bounce max_depth), resolution -r, threads -t (0 or None: all cores), --sampler, --seed,
         adaptive -a, --shading, --integrator, hemisphere -H, mis (False: --no-mis),
-        --roulette, --rr, --rr-depth, --isa, --fov, lens_radius -b, focal_distance -d); left
+        --roulette, --rr, --rr-depth, --isa, --fov, lens_radius -b, focal_distance -d, light_paths --light-paths); left
         out, the command line's default for the scene stands. The same options give the same
         image, bit for bit, as the command line. camera replaces the scene's for this render.
 

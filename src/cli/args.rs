@@ -163,6 +163,10 @@ pub struct RenderArgs {
     /// Focal distance of the thin lens.
     #[arg(short = 'd', value_name = "D")]
     pub focal_distance: Option<f64>,
+    /// Light subpaths per pixel and sample of --integrator light and path+light (default: 1
+    /// for light, 0.25 for path+light; bdpt and vcm trace one per pixel).
+    #[arg(long, value_name = "R")]
+    pub light_paths: Option<f64>,
     /// Uniform hemisphere sampling for direct light (default: light importance sampling).
     #[arg(short = 'H')]
     pub hemisphere: bool,

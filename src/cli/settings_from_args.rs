@@ -21,6 +21,7 @@ pub fn flag(f: Field) -> &'static str {
         Field::CellX | Field::CellY | Field::CellWidth | Field::CellHeight => "-p",
         Field::LensRadius => "-b",
         Field::FocalDistance => "-d",
+        Field::LightPaths => "--light-paths",
     }
 }
 
@@ -54,6 +55,7 @@ pub fn request(a: &RenderArgs) -> Request {
         fov: Some(a.fov),
         lens_radius: a.lens_radius,
         focal_distance: a.focal_distance,
+        light_paths: a.light_paths,
         aovs: Some(kept_aovs(a)),
     }
 }

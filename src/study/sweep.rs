@@ -159,6 +159,7 @@ pub fn curves(kind: SweepKind, base: &Settings) -> Vec<Curve> {
             (IntegratorKind::Wavefront, "path tracer"),
             (IntegratorKind::Bdpt, "bidirectional (BDPT)"),
             (IntegratorKind::Vcm, "connection and merging (VCM)"),
+            (IntegratorKind::PathLight, "path tracer plus light tracing"),
         ]
         .iter()
         .map(|&(k, what)| {

@@ -38,6 +38,7 @@ pub struct RenderOptions {
     pub fov: Option<String>,
     pub lens_radius: Option<f64>,
     pub focal_distance: Option<f64>,
+    pub light_paths: Option<f64>,
     /// Output variables returned beside the image, by name.
     pub aovs: Option<Vec<String>>,
     /// The image is denoised (the albedo and normal it is fed are kept for it).
@@ -59,6 +60,7 @@ fn keyword(f: Field) -> &'static str {
         Field::CellX | Field::CellY | Field::CellWidth | Field::CellHeight => "cell",
         Field::LensRadius => "lens_radius",
         Field::FocalDistance => "focal_distance",
+        Field::LightPaths => "light_paths",
     }
 }
 
@@ -91,6 +93,7 @@ pub fn request(o: &RenderOptions) -> PyResult<Request> {
         fov: choice("fov", &o.fov)?,
         lens_radius: o.lens_radius,
         focal_distance: o.focal_distance,
+        light_paths: o.light_paths,
         aovs: Some(kept_aovs(o)?),
         ..Request::default()
     })

@@ -243,7 +243,7 @@ impl PyScene {
     /// (`wavepath SCENE -s SPP -l LIGHT_SAMPLES -m MAX_DEPTH -r W H ...`). Ctrl-C stops the
     /// render (KeyboardInterrupt); `progress(done, total)` is called a few times a second
     /// with the camera samples finished. Other Python threads run meanwhile.
-    #[pyo3(signature = (*, spp=None, light_samples=None, max_depth=None, accumulate=None, resolution=None, camera=None, threads=None, sampler=None, seed=None, adaptive=None, shading=None, integrator=None, hemisphere=None, mis=None, roulette=None, rr=None, rr_depth=None, isa=None, fov=None, lens_radius=None, focal_distance=None, aovs=None, denoise=false, oidn=None, progress=None))]
+    #[pyo3(signature = (*, spp=None, light_samples=None, max_depth=None, accumulate=None, resolution=None, camera=None, threads=None, sampler=None, seed=None, adaptive=None, shading=None, integrator=None, hemisphere=None, mis=None, roulette=None, rr=None, rr_depth=None, isa=None, fov=None, lens_radius=None, focal_distance=None, light_paths=None, aovs=None, denoise=false, oidn=None, progress=None))]
     #[allow(clippy::too_many_arguments)]
     fn render<'py>(
         &self,
@@ -269,6 +269,7 @@ impl PyScene {
         fov: Option<String>,
         lens_radius: Option<f64>,
         focal_distance: Option<f64>,
+        light_paths: Option<f64>,
         aovs: Option<Vec<String>>,
         denoise: bool,
         oidn: Option<std::path::PathBuf>,
@@ -295,6 +296,7 @@ impl PyScene {
             fov,
             lens_radius,
             focal_distance,
+            light_paths,
             aovs,
             denoise,
         };

@@ -37,6 +37,7 @@ def test_defaults_are_the_command_lines(cli, tmp_path):
         (dict(integrator="recursive", max_depth=3), ["--integrator", "recursive", "-m", 3]),
         (dict(integrator="bdpt", max_depth=3), ["--integrator", "bdpt", "-m", 3]),
         (dict(integrator="vcm", max_depth=3), ["--integrator", "vcm", "-m", 3]),
+        (dict(integrator="path+light", light_paths=0.5, max_depth=3), ["--integrator", "path+light", "--light-paths", 0.5, "-m", 3]),
         (dict(adaptive=(4, 0.05), spp=16, max_depth=2), ["-a", 4, 0.05, "-s", 16, "-m", 2]),
         (dict(shading="normals"), ["--shading", "normals"]),
         (dict(isa="scalar", max_depth=2), ["--isa", "scalar", "-m", 2]),

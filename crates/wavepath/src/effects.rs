@@ -358,10 +358,10 @@ fn mis_reason(f: &Facts) -> Option<String> {
 
 /// The light transport the render runs, and the reason: what `--integrator` asks for, and
 /// for the path tracer whether the scene has caustic paths (light from a small emitter
-/// through a mirror, glass or glossy surface onto a diffuse one), which bidirectional
-/// transport finds far better per sample. It is not chosen for them yet: at equal error it
-/// is not faster than the path tracer on the harness's caustic scene (docs/decisions.md,
-/// "Bidirectional transport").
+/// through a mirror, glass or glossy surface onto a diffuse one), which light tracing finds
+/// far better per sample. `path+light` is not chosen for them yet: it runs one path at a
+/// time and splats across the image, so a cell (the viewer's bands, tile splits) cannot
+/// render it (docs/decisions.md, "Bidirectional transport").
 fn integrator_choice(f: &Facts) -> Effect {
     use crate::settings::IntegratorKind as K;
     let kind = f.settings.execution.integrator;
@@ -370,8 +370,8 @@ fn integrator_choice(f: &Facts) -> Effect {
     let reason = match kind {
         K::Wavefront if f.lit && specular > 0 && small_lights => format!(
             "path tracer: {specular} mirror, glass or glossy material(s) can carry light from small emitters onto \
-             diffuse surfaces (caustics), which --integrator bdpt or vcm finds better per sample, but not yet \
-             faster at equal error"
+             diffuse surfaces (caustics); --integrator path+light adds light tracing for them (1.3x the path \
+             tracer at equal error on the harness's spheres-box)"
         ),
         K::Wavefront => {
             "path tracer: no caustic paths (no mirror, glass or glossy surface lit by a small emitter)".into()
@@ -380,6 +380,9 @@ fn integrator_choice(f: &Facts) -> Effect {
         K::Light => "--integrator light: light tracing alone (surfaces seen through mirrors or glass stay dark)".into(),
         K::Bdpt => "--integrator bdpt: camera and light subpaths joined by every connection, weighted by MIS".into(),
         K::Vcm => "--integrator vcm: bdpt plus merging with nearby light vertices, weighted by MIS".into(),
+        K::PathLight => {
+            "--integrator path+light: the path tracer's strategies plus light tracing, weighted by MIS".into()
+        }
     };
     let name = if kind == K::Wavefront { "path" } else { kind.name() };
     Effect { name, reason }

@@ -38,7 +38,11 @@ pub enum Field {
     CellHeight,
     LensRadius,
     FocalDistance,
+    LightPaths,
 }
+
+/// Most light subpaths per pixel and sample (`--light-paths`): more only multiplies the time.
+pub const MAX_LIGHT_PATHS: f64 = 64.0;
 
 /// The values a field takes.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,6 +79,7 @@ impl Field {
             Field::CellHeight => "cell height",
             Field::LensRadius => "lens radius",
             Field::FocalDistance => "focal distance",
+            Field::LightPaths => "light subpaths per pixel and sample",
         }
     }
 
@@ -89,7 +94,7 @@ impl Field {
             Field::MaxDepth => Range::Whole(0, 1 << 12),
             Field::Accumulate => Range::Whole(0, 1),
             Field::AdaptiveBatch => Range::Whole(1, 1 << 20),
-            Field::AdaptiveTolerance | Field::FocalDistance => Range::Positive,
+            Field::AdaptiveTolerance | Field::FocalDistance | Field::LightPaths => Range::Positive,
             Field::Threads => Range::Whole(0, 4096),
             Field::ContinueProb => Range::Probability,
             Field::RouletteStart => Range::Whole(1, 1 << 16),
@@ -200,6 +205,8 @@ pub struct Request {
     pub fov: Option<FovRule>,
     pub lens_radius: Option<f64>,
     pub focal_distance: Option<f64>,
+    /// Light subpaths per pixel and sample of light tracing and `path+light`.
+    pub light_paths: Option<f64>,
     /// Output variables kept beside the picture (`--aov`).
     pub aovs: Option<crate::settings::AovSet>,
 }
@@ -219,6 +226,17 @@ impl Request {
         }
         if let Some(v) = whole(Field::LightSamples, self.light_samples)? {
             s.sampling.light_samples = v;
+        }
+        if let Some(v) = self.light_paths {
+            let v = Field::LightPaths.number(names(Field::LightPaths), v)?;
+            if v > MAX_LIGHT_PATHS {
+                return Err(Field::LightPaths.invalid(
+                    names(Field::LightPaths),
+                    &format!("must be at most {MAX_LIGHT_PATHS}"),
+                    v,
+                ));
+            }
+            s.sampling.light_paths = Some(v as f32);
         }
         if let Some(v) = whole(Field::MaxDepth, self.max_depth)? {
             s.paths.max_depth = v;

@@ -45,6 +45,8 @@ pub enum IntegratorKind {
     Bdpt,
     /// Vertex connection and merging: BDPT plus merging with light vertices nearby.
     Vcm,
+    /// The path tracer plus light tracing, weighted by MIS, without connections.
+    PathLight,
 }
 
 crate::choice::named!(IntegratorKind, "integrator", {
@@ -53,6 +55,7 @@ crate::choice::named!(IntegratorKind, "integrator", {
     Light => "light", "light tracing alone: paths from the lights splatted onto the film (a reference for caustics)";
     Bdpt => "bdpt", "bidirectional path tracing: camera and light paths joined by every connection, weighted by MIS";
     Vcm => "vcm", "vertex connection and merging: bdpt plus merging with nearby light vertices (caustics seen in mirrors and glass)";
+    PathLight => "path+light" | "pt+lt", "the path tracer's strategies plus light tracing, weighted by MIS (caustics on diffuse surfaces; no connections)";
 });
 
 /// An image-space rectangle to render (`-p X Y DX DY`), in pixels, bottom-left origin.
@@ -134,6 +137,10 @@ pub struct Sampling {
     /// Render only camera samples with these indices, `[first, end)`, of the `spp` per
     /// pixel (a `--split samples` part); `None`: all of them.
     pub sample_range: Option<(u32, u32)>,
+    /// Light subpaths per pixel and sample for light tracing and `path+light`
+    /// (`--light-paths`); `None`: each integrator's default. BDPT and VCM trace one per
+    /// pixel, since a camera path joins the light subpath of its own pixel.
+    pub light_paths: Option<f32>,
 }
 
 impl Default for Sampling {
@@ -145,6 +152,7 @@ impl Default for Sampling {
             sampler: crate::sampling::SamplerKind::Independent,
             seed: 0,
             sample_range: None,
+            light_paths: None,
         }
     }
 }

@@ -238,7 +238,7 @@ impl Canvas {
             IntegratorKind::Recursive => {
                 render_recursive_into(plan.transport(), settings, accel, progress, stop, &mut self.sums)
             }
-            kind @ (IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm) => {
+            kind @ (IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm | IntegratorKind::PathLight) => {
                 if settings.image.aovs.traced() {
                     anyhow::bail!(
                         "{} records no first hits: --aov {} needs the wavefront integrator",

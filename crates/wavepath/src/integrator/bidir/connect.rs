@@ -4,7 +4,7 @@
 //! vertices near it (merging). Each returns its contribution already weighted.
 
 use super::walk::{LightVertex, PathState, evaluate, mis};
-use super::{Bidir, IterFactors};
+use super::{Bidir, IterFactors, Mode};
 use crate::accel::TraceCounters;
 use crate::geometry::Ray;
 use crate::geometry::offset::{offset_origin, shadow_tmax};
@@ -39,10 +39,13 @@ impl Bidir<'_, '_> {
         let dist2 = pr.dist * pr.dist;
         let camera_pdf_w = self.camera.pdf_w(pr.cos_camera);
         let camera_pdf_a = camera_pdf_w * cos_geo / dist2;
-        let weight = if self.mode.light_tracing_only() {
-            1.0
-        } else {
-            camera_weight(lv.quantities(), camera_pdf_a, self.light_paths, e.pdf_rev, &self.iter)
+        let weight = match self.mode {
+            Mode::Light => 1.0,
+            Mode::PathLight => {
+                let own = if lv.len == 1 { lv.d_vcm } else { 0.0 };
+                pl_camera_weight(own, lv.d_pl, camera_pdf_a, self.light_paths, e.pdf_rev)
+            }
+            _ => camera_weight(lv.quantities(), camera_pdf_a, self.light_paths, e.pdf_rev, &self.iter),
         };
         // The film's importance per pixel area, W = pdf_w: the contribution is
         // throughput f cos W / dist^2 over the light paths drawn per pixel sample.
@@ -80,7 +83,12 @@ impl Bidir<'_, '_> {
             return Vec3::ZERO;
         }
         let cos_geo = il.wi.dot(v.ng).abs();
-        let weight = light_sample_weight(state.quantities(), &il, pick, cos_geo, e.pdf_fwd, e.pdf_rev, &self.iter);
+        let weight = if self.mode == Mode::PathLight {
+            let own = if state.len == 1 { state.d_vcm } else { 0.0 };
+            pl_light_sample_weight(own, state.d_pl, &il, pick, cos_geo, e.pdf_fwd, e.pdf_rev)
+        } else {
+            light_sample_weight(state.quantities(), &il, pick, cos_geo, e.pdf_fwd, e.pdf_rev, &self.iter)
+        };
         let c = il.radiance * e.f * (weight * e.cos_shading / (pick * il.direct_pdf_w));
         if !c.is_finite() || c == Vec3::ZERO {
             return Vec3::ZERO;
@@ -232,4 +240,36 @@ pub fn merge_weight(cam: [f32; 3], light: [f32; 3], pdf_fwd: f32, pdf_rev: f32, 
     let w_light = light[0] * f.mis_vc + light[2] * mis(pdf_fwd);
     let w_camera = cam[0] * f.mis_vc + cam[2] * mis(pdf_rev);
     1.0 / (w_light + 1.0 + w_camera)
+}
+
+// The path-and-light-tracing mode's weights: the same ratios restricted to light sampling,
+// BSDF hits and light tracing (`own`: the subpath's `d_vcm` at its first vertex, where it is
+// one of those strategies' terms, else 0; `pl`: the subpath's `d_pl`).
+
+/// [`hit_weight`] among the path-and-light strategies.
+#[inline]
+pub fn pl_hit_weight(d_vcm: f32, pl: f32, direct_pdf_a: f32, emission_pdf_w: f32) -> f32 {
+    1.0 / (1.0 + mis(direct_pdf_a) * d_vcm + mis(emission_pdf_w) * pl)
+}
+
+/// [`light_sample_weight`] among the path-and-light strategies.
+#[inline]
+pub fn pl_light_sample_weight(
+    own: f32,
+    pl: f32,
+    il: &Illumination,
+    pick: f32,
+    cos_geo: f32,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+) -> f32 {
+    let w_light = if il.delta { 0.0 } else { mis(pdf_fwd / (pick * il.direct_pdf_w)) };
+    let w_camera = mis(il.emission_pdf_w * cos_geo / (il.direct_pdf_w * il.cos_light)) * (own + pl * mis(pdf_rev));
+    1.0 / (w_light + 1.0 + w_camera)
+}
+
+/// [`camera_weight`] among the path-and-light strategies.
+#[inline]
+pub fn pl_camera_weight(own: f32, pl: f32, camera_pdf_a: f32, light_paths: f32, pdf_rev: f32) -> f32 {
+    1.0 / (mis(camera_pdf_a / light_paths) * (own + pl * mis(pdf_rev)) + 1.0)
 }

@@ -56,6 +56,9 @@ pub enum Mode {
     Bdpt,
     /// Connections and merges (VCM).
     Vcm,
+    /// The path tracer's strategies (light sampling, BSDF hits) and light tracing, weighted
+    /// among themselves: no connections between subpaths, no light vertices kept.
+    PathLight,
 }
 
 impl Mode {
@@ -67,14 +70,16 @@ impl Mode {
             K::Light => Some(Mode::Light),
             K::Bdpt => Some(Mode::Bdpt),
             K::Vcm => Some(Mode::Vcm),
+            K::PathLight => Some(Mode::PathLight),
         }
     }
 
     fn light_tracing_only(self) -> bool {
         self == Mode::Light
     }
+    /// Camera vertices join light subpaths' vertices (and so those are kept).
     fn connects(self) -> bool {
-        self != Mode::Light
+        matches!(self, Mode::Bdpt | Mode::Vcm)
     }
     fn merges(self) -> bool {
         self == Mode::Vcm
@@ -154,11 +159,31 @@ pub struct Bidir<'t, 'a> {
     cdf: Vec<f32>,
     /// Most edges a full path may have.
     max_len: u32,
-    /// Light subpaths per iteration (one per pixel).
+    /// Light subpaths per iteration (one per pixel where camera paths join their own).
     light_paths: f32,
+    height: usize,
     iter: IterFactors,
     width: usize,
 }
+
+/// Light subpaths per iteration: one per pixel for the modes that join each camera path to
+/// the light subpath of its pixel, the settings' share of the pixels otherwise.
+fn light_path_count(mode: Mode, settings: &Settings) -> usize {
+    let pixels = settings.image.width * settings.image.height;
+    if mode.connects() {
+        return pixels;
+    }
+    let per_pixel = settings.sampling.light_paths.unwrap_or(match mode {
+        Mode::PathLight => PATH_LIGHT_SHARE,
+        _ => 1.0,
+    });
+    ((pixels as f64 * per_pixel as f64).round() as usize).max(1)
+}
+
+/// `path+light`'s light subpaths per pixel and sample: on the harness's `spheres-box` a
+/// quarter keeps the error of one per pixel (relative RMSE 0.0089 vs 0.0085 at 64 spp) at a
+/// quarter of light tracing's time (docs/decisions.md, "Bidirectional transport").
+const PATH_LIGHT_SHARE: f32 = 0.25;
 
 /// Why bidirectional transport cannot render `transport`'s scene under `settings`, in one
 /// line; `None` when it can.
@@ -167,6 +192,13 @@ pub fn unsupported(transport: &Transport, settings: &Settings) -> Option<String>
     if !transport.camera.pinhole() {
         return Some(format!(
             "{name} connects light paths to a pinhole camera; this camera has a lens or is orthographic (use --integrator path)"
+        ));
+    }
+    if Mode::of(settings.execution.integrator).is_some_and(|m| m.connects())
+        && settings.sampling.light_paths.is_some_and(|r| r != 1.0)
+    {
+        return Some(format!(
+            "{name} joins each camera path to the light subpath of its own pixel, one per pixel: --light-paths is for light and path+light"
         ));
     }
     if settings.sampling.adaptive.is_some() {
@@ -224,7 +256,8 @@ impl<'t, 'a> Bidir<'t, 'a> {
             pick,
             cdf,
             max_len: transport.rules.max_depth + 1,
-            light_paths: (w * h) as f32,
+            light_paths: light_path_count(mode, settings) as f32,
+            height: h,
             iter: IterFactors::default(),
             width: w,
         })
@@ -249,8 +282,9 @@ impl<'t, 'a> Bidir<'t, 'a> {
         self.transport.camera.camera.position
     }
 
-    /// Traces the light subpath of (pixel, sample): its stored vertices go to `out`, its
-    /// splats (pixel, value) to `splats`.
+    /// Traces light subpath `pixel` (the pixel whose camera path joins it, where they join;
+    /// its index among the iteration's otherwise) of iteration `sample`: its stored
+    /// vertices go to `out`, its splats (pixel, value) to `splats`.
     fn light_path(
         &self,
         pixel: u32,
@@ -287,6 +321,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             d_vcm: mis(direct_pdf_a / emission_pdf_w),
             d_vc,
             d_vm: d_vc * self.iter.mis_vc,
+            d_pl: d_vc,
             infinite_start: em.delta_dir,
             falloff_free: em.falloff_free,
             after_delta: false,
@@ -310,6 +345,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
                     d_vcm: state.d_vcm,
                     d_vc: state.d_vc,
                     d_vm: state.d_vm,
+                    d_pl: state.d_pl,
                 };
                 if state.len < self.max_len {
                     st.shadow += 1;
@@ -338,8 +374,9 @@ impl<'t, 'a> Bidir<'t, 'a> {
     /// segment hits it, and the emission of a surface that is no light (an emissive quad
     /// beside an area light) only after a delta bounce, at full weight.
     fn found_light(&self, state: &PathState, ray: &Ray, hit: Option<(&crate::geometry::Hit, &Vertex)>) -> Vec3 {
-        let weight = |direct_pdf_a: f32, emission_pdf_w: f32| {
-            connect::hit_weight(state.quantities(), direct_pdf_a, emission_pdf_w)
+        let weight = |direct_pdf_a: f32, emission_pdf_w: f32| match self.mode {
+            Mode::PathLight => connect::pl_hit_weight(state.d_vcm, state.d_pl, direct_pdf_a, emission_pdf_w),
+            _ => connect::hit_weight(state.quantities(), direct_pdf_a, emission_pdf_w),
         };
         let seen = match hit {
             Some((h, _)) => Seen::Hit { t: h.t, emitter: None },
@@ -374,7 +411,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
 
     /// The camera subpath of (x, y, sample), joined to light: what it adds to the pixel.
     fn camera_path(&self, x: u32, y: u32, sample: u32, light: &LightPaths, st: &mut Counts) -> Vec3 {
-        let (w, h) = (self.width, self.light_paths as usize / self.width);
+        let (w, h) = (self.width, self.height);
         let pixel = y * w as u32 + x;
         let key = self.transport.streams.path_key(pixel, sample);
         // Always jittered over the pixel (the light paths' importance covers the whole
@@ -389,11 +426,12 @@ impl<'t, 'a> Bidir<'t, 'a> {
             d_vcm: mis(self.light_paths / camera_pdf_w),
             d_vc: 0.0,
             d_vm: 0.0,
+            d_pl: 0.0,
             infinite_start: false,
             falloff_free: false,
             after_delta: false,
         };
-        let own = light.of(x as usize, y as usize);
+        let own = if self.mode.connects() { light.of(x as usize, y as usize) } else { &[] };
         let mut l = Vec3::ZERO;
         loop {
             if state.len == 0 {
@@ -488,7 +526,10 @@ pub fn render_bidir_into(
     let mut counts = Counts::default();
     let (mut light_s, mut camera_s, mut grid_s) = (0.0, 0.0, 0.0);
     let (first, end) = settings.sample_span();
-    let mut rows: Vec<LightRow> = (0..h).map(|_| LightRow::default()).collect();
+    // Light subpaths in chunks of a row's width (a row of pixels each, where camera paths
+    // join the light subpath of their own pixel).
+    let n_light = light_path_count(mode, settings);
+    let mut rows: Vec<LightRow> = (0..n_light.div_ceil(w)).map(|_| LightRow::default()).collect();
     let mut splat = vec![Vec3::ZERO; w * h];
     for sample in first..end {
         if stop.load(Ordering::Relaxed) {
@@ -502,8 +543,8 @@ pub fn render_bidir_into(
             row.ends.clear();
             row.splats.clear();
             row.counts = Counts::default();
-            for x in 0..w {
-                b.light_path((y * w + x) as u32, sample, &mut row.vertices, &mut row.splats, &mut row.counts);
+            for i in y * w..((y + 1) * w).min(n_light) {
+                b.light_path(i as u32, sample, &mut row.vertices, &mut row.splats, &mut row.counts);
                 row.ends.push(row.vertices.len() as u32);
             }
         });

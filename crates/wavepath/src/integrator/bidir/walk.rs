@@ -44,6 +44,10 @@ pub struct PathState {
     pub d_vcm: f32,
     pub d_vc: f32,
     pub d_vm: f32,
+    /// The part of `d_vc` that only the path tracer's strategies and light tracing make
+    /// (light sampling and BSDF hits on the camera side, the camera reached by a light
+    /// vertex): what the path-and-light-tracing mode weighs by, without connections.
+    pub d_pl: f32,
     /// A light path from a light without a surface at a finite distance (directional): its
     /// first segment has no distance to convert by.
     pub infinite_start: bool,
@@ -67,6 +71,7 @@ pub struct LightVertex {
     pub d_vcm: f32,
     pub d_vc: f32,
     pub d_vm: f32,
+    pub d_pl: f32,
 }
 
 impl LightVertex {
@@ -135,6 +140,7 @@ impl PathState {
         self.d_vcm *= inv;
         self.d_vc *= inv;
         self.d_vm *= inv;
+        self.d_pl *= inv;
         if self.len == 0 && self.falloff_free {
             self.throughput *= t * t;
         }
@@ -145,6 +151,9 @@ impl PathState {
             self.d_vcm = f32::MAX;
             self.d_vc = if self.d_vc == 0.0 { 0.0 } else { f32::MAX };
             self.d_vm = if self.d_vm == 0.0 { 0.0 } else { f32::MAX };
+            if !self.d_pl.is_finite() {
+                self.d_pl = f32::MAX;
+            }
         }
     }
 }
@@ -161,8 +170,13 @@ impl PathState {
             self.d_vcm = 0.0;
             self.d_vc *= mis(cos_out);
             self.d_vm *= mis(cos_out);
+            self.d_pl *= mis(cos_out);
         } else {
             let r = mis(cos_out / pdf);
+            // Only the first vertex's own term (light tracing on the camera's side, light
+            // sampling on the light's) is one of the path-and-light strategies.
+            let first = if self.len == 1 { self.d_vcm } else { 0.0 };
+            self.d_pl = r * (self.d_pl * mis(pdf_rev) + first);
             self.d_vc = r * (self.d_vc * mis(pdf_rev) + self.d_vcm + f.mis_vm);
             self.d_vm = r * (self.d_vm * mis(pdf_rev) + self.d_vcm * f.mis_vc + 1.0);
             self.d_vcm = mis(1.0 / pdf);

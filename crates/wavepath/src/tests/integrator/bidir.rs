@@ -53,7 +53,7 @@ fn bdpt_and_vcm_agree_with_the_path_tracer() {
     for (file, depth) in [("cs184/sky/CBspheres_lambertian.dae", 4), ("obj/CornellBox/CornellBox-Sphere.obj", 5)] {
         let Some(scene) = common::load_scene(file) else { return };
         let path = sums(IntegratorKind::Wavefront, &scene, &settings(512, depth));
-        for kind in [IntegratorKind::Bdpt, IntegratorKind::Vcm] {
+        for kind in [IntegratorKind::Bdpt, IntegratorKind::Vcm, IntegratorKind::PathLight] {
             let bi = sums(kind, &scene, &settings(96, depth));
             // VCM's merges blur light over a radius that shrinks with the iterations: a
             // bias of a fraction of a percent at this sample count.
@@ -99,7 +99,7 @@ fn image_z(a: &Accumulator, b: &Accumulator) -> f64 {
 #[test]
 fn images_do_not_depend_on_the_thread_count() {
     let Some(scene) = common::load_scene("obj/CornellBox/CornellBox-Sphere.obj") else { return };
-    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt, IntegratorKind::Vcm] {
+    for kind in [IntegratorKind::Light, IntegratorKind::Bdpt, IntegratorKind::Vcm, IntegratorKind::PathLight] {
         let s = settings(4, 5);
         let one = crate::render::with_threads(1, || sums(kind, &scene, &s)).unwrap();
         let two = crate::render::with_threads(2, || sums(kind, &scene, &s)).unwrap();
@@ -113,10 +113,11 @@ fn images_do_not_depend_on_the_thread_count() {
 fn refusals_are_one_line() {
     let scene = crate::load::default_scene();
     type Change = fn(&mut Settings);
-    let cases: [(&str, Change); 3] = [
+    let cases: [(&str, Change); 4] = [
         ("adaptive", |s| s.sampling.adaptive = Some((8, 0.05))),
         ("cell", |s| s.image.cell = Some(crate::settings::Cell { x: 0, y: 0, w: 8, h: 8 })),
         ("last bounce", |s| s.paths.accumulate = false),
+        ("light paths", |s| s.sampling.light_paths = Some(0.5)),
     ];
     for (what, change) in cases {
         let mut s = settings(2, 4);
@@ -176,6 +177,7 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
             d_vcm,
             d_vc,
             d_vm: d_vc * f.mis_vc,
+            d_pl: d_vc,
             infinite_start: false,
             falloff_free: false,
             after_delta: false,
@@ -244,8 +246,38 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
             }
         }
         assert!((sum - 1.0).abs() < 1e-4, "merging {merging}: the weights add to {sum}");
+        // The path-and-light mode's weights: the power heuristic among light sampling, BSDF
+        // hits and light tracing alone (s = 0, 1, 3), from the same walks' `d_pl`.
+        if !merging {
+            use crate::integrator::bidir::connect::{pl_camera_weight, pl_hit_weight, pl_light_sample_weight};
+            let restricted = [connections[0], connections[1], connections[3]];
+            let total: f64 = restricted.iter().map(|&q| (q as f64).powi(2)).sum();
+            let got = [
+                pl_hit_weight(c0.d_vcm, c0.d_pl, pick / area, emission_pdf_w),
+                pl_light_sample_weight(0.0, c1.d_pl, &il, pick, cos(x1, x0, n1), lam(x1, x0, n1), lam(x1, x2, n1)),
+                pl_camera_weight(0.0, l2.d_pl, pc2, light_paths, lam(x2, x1, n2)),
+            ];
+            for (&q, &w) in restricted.iter().zip(&got) {
+                let e = (q as f64).powi(2) / total;
+                assert!((w as f64 - e).abs() < 1e-3 * e, "path+light: {w} vs {e} ({got:?})");
+            }
+            assert!((got.iter().map(|&w| w as f64).sum::<f64>() - 1.0).abs() < 1e-4, "{got:?}");
+        }
         // Every strategy has a weight well above f32's rounding on this path, so the
         // relative comparison above tests each of them.
         assert!(got_connections.iter().all(|&w| w > 1e-4), "{got_connections:?}");
+    }
+}
+
+/// `--light-paths` out of range is refused in one line naming the option.
+#[test]
+fn light_paths_out_of_range_is_refused() {
+    for v in [0.0, -1.0, f64::NAN, 1e6] {
+        let r = crate::request::Request { light_paths: Some(v), ..Default::default() };
+        let names: crate::request::Names =
+            |f| if f == crate::request::Field::LightPaths { "--light-paths" } else { "?" };
+        let err = r.apply(Settings::default(), names);
+        let msg = err.expect_err("out of range").to_string();
+        assert!(msg.starts_with("--light-paths (light subpaths per pixel and sample)"), "{msg}");
     }
 }
