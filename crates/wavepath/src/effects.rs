@@ -360,8 +360,8 @@ fn mis_reason(f: &Facts) -> Option<String> {
 /// for the path tracer whether the scene has caustic paths (light from a small emitter
 /// through a mirror, glass or glossy surface onto a diffuse one), which light tracing finds
 /// far better per sample. `path+light` is not chosen for them yet: it runs one path at a
-/// time and splats across the image, so a cell (the viewer's bands, tile splits) cannot
-/// render it (docs/decisions.md, "Bidirectional transport").
+/// time, and a cell (the viewer's bands, tile splits) traces every light path of the image
+/// (docs/decisions.md, "Bidirectional transport").
 fn integrator_choice(f: &Facts) -> Effect {
     use crate::settings::IntegratorKind as K;
     let kind = f.settings.execution.integrator;

@@ -10,7 +10,8 @@
 //! its camera hits splatted), then one camera subpath per pixel, which joins the light
 //! subpath of the same (pixel, sample) and, for VCM, merges with all of that iteration's
 //! light vertices. Splats are gathered per row and added in row order before the camera
-//! pass, so the image does not depend on the thread count. A pixel's sample is its camera
+//! pass, so the image does not depend on the thread count (nor on the cells it is cut into:
+//! a cell traces every light subpath and keeps its own pixels). A pixel's sample is its camera
 //! path plus what that iteration's light paths splatted onto it: iterations are
 //! independent samples, and the pixel's variance is measured as for the path tracer.
 
@@ -204,12 +205,6 @@ pub fn unsupported(transport: &Transport, settings: &Settings) -> Option<String>
     if settings.sampling.adaptive.is_some() {
         return Some(format!(
             "{name} splats light paths onto other pixels, so a pixel's own samples do not measure its error: adaptive sampling (-a) needs --integrator path"
-        ));
-    }
-    let (w, h) = (settings.image.width, settings.image.height);
-    if settings.region() != (crate::settings::Cell { x: 0, y: 0, w, h }) {
-        return Some(format!(
-            "{name} splats light paths anywhere on the image, so it renders whole images only (not a cell, -p); split by samples instead"
         ));
     }
     if transport.lights.set.lights.iter().any(|l| matches!(l, SampledLight::Infinite(_))) {
@@ -526,6 +521,10 @@ pub fn render_bidir_into(
     let mut counts = Counts::default();
     let (mut light_s, mut camera_s, mut grid_s) = (0.0, 0.0, 0.0);
     let (first, end) = settings.sample_span();
+    // A cell (`-p`, a tile of a split, the viewer's band) traces every light subpath, as
+    // the whole image does, and keeps what lands in it: its pixels get the same sums, bit
+    // for bit, as in a render of the whole image.
+    let region = settings.region();
     // Light subpaths in chunks of a row's width (a row of pixels each, where camera paths
     // join the light subpath of their own pixel).
     let n_light = light_path_count(mode, settings);
@@ -575,16 +574,17 @@ pub fn render_bidir_into(
             .pixels
             .par_chunks_mut(w)
             .enumerate()
+            .filter(|(y, _)| *y >= region.y && *y < region.y + region.h)
             .map(|(y, row)| {
                 let mut st = Counts::default();
-                for (x, out) in row.iter_mut().enumerate() {
+                for (x, out) in row.iter_mut().enumerate().skip(region.x).take(region.w) {
                     // One sample of the pixel: its camera path and what this iteration's
                     // light paths splatted onto it (independent across iterations, so the
                     // pixel's sample variance stays the variance of its estimate).
                     let l = b.camera_path(x as u32, y as u32, sample, &light, &mut st);
                     out.add(l + splat[y * w + x]);
                 }
-                progress(w as u64);
+                progress(region.w as u64);
                 st
             })
             .collect();
