@@ -70,6 +70,8 @@ pub struct Transport<'a> {
     pub lights: LightSampler,
     /// Depth, what counts, direct-light strategy, MIS and roulette.
     pub rules: Rules,
+    /// path+light: how camera paths weigh the caustics light tracing also draws.
+    pub caustics: Option<bidir::caustics::CausticTerms>,
 }
 
 /// A hit point ready for shading, normals turned toward the incoming ray's side.
@@ -152,9 +154,17 @@ impl<'a> Transport<'a> {
     pub fn new(scene: &'a Scene, settings: &Settings, effects: &crate::effects::Effects) -> Self {
         let lights = LightSampler::new(scene, settings);
         let rules = Rules::new(settings, effects, &lights.set);
+        let camera = CameraTerms::new(&settings.image.camera(&scene.camera));
+        let caustics = (settings.execution.integrator == crate::settings::IntegratorKind::PathLight)
+            .then(|| {
+                let sphere = bidir::scene_sphere(scene);
+                bidir::caustics::CausticTerms::new(&camera, &lights.set, &sphere, settings)
+            })
+            .flatten();
         Transport {
             scene,
-            camera: CameraTerms::new(&settings.image.camera(&scene.camera)),
+            camera,
+            caustics,
             streams: Streams::new(settings),
             materials: MaterialTable::new(scene),
             rules,

@@ -194,6 +194,21 @@ impl EmissiveTriangles {
         Some((pdf_a, pdf_a * cos * FRAC_1_PI * sides))
     }
 
+    /// [`emission_pdfs`](Self::emission_pdfs)' second density over the cosine at the light:
+    /// the light subpath's density of the direction `-w` converted to the area measure at a
+    /// point at unit distance, as the path tracer's side of path+light weighs a hit by it.
+    #[inline]
+    pub fn emission_pdf_per_cos(&self, prim: u32, w: Vec3) -> Option<f32> {
+        let i = self.prims.binary_search(&prim).ok()?;
+        let tri = &self.triangles[i];
+        let c = w.dot(tri.n);
+        if (if tri.one_sided { c } else { c.abs() }) <= 0.0 {
+            return None;
+        }
+        let sides = if tri.one_sided { 1.0 } else { 0.5 };
+        Some(self.density[i] * FRAC_1_PI * sides)
+    }
+
     /// The light's total power per pi (sum of area x emitted illuminance).
     pub fn total_power(&self) -> f32 {
         self.cdf.last().copied().unwrap_or(0.0)

@@ -226,7 +226,15 @@ impl Canvas {
             anyhow::bail!("this canvas keeps no first-hit sums for the output variables {}", settings.image.aovs);
         }
         let done = match settings.execution.integrator {
-            IntegratorKind::Wavefront => {
+            IntegratorKind::Wavefront | IntegratorKind::PathLight => {
+                if settings.execution.integrator == IntegratorKind::PathLight {
+                    if let Some(why) = crate::integrator::bidir::unsupported(plan.transport(), settings) {
+                        anyhow::bail!(why);
+                    }
+                    if plan.transport().caustics.is_none() {
+                        anyhow::bail!("path+light: the camera cannot be inverted");
+                    }
+                }
                 let (transport, effects, lanes) = (plan.transport(), plan.effects(), plan.lanes());
                 let job = RenderJob { transport, effects, lanes, settings, accel, progress, stop };
                 render_wavefront_into(&job, &self.workers, &mut self.sums)
@@ -238,7 +246,7 @@ impl Canvas {
             IntegratorKind::Recursive => {
                 render_recursive_into(plan.transport(), settings, accel, progress, stop, &mut self.sums)
             }
-            kind @ (IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm | IntegratorKind::PathLight) => {
+            kind @ (IntegratorKind::Light | IntegratorKind::Bdpt | IntegratorKind::Vcm) => {
                 if settings.image.aovs.traced() {
                     anyhow::bail!(
                         "{} records no first hits: --aov {} needs the wavefront integrator",

@@ -41,10 +41,7 @@ impl Bidir<'_, '_> {
         let camera_pdf_a = camera_pdf_w * cos_geo / dist2;
         let weight = match self.mode {
             Mode::Light => 1.0,
-            Mode::PathLight => {
-                let own = if lv.len == 1 { lv.d_vcm } else { 0.0 };
-                pl_camera_weight(own, lv.d_pl, camera_pdf_a, self.light_paths, e.pdf_rev)
-            }
+            Mode::PathLight => pl_camera_weight(lv.d_pl, camera_pdf_a, self.light_paths, e.pdf_rev),
             _ => camera_weight(lv.quantities(), camera_pdf_a, self.light_paths, e.pdf_rev, &self.iter),
         };
         // The film's importance per pixel area, W = pdf_w: the contribution is
@@ -84,8 +81,7 @@ impl Bidir<'_, '_> {
         }
         let cos_geo = il.wi.dot(v.ng).abs();
         let weight = if self.mode == Mode::PathLight {
-            let own = if state.len == 1 { state.d_vcm } else { 0.0 };
-            pl_light_sample_weight(own, state.d_pl, &il, pick, cos_geo, e.pdf_fwd, e.pdf_rev)
+            pl_light_sample_weight(&il, pick, e.pdf_fwd)
         } else {
             light_sample_weight(state.quantities(), &il, pick, cos_geo, e.pdf_fwd, e.pdf_rev, &self.iter)
         };
@@ -242,34 +238,29 @@ pub fn merge_weight(cam: [f32; 3], light: [f32; 3], pdf_fwd: f32, pdf_rev: f32, 
     1.0 / (w_light + 1.0 + w_camera)
 }
 
-// The path-and-light-tracing mode's weights: the same ratios restricted to light sampling,
-// BSDF hits and light tracing (`own`: the subpath's `d_vcm` at its first vertex, where it is
-// one of those strategies' terms, else 0; `pl`: the subpath's `d_pl`).
+// The path-and-light mode's weights. Light tracing shares only the caustics seen directly with
+// the path tracer's strategies (camera, a diffusely scattering vertex, delta vertices, the
+// light), which only BSDF hits also make; every other path is the path tracer's alone.
+// `pl`: the subpath's `d_pl`, nonzero only on such a path's prefix.
 
-/// [`hit_weight`] among the path-and-light strategies.
+/// [`hit_weight`] among the path-and-light strategies: light sampling and, on a caustic seen
+/// directly, light tracing.
 #[inline]
 pub fn pl_hit_weight(d_vcm: f32, pl: f32, direct_pdf_a: f32, emission_pdf_w: f32) -> f32 {
     1.0 / (1.0 + mis(direct_pdf_a) * d_vcm + mis(emission_pdf_w) * pl)
 }
 
-/// [`light_sample_weight`] among the path-and-light strategies.
+/// [`light_sample_weight`] among the path-and-light strategies: against BSDF hits alone (a
+/// light-sampled path ends in a diffuse vertex, which light tracing does not share).
 #[inline]
-pub fn pl_light_sample_weight(
-    own: f32,
-    pl: f32,
-    il: &Illumination,
-    pick: f32,
-    cos_geo: f32,
-    pdf_fwd: f32,
-    pdf_rev: f32,
-) -> f32 {
+pub fn pl_light_sample_weight(il: &Illumination, pick: f32, pdf_fwd: f32) -> f32 {
     let w_light = if il.delta { 0.0 } else { mis(pdf_fwd / (pick * il.direct_pdf_w)) };
-    let w_camera = mis(il.emission_pdf_w * cos_geo / (il.direct_pdf_w * il.cos_light)) * (own + pl * mis(pdf_rev));
-    1.0 / (w_light + 1.0 + w_camera)
+    1.0 / (w_light + 1.0)
 }
 
-/// [`camera_weight`] among the path-and-light strategies.
+/// [`camera_weight`] among the path-and-light strategies: a caustic's light vertex (reached
+/// through delta vertices only) against the camera's BSDF hit on the light.
 #[inline]
-pub fn pl_camera_weight(own: f32, pl: f32, camera_pdf_a: f32, light_paths: f32, pdf_rev: f32) -> f32 {
-    1.0 / (mis(camera_pdf_a / light_paths) * (own + pl * mis(pdf_rev)) + 1.0)
+pub fn pl_camera_weight(pl: f32, camera_pdf_a: f32, light_paths: f32, pdf_rev: f32) -> f32 {
+    1.0 / (mis(camera_pdf_a / light_paths) * pl * mis(pdf_rev) + 1.0)
 }

@@ -15,6 +15,7 @@
 //! path plus what that iteration's light paths splatted onto it: iterations are
 //! independent samples, and the pixel's variance is measured as for the path tracer.
 
+pub mod caustics;
 pub mod connect;
 pub mod grid;
 pub mod importance;
@@ -113,6 +114,51 @@ impl IterFactors {
     }
 }
 
+/// The sphere around the scene's bounds (light from a direction starts on its disk).
+pub fn scene_sphere(scene: &crate::scene::Scene) -> SceneSphere {
+    match scene.bounds() {
+        Some((lo, hi)) => SceneSphere { center: 0.5 * (lo + hi), radius: (0.5 * (hi - lo).length()).max(1e-6) },
+        None => SceneSphere { center: Vec3::ZERO, radius: 1.0 },
+    }
+}
+
+/// A choice among the scene's lights: each one's probability and their running sum.
+#[derive(Clone, Debug)]
+pub struct Picker {
+    pick: Vec<f32>,
+    cdf: Vec<f32>,
+}
+
+impl Picker {
+    /// In proportion to `powers` (uniform when none has power).
+    fn by_power(powers: &[f32]) -> Picker {
+        let total: f32 = powers.iter().sum();
+        let n = powers.len().max(1) as f32;
+        let pick: Vec<f32> = powers.iter().map(|&p| if total > 0.0 { p / total } else { 1.0 / n }).collect();
+        let cdf = pick
+            .iter()
+            .scan(0.0, |s, &p| {
+                *s += p;
+                Some(*s)
+            })
+            .collect();
+        Picker { pick, cdf }
+    }
+
+    /// No light of `n` is ever chosen.
+    fn none(n: usize) -> Picker {
+        Picker { pick: vec![0.0; n], cdf: vec![0.0; n] }
+    }
+
+    /// The light `u` chooses: its index and probability (0 when nothing can be chosen).
+    #[inline]
+    fn choose(&self, u: f32) -> (usize, f32) {
+        let x = u * self.cdf.last().copied().unwrap_or(0.0);
+        let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len().saturating_sub(1));
+        (i, self.pick.get(i).copied().unwrap_or(0.0))
+    }
+}
+
 /// One row's light subpaths (buffers kept from iteration to iteration).
 #[derive(Default)]
 struct LightRow {
@@ -155,9 +201,11 @@ pub struct Bidir<'t, 'a> {
     mode: Mode,
     camera: Importance,
     sphere: SceneSphere,
-    /// Light choice: each light's probability and their running sum.
-    pick: Vec<f32>,
-    cdf: Vec<f32>,
+    /// Light choice for light samples (by power).
+    lights: Picker,
+    /// Light choice for light subpaths: by power too, among the emissive triangles alone in
+    /// the path-and-light mode (the lights whose caustics the path tracer also finds).
+    emitters: Picker,
     /// Most edges a full path may have.
     max_len: u32,
     /// Light subpaths per iteration (one per pixel where camera paths join their own).
@@ -227,29 +275,19 @@ impl<'t, 'a> Bidir<'t, 'a> {
     fn new(transport: &'t Transport<'a>, accel: &'t dyn Intersector, settings: &Settings, mode: Mode) -> Option<Self> {
         let (w, h) = (settings.image.width, settings.image.height);
         let camera = Importance::new(&transport.camera, w, h)?;
-        let sphere = match transport.scene.bounds() {
-            Some((lo, hi)) => SceneSphere { center: 0.5 * (lo + hi), radius: (0.5 * (hi - lo).length()).max(1e-6) },
-            None => SceneSphere { center: Vec3::ZERO, radius: 1.0 },
-        };
+        let sphere = scene_sphere(transport.scene);
         let powers: Vec<f32> = transport.lights.set.lights.iter().map(|l| l.power(&sphere)).collect();
-        let total: f32 = powers.iter().sum();
-        let n = powers.len().max(1) as f32;
-        let pick: Vec<f32> = powers.iter().map(|&p| if total > 0.0 { p / total } else { 1.0 / n }).collect();
-        let cdf = pick
-            .iter()
-            .scan(0.0, |s, &p| {
-                *s += p;
-                Some(*s)
-            })
-            .collect();
+        let lights = Picker::by_power(&powers);
+        let emitters =
+            if mode == Mode::PathLight { caustics::emitters(&transport.lights.set, &sphere) } else { lights.clone() };
         Some(Bidir {
             transport,
             accel,
             mode,
             camera,
             sphere,
-            pick,
-            cdf,
+            lights,
+            emitters,
             max_len: transport.rules.max_depth + 1,
             light_paths: light_path_count(mode, settings) as f32,
             height: h,
@@ -265,12 +303,10 @@ impl<'t, 'a> Bidir<'t, 'a> {
         self.iter = IterFactors::new(radius, self.light_paths, self.mode.merges());
     }
 
-    /// A light chosen by power with `u`: its index and probability.
+    /// A light for a light sample chosen with `u`: its index and probability.
     #[inline]
     fn pick_light(&self, u: f32) -> (usize, f32) {
-        let x = u * self.cdf.last().copied().unwrap_or(0.0);
-        let i = self.cdf.partition_point(|&c| c <= x).min(self.cdf.len().saturating_sub(1));
-        (i, self.pick.get(i).copied().unwrap_or(0.0))
+        self.lights.choose(u)
     }
 
     fn camera_pos(&self) -> Vec3 {
@@ -293,7 +329,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             return;
         }
         let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS);
-        let (i, pick) = self.pick_light(rng.at(0).next_f32());
+        let (i, pick) = self.emitters.choose(rng.at(0).next_f32());
         if pick <= 0.0 || pick.is_nan() {
             return;
         }
@@ -321,6 +357,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             falloff_free: em.falloff_free,
             after_delta: false,
         };
+        let mut first_delta = false;
         loop {
             st.light_rays += 1;
             let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else { break };
@@ -330,7 +367,10 @@ impl<'t, 'a> Bidir<'t, 'a> {
                 break;
             }
             let sh = self.transport.shading(&v, state.ray.dir);
-            if sh.kind != crate::bsdf::Kind::Delta {
+            // The path-and-light mode traces caustics: light paths whose first vertex is a
+            // delta vertex, joined to the camera at every later vertex that is not one.
+            let caustic = state.len >= 2 && first_delta;
+            if sh.kind != crate::bsdf::Kind::Delta && (caustic || self.mode != Mode::PathLight) {
                 let lv = LightVertex {
                     v,
                     sh,
@@ -355,10 +395,15 @@ impl<'t, 'a> Bidir<'t, 'a> {
             if state.len + 2 > self.max_len {
                 break;
             }
-            let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS + state.len);
-            if !self.scatter(&mut state, &v, &sh, rng, Side::Light) {
+            let caustics_only = self.mode == Mode::PathLight && state.len == 1;
+            if caustics_only && sh.kind == crate::bsdf::Kind::Diffuse {
                 break;
             }
+            let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS + state.len);
+            if !self.scatter(&mut state, &v, &sh, rng, Side::Light) || (caustics_only && !state.after_delta) {
+                break;
+            }
+            first_delta |= state.len == 1 && state.after_delta;
         }
     }
 
@@ -370,7 +415,11 @@ impl<'t, 'a> Bidir<'t, 'a> {
     /// beside an area light) only after a delta bounce, at full weight.
     fn found_light(&self, state: &PathState, ray: &Ray, hit: Option<(&crate::geometry::Hit, &Vertex)>) -> Vec3 {
         let weight = |direct_pdf_a: f32, emission_pdf_w: f32| match self.mode {
-            Mode::PathLight => connect::pl_hit_weight(state.d_vcm, state.d_pl, direct_pdf_a, emission_pdf_w),
+            // Light tracing shares only the paths that reach the light from a delta vertex.
+            Mode::PathLight => {
+                let pl = if state.after_delta { state.d_pl } else { 0.0 };
+                connect::pl_hit_weight(state.d_vcm, pl, direct_pdf_a, emission_pdf_w)
+            }
             _ => connect::hit_weight(state.quantities(), direct_pdf_a, emission_pdf_w),
         };
         let seen = match hit {
@@ -380,19 +429,19 @@ impl<'t, 'a> Bidir<'t, 'a> {
         let emission = hit.map_or(Vec3::ZERO, |(_, v)| v.emission);
         let (mut l, mut area_found, mut owned) = (Vec3::ZERO, false, false);
         for (i, light) in self.transport.lights.set.lights.iter().enumerate() {
-            let pick = self.pick[i];
+            // The light sample's choice of this light, and the light subpath's.
+            let (pick, emit) = (self.lights.pick[i], self.emitters.pick[i]);
             match light {
                 SampledLight::Area { normal, area, .. } => {
                     if let Some((le, _)) = light.radiance_pdf(ray.origin, *normal, ray.dir, seen) {
                         area_found = true;
-                        let a = pick / area;
-                        l += le * weight(a, a * -ray.dir.dot(*normal) * FRAC_1_PI);
+                        l += le * weight(pick / area, emit / area * -ray.dir.dot(*normal) * FRAC_1_PI);
                     }
                 }
                 SampledLight::Emissive(e) if emission != Vec3::ZERO => {
                     if let Some((a, w)) = hit.and_then(|(h, _)| e.emission_pdfs(h.prim, -ray.dir)) {
                         owned = true;
-                        l += emission * weight(pick * a, pick * w);
+                        l += emission * weight(pick * a, emit * w);
                     }
                 }
                 _ => {}
@@ -495,6 +544,75 @@ impl Counts {
         self.extension += o.extension;
         self.shadow += o.shadow;
         self.light_rays += o.light_rays;
+    }
+}
+
+/// path+light's light side beside the wavefront's camera side: the light subpaths of a run
+/// of iterations, their camera connections splatted into one image per iteration.
+pub struct LightPass<'t, 'a> {
+    bidir: Bidir<'t, 'a>,
+    /// Rows of every iteration of a run, iteration-major (kept from run to run).
+    rows: Vec<LightRow>,
+    /// Rows per iteration, and light subpaths per iteration.
+    per: usize,
+    n_light: usize,
+}
+
+/// What a light pass traced.
+#[derive(Clone, Copy, Default)]
+pub struct LightPassCounts {
+    pub trace: TraceCounters,
+    /// Rays from the lights and between light vertices.
+    pub light_rays: u64,
+    /// Connections to the camera.
+    pub shadow: u64,
+}
+
+impl<'t, 'a> LightPass<'t, 'a> {
+    /// The light side of a path+light render of `settings` (whole image); `None` where the
+    /// camera cannot be inverted ([`unsupported`] says why first).
+    pub fn new(transport: &'t Transport<'a>, accel: &'t dyn Intersector, settings: &Settings) -> Option<Self> {
+        let bidir = Bidir::new(transport, accel, settings, Mode::PathLight)?;
+        let n_light = light_path_count(Mode::PathLight, settings);
+        let per = n_light.div_ceil(bidir.width);
+        Some(LightPass { bidir, rows: Vec::new(), per, n_light })
+    }
+
+    /// Traces the light subpaths of iterations `first..first + count` (rows of each in
+    /// parallel) and writes what they splat into `splats`, one image per iteration: each
+    /// image's sums added in row order, the same bits for any thread count, and the same
+    /// light subpaths as the one-path form's.
+    pub fn trace(&mut self, first: u32, count: u32, splats: &mut Vec<Vec3>) -> LightPassCounts {
+        let (w, h) = (self.bidir.width, self.bidir.height);
+        let per = self.per;
+        if self.rows.len() < per * count as usize {
+            self.rows.resize_with(per * count as usize, LightRow::default);
+        }
+        let (b, n_light) = (&self.bidir, self.n_light);
+        let rows = &mut self.rows[..per * count as usize];
+        rows.par_iter_mut().enumerate().for_each(|(k, row)| {
+            let (sample, y) = (first + (k / per) as u32, k % per);
+            row.vertices.clear();
+            row.ends.clear();
+            row.splats.clear();
+            row.counts = Counts::default();
+            for i in y * w..((y + 1) * w).min(n_light) {
+                b.light_path(i as u32, sample, &mut row.vertices, &mut row.splats, &mut row.counts);
+            }
+        });
+        splats.clear();
+        splats.resize(count as usize * w * h, Vec3::ZERO);
+        let mut out = LightPassCounts::default();
+        for (k, row) in rows.iter().enumerate() {
+            let image = &mut splats[(k / per) * w * h..][..w * h];
+            for &(p, c) in &row.splats {
+                image[p as usize] += c;
+            }
+            out.trace.add(&row.counts.trace);
+            out.light_rays += row.counts.light_rays;
+            out.shadow += row.counts.shadow;
+        }
+        out
     }
 }
 

@@ -44,9 +44,9 @@ pub struct PathState {
     pub d_vcm: f32,
     pub d_vc: f32,
     pub d_vm: f32,
-    /// The part of `d_vc` that only the path tracer's strategies and light tracing make
-    /// (light sampling and BSDF hits on the camera side, the camera reached by a light
-    /// vertex): what the path-and-light-tracing mode weighs by, without connections.
+    /// The part of `d_vc` that only the path tracer's BSDF hits and light tracing make: what
+    /// the path-and-light mode weighs the paths they share by (those whose vertex next to the
+    /// light is a delta vertex: caustics).
     pub d_pl: f32,
     /// A light path from a light without a surface at a finite distance (directional): its
     /// first segment has no distance to convert by.

@@ -35,6 +35,7 @@ use crate::cpu::Isa;
 use crate::effects::Effects;
 use crate::film::{Accumulator, AovSums, PixelSums};
 use crate::integrator::Transport;
+use crate::integrator::bidir::LightPass;
 use crate::settings::Settings;
 use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
@@ -157,6 +158,12 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
         None => None,
     };
     let (first, end) = s.sample_span();
+    // path+light: each frame's iterations first trace their light subpaths, whose splats
+    // join the camera paths' samples (a frame then holds as many iterations as its splat
+    // images allow).
+    let mut light = job.transport.caustics.as_ref().and_then(|_| LightPass::new(job.transport, job.accel, s));
+    let splat_batch = (SPLAT_BYTES / (w * s.image.height * std::mem::size_of::<Vec3>()).max(1)).clamp(1, 64) as u32;
+    let mut splats = Vec::new();
     let mut n = first;
     while n < end && !active.is_empty() {
         let check = match adaptive {
@@ -164,15 +171,25 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
             None => end,
         }
         .min(end);
-        let batch = (check - n).min(WAVE_PATHS as u32);
+        let mut batch = (check - n).min(WAVE_PATHS as u32);
+        if let Some(light) = &mut light {
+            batch = batch.min(splat_batch);
+            let clock = Instant::now();
+            let c = light.trace(n, batch, &mut splats);
+            total.counters.add(&c.trace);
+            total.extension += c.light_rays;
+            total.shadow += c.shadow;
+            lap(clock, &mut total.stages.light_paths);
+        }
         let per_wave = (WAVE_PATHS / batch as usize).max(1);
         let waves = wave_windows(&mut acc.pixels, &mut acc.aovs, &active, per_wave);
+        let frame_splats = Splats { images: &splats, pixels: w * s.image.height };
         let frame = workers.run(waves, WaveStats::default, WaveStats::sum, |queues, (pixels, window)| {
             if job.stop.load(Ordering::Relaxed) {
                 return WaveStats::default();
             }
             let wave = Wave { pixels, base: n, batch };
-            let st = run_wave(job, &wave, queues, window);
+            let st = run_wave(job, &wave, queues, window, frame_splats);
             (job.progress)(wave.len() as u64);
             st
         });
@@ -242,14 +259,37 @@ struct Window<'a> {
     aovs: &'a mut [AovSums],
 }
 
+/// Most memory a frame's splat images (path+light) take: at 320x240 a frame of 64
+/// iterations, at 1920x1080 two.
+const SPLAT_BYTES: usize = 64 << 20;
+
+/// A frame's splat images, one per iteration (empty without light subpaths).
+#[derive(Clone, Copy)]
+struct Splats<'a> {
+    images: &'a [Vec3],
+    pixels: usize,
+}
+
+impl Splats<'_> {
+    /// What iteration `k` of the frame splatted onto `pixel`.
+    #[inline]
+    fn at(&self, k: usize, pixel: u32) -> Vec3 {
+        self.images.get(k * self.pixels + pixel as usize).copied().unwrap_or(Vec3::ZERO)
+    }
+}
+
 /// One wave on one thread: generate, then the bounce loop until every path has finished,
-/// then each pixel's samples, summed in slot order, into the image's sums.
-fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> WaveStats {
+/// then each pixel's samples (with what the frame's light subpaths splatted onto them),
+/// summed in slot order, into the image's sums.
+fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window, splats: Splats) -> WaveStats {
     let (t, accel, s) = (&job.transport, job.accel, job.settings);
     let mut st = WaveStats::default();
     let n = wave.len();
     let clock = Instant::now();
-    generate::generate(t, job.lanes.camera, &mut q.paths, wave, s.image.width, s.image.height, s.sampling.spp.max(1));
+    // Light subpaths' importance covers the whole pixel: camera rays are jittered over it
+    // whatever the sample count (a count of 1 would aim at its centre).
+    let spp = if t.caustics.is_some() { s.sampling.spp.max(2) } else { s.sampling.spp.max(1) };
+    generate::generate(t, job.lanes.camera, &mut q.paths, wave, s.image.width, s.image.height, spp);
     st.camera = n as u64;
     let mut clock = lap(clock, &mut st.stages.generate);
     let aovs = !out.aovs.is_empty();
@@ -293,8 +333,10 @@ fn run_wave(job: &RenderJob, wave: &Wave, q: &mut WaveQueues, out: Window) -> Wa
         // The frame's samples of a pixel are summed first and then added to its sums, the
         // same order whatever frame or thread count.
         let mut frame = PixelSums::default();
-        for r in &q.slot_radiance[j * batch..(j + 1) * batch] {
-            frame.add(*r);
+        for (k, r) in q.slot_radiance[j * batch..(j + 1) * batch].iter().enumerate() {
+            // One sample of a path+light pixel: its camera path and what that iteration's
+            // light subpaths splatted onto it.
+            frame.add(if splats.images.is_empty() { *r } else { *r + splats.at(k, pixel) });
         }
         out.sums[(pixel - out.first) as usize].merge(&frame);
         if aovs {

@@ -67,8 +67,14 @@ pub fn arrive_at_hit<const WHOLE: bool>(t: &Transport, q: &mut PathQueue, i: usi
         q.radiance[i] += emission;
     }
     if (t.rules.features.non_diffuse || t.rules.mis) && depth > 0 {
-        let found = t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, emission, depth);
+        let mut found = t.arrival_at_hit(q.bounce[i], &q.ray[i], &hit, emission, depth);
         if found != Vec3::ZERO {
+            if let Some(c) = &t.caustics
+                && q.bounce[i].pdf == f32::INFINITY
+            {
+                // Emission after a delta vertex: a caustic light tracing also draws.
+                found *= c.hit_weight(&t.lights.set, hit.prim, q.ray[i].dir, q.pl[i]);
+            }
             q.radiance[i] += q.throughput[i] * found;
         }
     }

@@ -206,6 +206,9 @@ soa_queue! {
         /// What the vertex that sampled `ray` means for the light the ray finds (read only by
         /// kernels with non-diffuse materials).
         pub bounce: Bounce = start(Bounce::DELTA),
+        /// path+light: light tracing's density of the path so far over the camera's, squared
+        /// ([`CausticTerms`](crate::integrator::bidir::caustics::CausticTerms)); 0 otherwise.
+        pub pl: f32 = start(0.0),
     }
 }
 

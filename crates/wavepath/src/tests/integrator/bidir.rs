@@ -65,6 +65,37 @@ fn bdpt_and_vcm_agree_with_the_path_tracer() {
     }
 }
 
+/// path+light in the wavefront against its one-path reference form (the camera side written
+/// from the recursive MIS quantities, its light samples its own): the same estimator, so the
+/// same image within the noise, on the box with a mirror and a glass sphere under emissive
+/// geometry, where the light subpaths carry the caustics.
+#[test]
+fn path_light_in_the_wavefront_agrees_with_its_reference_form() {
+    let Some(scene) = common::load_scene("obj/CornellBox/CornellBox-Sphere.obj") else { return };
+    let mut s = settings(256, 5);
+    s.execution.integrator = IntegratorKind::PathLight;
+    let accel = bvh(&scene, &s);
+    let plan = crate::integrator::plan::RenderPlan::new(&scene, &s);
+    let mut reference = Accumulator::new(W, H);
+    let mode = crate::integrator::bidir::Mode::PathLight;
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    crate::integrator::bidir::render_bidir_into(
+        plan.transport(),
+        &s,
+        accel.as_ref(),
+        mode,
+        &|_| {},
+        &stop,
+        &mut reference,
+    )
+    .unwrap()
+    .unwrap();
+    let wavefront = sums(IntegratorKind::PathLight, &scene, &s);
+    assert_regions_agree(&wavefront, &reference, REGION, 0.0, "path+light: wavefront vs reference form");
+    let z = image_z(&wavefront, &reference);
+    assert!(z < 5.0, "path+light: wavefront vs reference form over the whole image: z = {z}");
+}
+
 /// The CS184 boxes' emissive quad is the area light turned a quarter (0.8 x 0.6 against
 /// 0.6 x 0.8): the course's path tracer takes light seen through a mirror or glass from the
 /// quad and all other light from the area light; bidirectional transport takes all of it
@@ -272,27 +303,94 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
             }
         }
         assert!((sum - 1.0).abs() < 1e-4, "merging {merging}: the weights add to {sum}");
-        // The path-and-light mode's weights: the power heuristic among light sampling, BSDF
-        // hits and light tracing alone (s = 0, 1, 3), from the same walks' `d_pl`.
+        // The path-and-light mode on this path (it reaches the light from a diffuse vertex,
+        // so light tracing does not share it): BSDF hit against light sample alone.
         if !merging {
-            use crate::integrator::bidir::connect::{pl_camera_weight, pl_hit_weight, pl_light_sample_weight};
-            let restricted = [connections[0], connections[1], connections[3]];
-            let total: f64 = restricted.iter().map(|&q| (q as f64).powi(2)).sum();
+            use crate::integrator::bidir::connect::{pl_hit_weight, pl_light_sample_weight};
+            let shared = [connections[0], connections[1]];
+            let total: f64 = shared.iter().map(|&q| (q as f64).powi(2)).sum();
             let got = [
-                pl_hit_weight(c0.d_vcm, c0.d_pl, pick / area, emission_pdf_w),
-                pl_light_sample_weight(0.0, c1.d_pl, &il, pick, cos(x1, x0, n1), lam(x1, x0, n1), lam(x1, x2, n1)),
-                pl_camera_weight(0.0, l2.d_pl, pc2, light_paths, lam(x2, x1, n2)),
+                // A hit from a diffuse vertex: the camera path passes no light-tracing term.
+                pl_hit_weight(c0.d_vcm, 0.0, pick / area, emission_pdf_w),
+                pl_light_sample_weight(&il, pick, lam(x1, x0, n1)),
             ];
-            for (&q, &w) in restricted.iter().zip(&got) {
+            for (&q, &w) in shared.iter().zip(&got) {
                 let e = (q as f64).powi(2) / total;
                 assert!((w as f64 - e).abs() < 1e-3 * e, "path+light: {w} vs {e} ({got:?})");
             }
-            assert!((got.iter().map(|&w| w as f64).sum::<f64>() - 1.0).abs() < 1e-4, "{got:?}");
         }
         // Every strategy has a weight well above f32's rounding on this path, so the
         // relative comparison above tests each of them.
         assert!(got_connections.iter().all(|&w| w > 1e-4), "{got_connections:?}");
     }
+}
+
+/// path+light's weights on a caustic seen directly (camera -> wall -> mirror -> light): the
+/// camera's BSDF hit on the light against light tracing from the light through the mirror,
+/// the power heuristic of the two explicit path densities (Veach's products; the mirror's
+/// delta density cancels, its area conversions stay), adding to one.
+#[test]
+fn path_light_weights_on_a_caustic_are_the_power_heuristic() {
+    use crate::integrator::bidir::IterFactors;
+    use crate::integrator::bidir::connect::{pl_camera_weight, pl_hit_weight};
+    use crate::integrator::bidir::walk::{PathState, mis};
+    use glam::Vec3;
+    use std::f32::consts::PI;
+
+    let (x2, n2) = (Vec3::new(-1.0, 0.6, 0.4), Vec3::X);
+    let (x1, n1) = (Vec3::new(0.3, 0.0, -0.1), Vec3::Y);
+    // The light where the mirror reflects the ray from x2, on the ceiling (y = 1).
+    let d = (x1 - x2).normalize();
+    let r = d - 2.0 * d.dot(n1) * n1;
+    let (x0, n0) = (x1 + r * (1.0 / r.y), Vec3::NEG_Y);
+    let cam = Vec3::new(0.2, 0.5, 3.0);
+    let (area, pick, light_paths, pixels_per_area) = (0.25f32, 0.7f32, 1000.0f32, 5000.0f32);
+    let cos = |a: Vec3, b: Vec3, n: Vec3| (b - a).normalize().dot(n).abs();
+    let d2 = |a: Vec3, b: Vec3| (b - a).length_squared();
+    let lam = |a: Vec3, b: Vec3, n: Vec3| cos(a, b, n) / PI;
+    let cos_cam = (x2 - cam).normalize().dot(Vec3::NEG_Z);
+    let cam_pdf_w = pixels_per_area / (cos_cam * cos_cam * cos_cam);
+    let pc2 = cam_pdf_w * cos(cam, x2, n2) / d2(cam, x2);
+    let q_hit = pc2 * (lam(x2, x1, n2) * cos(x2, x1, n1) / d2(x1, x2)) * (cos(x1, x0, n0) / d2(x1, x0));
+    let q_lt =
+        light_paths * (pick / area) * (lam(x0, x1, n0) * cos(x0, x1, n1) / d2(x0, x1)) * (cos(x1, x2, n2) / d2(x1, x2));
+
+    let f = IterFactors::new(0.01, light_paths, false);
+    let start = |d_vcm: f32, d_vc: f32| PathState {
+        ray: crate::geometry::Ray::new(Vec3::ZERO, Vec3::Z),
+        throughput: Vec3::ONE,
+        len: 0,
+        d_vcm,
+        d_vc,
+        d_vm: 0.0,
+        d_pl: d_vc,
+        infinite_start: false,
+        falloff_free: false,
+        after_delta: false,
+    };
+    let mut c = start(mis(light_paths / cam_pdf_w), 0.0);
+    c.arrive_at(cos(cam, x2, n2), d2(cam, x2).sqrt());
+    c.leave(cos(x2, x1, n2), lam(x2, x1, n2), lam(x2, cam, n2), false, &f);
+    c.arrive_at(cos(x2, x1, n1), d2(x1, x2).sqrt());
+    c.leave(cos(x1, x0, n1), 1.0, 0.0, true, &f);
+    c.arrive_at(cos(x1, x0, n0), d2(x1, x0).sqrt());
+    let emission_pdf_w = (1.0 / area) * lam(x0, x1, n0) * pick;
+    let mut l = start(mis(pick / area / emission_pdf_w), mis(cos(x0, x1, n0) / emission_pdf_w));
+    l.arrive_at(cos(x0, x1, n1), d2(x0, x1).sqrt());
+    l.leave(cos(x1, x2, n1), 1.0, 0.0, true, &f);
+    l.arrive_at(cos(x1, x2, n2), d2(x1, x2).sqrt());
+
+    let got = [
+        pl_hit_weight(c.d_vcm, c.d_pl, pick / area, emission_pdf_w),
+        pl_camera_weight(l.d_pl, pc2, light_paths, lam(x2, x1, n2)),
+    ];
+    let total = (q_hit as f64).powi(2) + (q_lt as f64).powi(2);
+    for (&q, &w) in [q_hit, q_lt].iter().zip(&got) {
+        let e = (q as f64).powi(2) / total;
+        assert!((w as f64 - e).abs() < 1e-3 * e, "{w} vs {e} ({got:?})");
+    }
+    // Both strategies matter on this path: the comparison tests each.
+    assert!(got.iter().all(|&w| w > 1e-3), "{got:?}");
 }
 
 /// `--light-paths` out of range is refused in one line naming the option.

@@ -21,6 +21,7 @@ use super::soa::{Emitters, LightPoints, Points, Rays, area_rays, get, put, unuse
 use crate::bsdf::to_local;
 use crate::geometry::Ray;
 use crate::geometry::offset::offset_origin;
+use crate::integrator::bidir::caustics::CausticTerms;
 use crate::integrator::light_ray::LightPoint;
 use crate::integrator::wavefront::one_path;
 use crate::integrator::wavefront::queues::{PathQueue, ShadowQueue, ShadowSlots};
@@ -440,10 +441,20 @@ fn continuation<M: LaneModel, N: LaneNumbers<L>, const L: usize>(
     let mut weight = [[0.0f32; L]; 3];
     let mut bounce_n = [[0.0f32; L]; 3];
     let mut bounce_pdf = [0.0f32; L];
+    let caustics = t.caustics.as_ref();
+    // path+light's terms: the cosines at the vertex, the sample's densities both ways.
+    let (mut cos_in, mut cos_out, mut pdf, mut pdf_rev, mut delta) =
+        ([0.0f32; L], [0.0f32; L], [0.0f32; L], [0.0f32; L], [false; L]);
     for j in 0..L {
         let l = g.lane(j);
         let (s, ok) = l.model.sample_at(l.wo, [ua[j], ub[j], uc[j]], get(&calls, j).to_array());
         let wi = l.frame.to_world(s.wi);
+        if caustics.is_some() {
+            cos_in[j] = get(&g.dir, j).dot(l.ng).abs();
+            cos_out[j] = wi.dot(l.ng).abs();
+            delta[j] = M::DELTA || s.delta;
+            (pdf[j], pdf_rev[j]) = if delta[j] { (s.pdf, 0.0) } else { M::densities(&l, &s) };
+        }
         let origin = offset_origin(l.p, l.p_error, l.ng, wi);
         rays.set(j, &Ray { origin, dir: wi, tmin: 0.0, tmax: f32::INFINITY });
         put(&mut weight, j, s.weight);
@@ -455,6 +466,14 @@ fn continuation<M: LaneModel, N: LaneNumbers<L>, const L: usize>(
     for j in 0..g.n {
         if !rays.valid[j] {
             continue;
+        }
+        if let Some(c) = caustics {
+            let i = g.path[j];
+            q.pl[i] = match q.hit[i] {
+                _ if g.depth[j] > 0 => CausticTerms::next(q.pl[i], cos_in[j], cos_out[j], delta[j], pdf[j], pdf_rev[j]),
+                Some(h) if !delta[j] => c.first(get(&g.dir, j), h.t, cos_in[j], cos_out[j], pdf[j]),
+                _ => 0.0,
+            };
         }
         let bounce = crate::integrator::Bounce { n: get(&bounce_n, j), pdf: bounce_pdf[j] };
         one_path::go_on(t, q, g.path[j], g.depth[j], rays.ray(j), get(&weight, j), bounce, || rr[j]);

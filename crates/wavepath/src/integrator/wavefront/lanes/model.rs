@@ -196,6 +196,13 @@ pub trait LaneModel: Copy {
         (f * (local.z / (warp::UNIFORM_HEMISPHERE_PDF * n as f32)), f != Vec3::ZERO)
     }
 
+    /// The continuation `s`'s solid-angle density and the reverse's (of the arriving
+    /// direction, sampled from `s.wi`), as path+light weighs caustics by them.
+    #[inline(always)]
+    fn densities(l: &Lane<Self>, s: &BsdfSample) -> (f32, f32) {
+        (s.pdf, l.model.eval_pdf(s.wi, l.wo).1)
+    }
+
     /// What the light the continuation `s` (along `wi`, world) finds means.
     #[inline(always)]
     fn bounce(l: &Lane<Self>, s: &BsdfSample, _wi: Vec3, mis: bool) -> Bounce {
@@ -295,6 +302,12 @@ impl LaneModel for Lambert {
     #[inline(always)]
     fn probe(l: &Lane<Self>, local: Vec3, n: u32) -> (Vec3, bool) {
         (l.model.albedo * FRAC_1_PI / (warp::UNIFORM_HEMISPHERE_PDF * n as f32) * local.z, true)
+    }
+
+    #[inline(always)]
+    fn densities(l: &Lane<Self>, s: &BsdfSample) -> (f32, f32) {
+        // Cosine-weighted both ways (the lane's sample leaves its density out).
+        (s.wi.z.abs() * FRAC_1_PI, l.wo.z.abs() * FRAC_1_PI)
     }
 
     #[inline(always)]
