@@ -72,7 +72,9 @@ fn bdpt_and_vcm_agree_with_the_path_tracer() {
 #[test]
 fn path_light_in_the_wavefront_agrees_with_its_reference_form() {
     let Some(scene) = common::load_scene("obj/CornellBox/CornellBox-Sphere.obj") else { return };
-    let mut s = settings(256, 5);
+    // Enough samples that a caustic counted by both sides (5-9% of this image) fails the
+    // whole-image test (z about 9).
+    let mut s = settings(2048, 5);
     s.execution.integrator = IntegratorKind::PathLight;
     let accel = bvh(&scene, &s);
     let plan = crate::integrator::plan::RenderPlan::new(&scene, &s);
