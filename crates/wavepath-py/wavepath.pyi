@@ -117,7 +117,7 @@ class Scene:
         seed: Optional[int] = None,
         adaptive: Optional[Tuple[int, float]] = None,
         shading: Optional[Literal["normals", "direct", "global"]] = None,
-        integrator: Optional[Literal["wavefront", "path", "recursive", "light", "bdpt", "vcm"]] = None,
+        integrator: Optional[Literal["auto", "wavefront", "path", "recursive", "light", "bdpt", "vcm", "path+light"]] = None,
         hemisphere: Optional[bool] = None,
         mis: Optional[bool] = None,
         roulette: Optional[Literal["fixed", "throughput"]] = None,

@@ -216,7 +216,7 @@ pub struct RenderArgs {
     #[arg(long, value_parser = named::<Tonemap>(), default_value = "cs184")]
     pub tonemap: Tonemap,
     /// Light-transport implementation.
-    #[arg(long, value_parser = named::<IntegratorKind>(), default_value = "wavefront")]
+    #[arg(long, value_parser = named::<IntegratorKind>(), default_value = "auto")]
     pub integrator: IntegratorKind,
     /// COLLADA camera framing: cs184 (the reference renderer's placement) or the file's camera.
     #[arg(long, value_parser = named::<CameraMode>(), default_value = "cs184")]

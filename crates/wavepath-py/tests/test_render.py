@@ -54,6 +54,17 @@ def test_options_match_their_flags(cli, tmp_path, scenes, kwargs, flags):
     assert np.array_equal(image, expected)
 
 
+def test_auto_chooses_path_light_for_caustics(cli, tmp_path, scenes):
+    # Mirror and glass spheres under emissive triangles: the default (auto) traces light paths
+    # for the caustics, as the command line does, and says so in the stats.
+    path = scenes / "obj" / "CornellBox" / "CornellBox-Sphere.obj"
+    image, stats = wavepath.load(path).render(resolution=(40, 30), spp=2, max_depth=5, seed=3)
+    assert stats["integrator"]["name"] == "path+light"
+    assert "light_paths" in stats["stages"]
+    expected = cli_render(cli, tmp_path, [path], ["-r", 40, 30, "-s", 2, "-m", 5, "--seed", 3])
+    assert np.array_equal(image, expected)
+
+
 def test_mesh_file_matches_command_line(cli, tmp_path, scenes):
     # A standard-dialect file (OBJ: Sobol, throughput roulette) lit by the default sky.
     path = scenes / "meshes" / "suzanne.obj"

@@ -67,6 +67,8 @@ pub struct Effects {
     pub forced: bool,
     /// Which light transport runs and why (the log's "Integrator" line).
     pub integrator: Effect,
+    /// That light transport: the settings' own, or the rule's choice for `auto`.
+    pub integrator_kind: crate::settings::IntegratorKind,
     /// The effects that are on, in a fixed order, with their reasons.
     pub on: Vec<Effect>,
 }
@@ -96,6 +98,12 @@ struct Facts<'a> {
     pbr: usize,
     /// Phong materials (MTL `illum 2` with `Ks`, COLLADA `<phong>`/`<blinn>`).
     phong: usize,
+    /// Materials with delta lobes only (smooth mirrors and glass).
+    delta: usize,
+    /// An area light stands in for the emissive triangles (CS184): those are no light.
+    area_lights: bool,
+    /// Some material absorbs light inside its volume.
+    volumes: bool,
 }
 
 impl<'a> Facts<'a> {
@@ -137,6 +145,14 @@ impl<'a> Facts<'a> {
             metals: material_count(&["microfacet"]),
             pbr: material_count(&["metallic-roughness", "specular-glossiness"]),
             phong: material_count(&["phong"]),
+            // Mirrors and glass are delta models unless glTF layers make them layered ones.
+            delta: scene
+                .materials
+                .iter()
+                .filter(|m| m.layers.is_none() && ["mirror", "glass", "refraction"].contains(&m.bsdf.kind()))
+                .count(),
+            area_lights: scene.lights.iter().any(|l| matches!(l, Light::Area { .. })),
+            volumes: scene.materials.iter().any(|m| m.layers.as_ref().is_some_and(|l| l.sigma_a() != glam::Vec3::ZERO)),
         }
     }
 
@@ -356,36 +372,77 @@ fn mis_reason(f: &Facts) -> Option<String> {
     Some(format!("{what}: light and BSDF samples combined at diffuse surfaces (--no-mis: light sampling alone)"))
 }
 
-/// The light transport the render runs, and the reason: what `--integrator` asks for, and
-/// for the path tracer whether the scene has caustic paths (light from a small emitter
-/// through a mirror, glass or glossy surface onto a diffuse one), which light tracing finds
-/// far better per sample. `path+light` is not chosen for them yet: it runs one path at a
-/// time, and a cell (the viewer's bands, tile splits) traces every light path of the image
-/// (docs/decisions.md, "Bidirectional transport").
-fn integrator_choice(f: &Facts) -> Effect {
+/// The light transport the render runs, and the reason: what `--integrator` asks for, or
+/// for `auto` the scene's rule. path+light is chosen where the scene has caustics light
+/// tracing draws: smooth mirrors or glass that carry light from emissive triangles onto
+/// diffuse surfaces, whose paths a path tracer finds only when a bounce happens to hit the
+/// emitter through them. Everything path+light refuses (a lens, adaptive sampling, light from
+/// infinity, absorbing volumes, the last bounce alone) keeps the path tracer, as do scenes
+/// without such caustics (docs/decisions.md, "Bidirectional transport").
+fn integrator_choice(f: &Facts) -> (crate::settings::IntegratorKind, Effect) {
     use crate::settings::IntegratorKind as K;
     let kind = f.settings.execution.integrator;
-    let specular = f.mirrors + f.glasses + f.metals + f.pbr + f.phong;
-    let small_lights = f.scene.lights.iter().any(|l| l.kind() != "hemisphere") || f.emissive_triangles > 0;
     let reason = match kind {
-        K::Wavefront if f.lit && specular > 0 && small_lights => format!(
-            "path tracer: {specular} mirror, glass or glossy material(s) can carry light from small emitters onto \
-             diffuse surfaces (caustics); --integrator path+light adds light tracing for them (1.3x the path \
-             tracer at equal error on the harness's spheres-box)"
-        ),
-        K::Wavefront => {
-            "path tracer: no caustic paths (no mirror, glass or glossy surface lit by a small emitter)".into()
-        }
+        K::Auto => return auto_choice(f),
+        K::Wavefront => "--integrator path: the path tracer".into(),
         K::Recursive => "--integrator recursive: the path tracer's single-ray reference".into(),
         K::Light => "--integrator light: light tracing alone (surfaces seen through mirrors or glass stay dark)".into(),
         K::Bdpt => "--integrator bdpt: camera and light subpaths joined by every connection, weighted by MIS".into(),
         K::Vcm => "--integrator vcm: bdpt plus merging with nearby light vertices, weighted by MIS".into(),
         K::PathLight => {
-            "--integrator path+light: the path tracer's strategies plus light tracing, weighted by MIS".into()
+            "--integrator path+light: the path tracer plus light tracing of caustics, weighted by MIS".into()
         }
     };
     let name = if kind == K::Wavefront { "path" } else { kind.name() };
-    Effect { name, reason }
+    (kind, Effect { name, reason })
+}
+
+/// [`integrator_choice`] for `auto`.
+fn auto_choice(f: &Facts) -> (crate::settings::IntegratorKind, Effect) {
+    use crate::settings::IntegratorKind as K;
+    let emitters = if f.area_lights { 0 } else { f.emissive_triangles };
+    let path = |reason: String| (K::Wavefront, Effect { name: "path", reason });
+    if f.delta == 0 || emitters == 0 {
+        return path(
+            "path tracer: no caustics for light tracing (no smooth mirror or glass lit by emissive triangles)".into(),
+        );
+    }
+    if !f.global_to(2) {
+        return path(format!(
+            "path tracer: light reaches no caustic at this depth (-m {}; a caustic needs 2 bounces)",
+            f.depth
+        ));
+    }
+    let s = f.settings;
+    let environment = f.environment.is_some() || f.scene.lights.iter().any(|l| matches!(l, Light::Hemisphere { .. }));
+    let blocker = if f.camera.lens_radius > 0.0 || f.camera.orthographic {
+        Some("the camera has a lens or is orthographic")
+    } else if s.sampling.adaptive.is_some() {
+        Some("adaptive sampling measures each pixel by its own samples")
+    } else if environment {
+        Some("light from infinity starts no light subpath yet")
+    } else if f.volumes {
+        Some("light subpaths do not cross absorbing volumes yet")
+    } else if !s.paths.accumulate {
+        Some("the last bounce alone (-o 0) is the path tracer's")
+    } else {
+        None
+    };
+    let what =
+        format!("{} smooth mirror or glass material(s) carry light from {emitters} emissive triangle(s)", f.delta);
+    match blocker {
+        Some(why) => path(format!("path tracer: {what} (caustics), but {why}; path+light is not chosen")),
+        None => (
+            K::PathLight,
+            Effect {
+                name: "path+light",
+                reason: format!(
+                    "{what}: light tracing draws the caustics, the path tracer everything else \
+                     (3.6x the path tracer at equal error on the harness's spheres-box; --integrator path forces it)"
+                ),
+            },
+        ),
+    }
 }
 
 impl Effects {
@@ -408,7 +465,7 @@ impl Effects {
             e.mis = true;
             e.on.push(Effect { name: "mis", reason });
         }
-        e.integrator = integrator_choice(&facts);
+        (e.integrator_kind, e.integrator) = integrator_choice(&facts);
         e
     }
 

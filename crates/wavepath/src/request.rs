@@ -295,7 +295,12 @@ impl Request {
             }
             s.image.cell = Some(cell);
         }
-        if s.image.aovs.traced() && s.execution.integrator != IntegratorKind::Wavefront {
+        if s.image.aovs.traced()
+            && !matches!(
+                s.execution.integrator,
+                IntegratorKind::Auto | IntegratorKind::Wavefront | IntegratorKind::PathLight
+            )
+        {
             return Err(InvalidValue(format!(
                 "the output variables {} need the wavefront integrator: {} records no first hits",
                 s.image.aovs,

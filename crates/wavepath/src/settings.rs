@@ -34,8 +34,12 @@ impl Shading {
 /// Which light-transport implementation runs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum IntegratorKind {
-    /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
+    /// The scene's choice ([`Effects`](crate::effects::Effects)' integrator rule): the path
+    /// tracer, or path+light where the scene has caustics it can trace. Resolved when a
+    /// render's plan is made; a plan's settings never hold it.
     #[default]
+    Auto,
+    /// Structure-of-arrays queues through generate, traverse, shade, shadow, compact.
     Wavefront,
     /// The simple recursive single-ray reference.
     Recursive,
@@ -50,6 +54,7 @@ pub enum IntegratorKind {
 }
 
 crate::choice::named!(IntegratorKind, "integrator", {
+    Auto => "auto", "the scene's choice: path+light where mirrors or glass carry light from emissive triangles (caustics), the path tracer otherwise";
     Wavefront => "wavefront" | "path", "the path tracer: structure-of-arrays queues through generate, traverse, shade, shadow, compact";
     Recursive => "recursive", "the path tracer's simple recursive single-ray reference";
     Light => "light", "light tracing alone: paths from the lights splatted onto the film (a reference for caustics)";

@@ -50,6 +50,8 @@ impl<'s> RenderPlan<'s> {
         settings.image.cell = None;
         settings.sampling.sample_range = None;
         let effects = Effects::of(scene, &settings);
+        // `--integrator auto` becomes the kind the scene's rule chose.
+        settings.execution.integrator = effects.integrator_kind;
         let transport = Transport::new(scene, &settings, &effects);
         let lanes = Lanes::of(&transport, settings.execution.isa);
         RenderPlan { settings, effects, transport, lanes }

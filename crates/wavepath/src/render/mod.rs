@@ -226,7 +226,7 @@ impl Canvas {
             anyhow::bail!("this canvas keeps no first-hit sums for the output variables {}", settings.image.aovs);
         }
         let done = match settings.execution.integrator {
-            IntegratorKind::Wavefront | IntegratorKind::PathLight => {
+            IntegratorKind::Auto | IntegratorKind::Wavefront | IntegratorKind::PathLight => {
                 if settings.execution.integrator == IntegratorKind::PathLight {
                     if let Some(why) = crate::integrator::bidir::unsupported(plan.transport(), settings) {
                         anyhow::bail!(why);

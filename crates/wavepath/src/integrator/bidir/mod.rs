@@ -68,7 +68,7 @@ impl Mode {
     pub fn of(kind: crate::settings::IntegratorKind) -> Option<Mode> {
         use crate::settings::IntegratorKind as K;
         match kind {
-            K::Wavefront | K::Recursive => None,
+            K::Auto | K::Wavefront | K::Recursive => None,
             K::Light => Some(Mode::Light),
             K::Bdpt => Some(Mode::Bdpt),
             K::Vcm => Some(Mode::Vcm),

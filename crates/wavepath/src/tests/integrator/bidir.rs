@@ -407,3 +407,34 @@ fn light_paths_out_of_range_is_refused() {
         assert!(msg.starts_with("--light-paths (light subpaths per pixel and sample)"), "{msg}");
     }
 }
+
+/// `--integrator auto` (the default): path+light where smooth mirrors or glass carry light
+/// from emissive triangles, the path tracer for scenes without such caustics (a diffuse box,
+/// the CS184 boxes whose light is an area light), below two bounces, and where path+light
+/// cannot run (adaptive sampling); a render plan holds the kind chosen.
+#[test]
+fn auto_chooses_path_light_for_caustics_from_emissive_triangles() {
+    use crate::integrator::plan::RenderPlan;
+    let cases = [
+        ("obj/CornellBox/CornellBox-Sphere.obj", 5, false, IntegratorKind::PathLight),
+        ("obj/CornellBox/CornellBox-Sphere.obj", 1, false, IntegratorKind::Wavefront),
+        ("obj/CornellBox/CornellBox-Sphere.obj", 5, true, IntegratorKind::Wavefront),
+        ("obj/CornellBox/CornellBox-Original.obj", 5, false, IntegratorKind::Wavefront),
+        ("cs184/sky/CBspheres.dae", 5, false, IntegratorKind::Wavefront),
+    ];
+    for (file, depth, adaptive, expect) in cases {
+        let Some(scene) = common::load_scene(file) else { return };
+        let mut s = settings(4, depth);
+        assert_eq!(s.execution.integrator, IntegratorKind::Auto, "auto is the default");
+        if adaptive {
+            s.sampling.adaptive = Some((8, 0.05));
+        }
+        let plan = RenderPlan::new(&scene, &s);
+        let e = plan.effects();
+        assert_eq!(e.integrator_kind, expect, "{file} -m {depth} adaptive {adaptive}: {}", e.integrator.reason);
+        assert_eq!(plan.settings().execution.integrator, expect, "{file}: the plan holds the choice");
+        if adaptive {
+            assert!(e.integrator.reason.contains("adaptive"), "{}", e.integrator.reason);
+        }
+    }
+}
