@@ -168,6 +168,10 @@ struct LightRow {
     /// (pixel, value) of the row's light paths' camera connections.
     splats: Vec<(u32, Vec3)>,
     counts: Counts,
+    /// The batched light pass's paths in flight.
+    batch: LightBatch,
+    /// Thread-seconds this row's light subpaths took.
+    seconds: f64,
 }
 
 /// One iteration's light subpaths, by row, and for merging their vertices in one list.
@@ -324,19 +328,80 @@ impl<'t, 'a> Bidir<'t, 'a> {
         splats: &mut Vec<(u32, Vec3)>,
         st: &mut Counts,
     ) {
+        let Some(mut state) = self.start_light_path(pixel, sample) else { return };
+        let mut first_delta = false;
+        loop {
+            st.light_rays += 1;
+            let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else { break };
+            let at = At { pixel, sample, hit };
+            if !self.light_vertex(&mut state, &mut first_delta, at, out, splats, st) {
+                break;
+            }
+        }
+    }
+
+    /// path+light's light subpaths `paths` of iteration `sample` as a small wavefront: all
+    /// their rays of one bounce traced together through the intersector's batch interface,
+    /// the paths whose first hit scatters diffusely (most of them: light tracing draws only
+    /// the caustics) ended at their hit's material, before any vertex is made. The same paths,
+    /// vertices and splats as [`light_path`](Self::light_path), the splats of a bounce after
+    /// those of the one before.
+    fn caustic_paths(
+        &self,
+        paths: std::ops::Range<usize>,
+        sample: u32,
+        batch: &mut LightBatch,
+        splats: &mut Vec<(u32, Vec3)>,
+        st: &mut Counts,
+    ) {
+        batch.clear();
+        for pixel in paths {
+            if let Some(state) = self.start_light_path(pixel as u32, sample) {
+                batch.states.push((state, pixel as u32, false));
+            }
+        }
+        let materials = &self.transport.materials;
+        while !batch.states.is_empty() {
+            batch.rays.clear();
+            batch.rays.extend(batch.states.iter().map(|(s, _, _)| s.ray));
+            batch.hits.resize(batch.rays.len(), None);
+            self.accel.closest_hits(&batch.rays, &mut batch.hits, &mut st.trace);
+            st.light_rays += batch.rays.len() as u64;
+            let mut keep = 0;
+            for k in 0..batch.states.len() {
+                let Some(hit) = batch.hits[k] else { continue };
+                let (mut state, pixel, mut first_delta) = batch.states[k];
+                if state.len == 0
+                    && materials.models[materials.material_of(hit.prim)].kind() == crate::bsdf::Kind::Diffuse
+                {
+                    continue;
+                }
+                let at = At { pixel, sample, hit };
+                if self.light_vertex(&mut state, &mut first_delta, at, &mut Vec::new(), splats, st) {
+                    batch.states[keep] = (state, pixel, first_delta);
+                    keep += 1;
+                }
+            }
+            batch.states.truncate(keep);
+        }
+    }
+
+    /// The start of light subpath `pixel` of iteration `sample`: a light chosen by power, a
+    /// point and direction on it; `None` where it emits nothing that way.
+    fn start_light_path(&self, pixel: u32, sample: u32) -> Option<PathState> {
         let lights = &self.transport.lights.set.lights;
         if lights.is_empty() {
-            return;
+            return None;
         }
         let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS);
         let (i, pick) = self.emitters.choose(rng.at(0).next_f32());
         if pick <= 0.0 || pick.is_nan() {
-            return;
+            return None;
         }
         let (a, b) = rng.at(1).next_2d();
         let (c, d) = rng.at(2).next_2d();
         let e = rng.at(3).next_f32();
-        let Some(em) = lights[i].emit([a, b, c, d, e], &self.sphere) else { return };
+        let em = lights[i].emit([a, b, c, d, e], &self.sphere)?;
         let emission_pdf_w = em.pdf_pos * em.pdf_dir * pick;
         let direct_pdf_a = em.pdf_pos * pick;
         let d_vc = if em.delta_pos || em.delta_dir { 0.0 } else { mis(em.cos / emission_pdf_w) };
@@ -345,7 +410,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
         } else {
             offset_origin(em.pos, em.pos_error, em.normal, em.dir)
         };
-        let mut state = PathState {
+        Some(PathState {
             ray: Ray { origin, dir: em.dir, tmin: 0.0, tmax: f32::INFINITY },
             throughput: em.weight / pick,
             len: 0,
@@ -356,55 +421,65 @@ impl<'t, 'a> Bidir<'t, 'a> {
             infinite_start: em.delta_dir,
             falloff_free: em.falloff_free,
             after_delta: false,
-        };
-        let mut first_delta = false;
-        loop {
-            st.light_rays += 1;
-            let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else { break };
-            let v = self.transport.vertex(&state.ray, &hit);
-            state.arrive(&v, hit.t);
-            if !state.throughput.is_finite() {
-                break;
-            }
-            let sh = self.transport.shading(&v, state.ray.dir);
-            // The path-and-light mode traces caustics: light paths whose first vertex is a
-            // delta vertex, joined to the camera at every later vertex that is not one.
-            let caustic = state.len >= 2 && first_delta;
-            if sh.kind != crate::bsdf::Kind::Delta && (caustic || self.mode != Mode::PathLight) {
-                let lv = LightVertex {
-                    v,
-                    sh,
-                    wo: -state.ray.dir,
-                    throughput: state.throughput,
-                    len: state.len,
-                    d_vcm: state.d_vcm,
-                    d_vc: state.d_vc,
-                    d_vm: state.d_vm,
-                    d_pl: state.d_pl,
-                };
-                if state.len < self.max_len {
-                    st.shadow += 1;
-                    if let Some((p, c)) = self.connect_to_camera(&lv, &mut st.trace) {
-                        splats.push((p as u32, c));
-                    }
-                }
-                if self.mode.connects() {
-                    out.push(lv);
-                }
-            }
-            if state.len + 2 > self.max_len {
-                break;
-            }
-            let caustics_only = self.mode == Mode::PathLight && state.len == 1;
-            if caustics_only && sh.kind == crate::bsdf::Kind::Diffuse {
-                break;
-            }
-            let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS + state.len);
-            if !self.scatter(&mut state, &v, &sh, rng, Side::Light) || (caustics_only && !state.after_delta) {
-                break;
-            }
-            first_delta |= state.len == 1 && state.after_delta;
+        })
+    }
+
+    /// A light subpath arrives at its hit `at`: the vertex kept (`out`) and joined to the
+    /// camera (`splats`) as the mode asks, then the next direction; `false` ends the subpath.
+    /// `first_delta`: its first vertex scattered by a delta lobe (path+light's caustics).
+    fn light_vertex(
+        &self,
+        state: &mut PathState,
+        first_delta: &mut bool,
+        at: At,
+        out: &mut Vec<LightVertex>,
+        splats: &mut Vec<(u32, Vec3)>,
+        st: &mut Counts,
+    ) -> bool {
+        let v = self.transport.vertex(&state.ray, &at.hit);
+        state.arrive(&v, at.hit.t);
+        if !state.throughput.is_finite() {
+            return false;
         }
+        let sh = self.transport.shading(&v, state.ray.dir);
+        // The path-and-light mode traces caustics: light paths whose first vertex is a
+        // delta vertex, joined to the camera at every later vertex that is not one.
+        let caustic = state.len >= 2 && *first_delta;
+        if sh.kind != crate::bsdf::Kind::Delta && (caustic || self.mode != Mode::PathLight) {
+            let lv = LightVertex {
+                v,
+                sh,
+                wo: -state.ray.dir,
+                throughput: state.throughput,
+                len: state.len,
+                d_vcm: state.d_vcm,
+                d_vc: state.d_vc,
+                d_vm: state.d_vm,
+                d_pl: state.d_pl,
+            };
+            if state.len < self.max_len {
+                st.shadow += 1;
+                if let Some((p, c)) = self.connect_to_camera(&lv, &mut st.trace) {
+                    splats.push((p as u32, c));
+                }
+            }
+            if self.mode.connects() {
+                out.push(lv);
+            }
+        }
+        if state.len + 2 > self.max_len {
+            return false;
+        }
+        let caustics_only = self.mode == Mode::PathLight && state.len == 1;
+        if caustics_only && sh.kind == crate::bsdf::Kind::Diffuse {
+            return false;
+        }
+        let rng = self.transport.streams.sampler(at.pixel, at.sample, LIGHT_STREAMS + state.len);
+        if !self.scatter(state, &v, &sh, rng, Side::Light) || (caustics_only && !state.after_delta) {
+            return false;
+        }
+        *first_delta |= state.len == 1 && state.after_delta;
+        true
     }
 
     /// The light a camera subpath's segment `ray` (reaching `hit` at vertex `v`, or nothing)
@@ -528,6 +603,32 @@ impl<'t, 'a> Bidir<'t, 'a> {
     }
 }
 
+/// Where a light subpath's ray landed: the subpath (its index and iteration) and the hit.
+#[derive(Clone, Copy)]
+struct At {
+    pixel: u32,
+    sample: u32,
+    hit: crate::geometry::Hit,
+}
+
+/// The light subpaths of a batched light pass in flight (buffers kept from batch to batch):
+/// each one's state, index and whether its first vertex was a delta vertex; their rays and
+/// hits of one bounce.
+#[derive(Default)]
+struct LightBatch {
+    states: Vec<(PathState, u32, bool)>,
+    rays: Vec<Ray>,
+    hits: Vec<Option<crate::geometry::Hit>>,
+}
+
+impl LightBatch {
+    fn clear(&mut self) {
+        self.states.clear();
+        self.rays.clear();
+        self.hits.clear();
+    }
+}
+
 #[derive(Clone, Copy, Default)]
 struct Counts {
     trace: TraceCounters,
@@ -566,6 +667,8 @@ pub struct LightPassCounts {
     pub light_rays: u64,
     /// Connections to the camera.
     pub shadow: u64,
+    /// Thread-seconds the light subpaths took (summed over the rows, as the wavefront's stages).
+    pub seconds: f64,
 }
 
 impl<'t, 'a> LightPass<'t, 'a> {
@@ -596,9 +699,15 @@ impl<'t, 'a> LightPass<'t, 'a> {
             row.ends.clear();
             row.splats.clear();
             row.counts = Counts::default();
-            for i in y * w..((y + 1) * w).min(n_light) {
-                b.light_path(i as u32, sample, &mut row.vertices, &mut row.splats, &mut row.counts);
-            }
+            let clock = Instant::now();
+            b.caustic_paths(
+                y * w..((y + 1) * w).min(n_light),
+                sample,
+                &mut row.batch,
+                &mut row.splats,
+                &mut row.counts,
+            );
+            row.seconds = clock.elapsed().as_secs_f64();
         });
         splats.clear();
         splats.resize(count as usize * w * h, Vec3::ZERO);
@@ -611,6 +720,7 @@ impl<'t, 'a> LightPass<'t, 'a> {
             out.trace.add(&row.counts.trace);
             out.light_rays += row.counts.light_rays;
             out.shadow += row.counts.shadow;
+            out.seconds += row.seconds;
         }
         out
     }

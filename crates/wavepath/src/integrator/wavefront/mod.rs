@@ -174,12 +174,11 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
         let mut batch = (check - n).min(WAVE_PATHS as u32);
         if let Some(light) = &mut light {
             batch = batch.min(splat_batch);
-            let clock = Instant::now();
             let c = light.trace(n, batch, &mut splats);
             total.counters.add(&c.trace);
             total.extension += c.light_rays;
             total.shadow += c.shadow;
-            lap(clock, &mut total.stages.light_paths);
+            total.stages.light_paths = Some(total.stages.light_paths.unwrap_or(0.0) + c.seconds);
         }
         let per_wave = (WAVE_PATHS / batch as usize).max(1);
         let waves = wave_windows(&mut acc.pixels, &mut acc.aovs, &active, per_wave);
