@@ -234,8 +234,8 @@ fn light_path_count(mode: Mode, settings: &Settings) -> usize {
 }
 
 /// `path+light`'s light subpaths per pixel and sample: on the harness's `spheres-box` a
-/// quarter keeps the error of one per pixel (relative RMSE 0.0089 vs 0.0085 at 64 spp) at a
-/// quarter of light tracing's time (docs/decisions.md, "Bidirectional transport").
+/// quarter gives the least error for the time among 1/8, 1/4 and 1/2 (docs/decisions.md,
+/// "path+light: light tracing for caustics only").
 const PATH_LIGHT_SHARE: f32 = 0.25;
 
 /// Why bidirectional transport cannot render `transport`'s scene under `settings`, in one
