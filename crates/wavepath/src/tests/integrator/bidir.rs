@@ -199,7 +199,7 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
     use crate::integrator::bidir::connect::{
         camera_weight, connection_weight, hit_weight, light_sample_weight, merge_weight,
     };
-    use crate::integrator::bidir::walk::{PathState, mis};
+    use crate::integrator::bidir::walk::mis;
     use crate::lights::emission::Illumination;
     use glam::Vec3;
     use std::f32::consts::PI;
@@ -229,18 +229,7 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
 
     for merging in [false, true] {
         let f = IterFactors::new(radius, light_paths, merging);
-        let start = |d_vcm: f32, d_vc: f32| PathState {
-            ray: crate::geometry::Ray::new(Vec3::ZERO, Vec3::Z),
-            throughput: Vec3::ONE,
-            len: 0,
-            d_vcm,
-            d_vc,
-            d_vm: d_vc * f.mis_vc,
-            d_pl: d_vc,
-            infinite_start: false,
-            falloff_free: false,
-            after_delta: false,
-        };
+        let start = |d_vcm: f32, d_vc: f32| subpath_start(d_vcm, d_vc, &f);
         // The camera subpath at x2, then at x1, then at the light.
         let mut c2 = start(mis(light_paths / cam_pdf_w), 0.0);
         c2.arrive_at(cos(cam, x2, n2), d2(cam, x2).sqrt());
@@ -335,7 +324,7 @@ fn mis_weights_are_the_power_heuristic_and_add_to_one() {
 fn path_light_weights_on_a_caustic_are_the_power_heuristic() {
     use crate::integrator::bidir::IterFactors;
     use crate::integrator::bidir::connect::{pl_camera_weight, pl_hit_weight};
-    use crate::integrator::bidir::walk::{PathState, mis};
+    use crate::integrator::bidir::walk::mis;
     use glam::Vec3;
     use std::f32::consts::PI;
 
@@ -358,18 +347,7 @@ fn path_light_weights_on_a_caustic_are_the_power_heuristic() {
         light_paths * (pick / area) * (lam(x0, x1, n0) * cos(x0, x1, n1) / d2(x0, x1)) * (cos(x1, x2, n2) / d2(x1, x2));
 
     let f = IterFactors::new(0.01, light_paths, false);
-    let start = |d_vcm: f32, d_vc: f32| PathState {
-        ray: crate::geometry::Ray::new(Vec3::ZERO, Vec3::Z),
-        throughput: Vec3::ONE,
-        len: 0,
-        d_vcm,
-        d_vc,
-        d_vm: 0.0,
-        d_pl: d_vc,
-        infinite_start: false,
-        falloff_free: false,
-        after_delta: false,
-    };
+    let start = |d_vcm: f32, d_vc: f32| subpath_start(d_vcm, d_vc, &f);
     let mut c = start(mis(light_paths / cam_pdf_w), 0.0);
     c.arrive_at(cos(cam, x2, n2), d2(cam, x2).sqrt());
     c.leave(cos(x2, x1, n2), lam(x2, x1, n2), lam(x2, cam, n2), false, &f);
@@ -393,6 +371,27 @@ fn path_light_weights_on_a_caustic_are_the_power_heuristic() {
     }
     // Both strategies matter on this path: the comparison tests each.
     assert!(got.iter().all(|&w| w > 1e-3), "{got:?}");
+}
+
+/// A subpath before its first segment with the running quantities `d_vcm` and `d_vc` (the
+/// others follow from them under `f`), as both MIS tests start their walks.
+fn subpath_start(
+    d_vcm: f32,
+    d_vc: f32,
+    f: &crate::integrator::bidir::IterFactors,
+) -> crate::integrator::bidir::walk::PathState {
+    crate::integrator::bidir::walk::PathState {
+        ray: crate::geometry::Ray::new(glam::Vec3::ZERO, glam::Vec3::Z),
+        throughput: glam::Vec3::ONE,
+        len: 0,
+        d_vcm,
+        d_vc,
+        d_vm: d_vc * f.mis_vc,
+        d_pl: d_vc,
+        infinite_start: false,
+        falloff_free: false,
+        after_delta: false,
+    }
 }
 
 /// `--light-paths` out of range is refused in one line naming the option.
