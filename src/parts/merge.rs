@@ -127,6 +127,7 @@ impl Merged {
             total.camera_rays += s.camera_rays;
             total.extension_rays += s.extension_rays;
             total.shadow_rays += s.shadow_rays;
+            total.light_rays += s.light_rays;
             total.prim_tests += s.prim_tests;
             total.nodes += s.nodes;
             total.stages.add(&s.stages);
@@ -152,6 +153,7 @@ impl Merged {
                 "camera": total.camera_rays,
                 "extension": total.extension_rays,
                 "shadow": total.shadow_rays,
+                "light": total.light_rays,
                 "total": rays,
             },
             "render_s": slowest_render,

@@ -10,6 +10,9 @@ pub struct PartStats {
     pub camera_rays: u64,
     pub extension_rays: u64,
     pub shadow_rays: u64,
+    /// Rays of light subpaths (path+light); absent from parts written before they were counted.
+    #[serde(default)]
+    pub light_rays: u64,
     pub prim_tests: u64,
     pub nodes: u64,
     /// Thread-seconds per stage; a stage that did not run stays absent.
@@ -28,6 +31,7 @@ impl PartStats {
         self.camera_rays += st.camera_rays;
         self.extension_rays += st.extension_rays;
         self.shadow_rays += st.shadow_rays;
+        self.light_rays += st.light_rays;
         self.prim_tests += st.counters.prim_tests;
         self.nodes += st.counters.nodes;
         self.stages.add(&st.stages);
@@ -35,6 +39,6 @@ impl PartStats {
     }
 
     pub fn rays(&self) -> u64 {
-        self.camera_rays + self.extension_rays + self.shadow_rays
+        self.camera_rays + self.extension_rays + self.shadow_rays + self.light_rays
     }
 }

@@ -11,6 +11,7 @@
 
 pub mod area;
 pub mod emitter_filter;
+pub mod lane_width;
 pub mod layers;
 pub mod light_ray;
 pub(crate) mod material;

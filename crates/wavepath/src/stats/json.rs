@@ -30,6 +30,7 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
             "camera": st.camera_rays,
             "extension": st.extension_rays,
             "shadow": st.shadow_rays,
+            "light": st.light_rays,
             "total": st.total_rays(),
         },
         "render_s": st.render_s,
@@ -37,6 +38,7 @@ pub fn to_json(scene: &Scene, s: &Settings, effects: &Effects, build: &BuildInfo
         "intersection_tests_per_ray": st.tests_per_ray(),
         "nodes_visited_per_ray": st.nodes_per_ray(),
         "stages": st.stages,
+        "ns_per_vertex": st.ns_per_vertex().map(|(camera, light)| json!({ "camera": camera, "light": light })),
         "samples_per_pixel": { "mean": mean, "min": min, "max": max },
         "invalid_samples": st.invalid_samples,
     })

@@ -79,6 +79,9 @@ pub struct RenderStats {
     pub camera_rays: u64,
     pub extension_rays: u64,
     pub shadow_rays: u64,
+    /// Rays of light subpaths: from the lights and between light vertices (their camera
+    /// connections are shadow rays).
+    pub light_rays: u64,
     pub counters: TraceCounters,
     pub stages: StageTimes,
     pub render_s: f64,
@@ -90,7 +93,21 @@ pub struct RenderStats {
 
 impl RenderStats {
     pub fn total_rays(&self) -> u64 {
-        self.camera_rays + self.extension_rays + self.shadow_rays
+        self.camera_rays + self.extension_rays + self.shadow_rays + self.light_rays
+    }
+
+    /// Nanoseconds of thread time per vertex of each side, (camera, light), when a render
+    /// traced light subpaths beside the wavefront's camera paths: the camera side's stages over
+    /// its camera and extension rays (one vertex each), the light stage over its light rays.
+    /// The two sides' costs compare here, so a side run one path at a time would show.
+    pub fn ns_per_vertex(&self) -> Option<(f64, f64)> {
+        let s = &self.stages;
+        let light = s.light_paths?;
+        let camera = s.generate? + s.traverse? + s.shade? + s.shadow.unwrap_or(0.0) + s.compact.unwrap_or(0.0);
+        let per = |t: f64, n: u64| t * 1e9 / n.max(1) as f64;
+        (self.light_rays > 0).then(|| {
+            (per(camera + s.aov.unwrap_or(0.0), self.camera_rays + self.extension_rays), per(light, self.light_rays))
+        })
     }
 
     pub fn mrays_per_s(&self) -> f64 {
@@ -117,13 +134,14 @@ impl RenderStats {
     /// The seed-style summary printed at the end of a render.
     pub fn log_lines(&self) -> Vec<String> {
         let s = &self.stages;
-        vec![
+        let mut lines = vec![
             format!(
-                "Rays traced: {} (camera {}, extension {}, shadow {})",
+                "Rays traced: {} (camera {}, extension {}, shadow {}{})",
                 self.total_rays(),
                 self.camera_rays,
                 self.extension_rays,
-                self.shadow_rays
+                self.shadow_rays,
+                if self.light_rays > 0 { format!(", light {}", self.light_rays) } else { String::new() }
             ),
             format!("Render time: {:.4} s", self.render_s),
             format!("Average speed: {:.3} million rays per second", self.mrays_per_s()),
@@ -137,7 +155,17 @@ impl RenderStats {
                 s.list().iter().map(|(n, t)| format!("{n} {t:.4}")).collect::<Vec<_>>().join(", ")
             ),
             format!("Invalid (NaN/Inf) samples dropped: {}", self.invalid_samples),
-        ]
+        ];
+        if let Some((camera, light)) = self.ns_per_vertex() {
+            lines.insert(
+                lines.len() - 1,
+                format!(
+                    "Thread time per vertex: camera side {camera:.0} ns, light side {light:.0} ns ({:.2}x)",
+                    light / camera
+                ),
+            );
+        }
+        lines
     }
 }
 

@@ -14,6 +14,16 @@ use crate::lights::emission::Illumination;
 use crate::sampling::Numbers;
 use glam::Vec3;
 
+/// A light vertex seen by the camera: the pixel it lands on, the weighted contribution to
+/// that pixel's sum, and the ray from the camera to it, which must be free for it to count.
+/// Its rays all start at the camera, so a bounce's joins traced together go in packets.
+#[derive(Clone, Copy, Debug)]
+pub struct Join {
+    pub pixel: u32,
+    pub value: Vec3,
+    pub ray: Ray,
+}
+
 /// Whether the segment from surface point `v` toward `q` (error bound `q_error`) is free.
 fn unoccluded(b: &Bidir, v: &Vertex, q: Vec3, q_error: Vec3, counters: &mut TraceCounters) -> bool {
     let origin = offset_origin(v.p, v.p_error, v.ng, q - v.p);
@@ -23,9 +33,10 @@ fn unoccluded(b: &Bidir, v: &Vertex, q: Vec3, q_error: Vec3, counters: &mut Trac
 }
 
 impl Bidir<'_, '_> {
-    /// Light tracing: the light vertex `lv` seen by the camera. The pixel it lands on and
-    /// the weighted contribution to that pixel's sum.
-    pub fn connect_to_camera(&self, lv: &LightVertex, counters: &mut TraceCounters) -> Option<(usize, Vec3)> {
+    /// Light tracing: the light vertex `lv` seen by the camera, if nothing is in between
+    /// (the join's ray, which the caller traces: one at a time, or a bounce's joins as one
+    /// batch).
+    pub fn camera_join(&self, lv: &LightVertex) -> Option<Join> {
         let pr = self.camera.project(lv.v.p)?;
         let w = pr.to_camera;
         if !lv.v.consistent(w) {
@@ -54,8 +65,7 @@ impl Bidir<'_, '_> {
         let origin = self.camera_pos();
         let dir = (lv.v.p - origin) / pr.dist;
         let tmax = shadow_tmax(origin, lv.v.p, target_error);
-        let ray = Ray { origin, dir, tmin: 0.0, tmax };
-        (!self.accel.any_hit(&ray, counters)).then_some((pr.pixel, c))
+        Some(Join { pixel: pr.pixel as u32, value: c, ray: Ray { origin, dir, tmin: 0.0, tmax } })
     }
 
     /// A light sample of the camera vertex `v` (the next event), weighted against reaching

@@ -19,8 +19,10 @@ pub mod caustics;
 pub mod connect;
 pub mod grid;
 pub mod importance;
+mod starts;
 pub mod walk;
 
+use super::lane_width::ShadeWidth;
 use super::{Transport, Vertex};
 use crate::accel::{Intersector, TraceCounters};
 use crate::film::Accumulator;
@@ -30,6 +32,7 @@ use crate::lights::emission::SceneSphere;
 use crate::lights::{SampledLight, Seen};
 use crate::settings::Settings;
 use crate::stats::RenderStats;
+use connect::Join;
 use glam::Vec3;
 use grid::HashGrid;
 use importance::Importance;
@@ -42,6 +45,9 @@ use walk::{LightVertex, PathState, Side, mis};
 /// First vertex-stream depth of light subpaths: their numbers never meet a camera
 /// subpath's (depths 0..max depth), whatever the depth.
 const LIGHT_STREAMS: u32 = 1 << 20;
+/// Light subpaths per batch of path+light's light pass (a fixed count, so the splats' order,
+/// and with it the image, is the same for any thread count).
+const LIGHT_CHUNK: usize = 1024;
 /// Merge radius of the first iteration, as a fraction of the scene's bounding radius.
 const RADIUS_FACTOR: f32 = 0.003;
 /// How fast the merge radius shrinks: r_i = r_0 (i + 1)^((alpha - 1) / 2), which makes
@@ -150,6 +156,11 @@ impl Picker {
         Picker { pick: vec![0.0; n], cdf: vec![0.0; n] }
     }
 
+    /// Whether there is one light to choose, which every number then chooses.
+    fn single(&self) -> bool {
+        self.pick.len() == 1
+    }
+
     /// The light `u` chooses: its index and probability (0 when nothing can be chosen).
     #[inline]
     fn choose(&self, u: f32) -> (usize, f32) {
@@ -168,8 +179,16 @@ struct LightRow {
     /// (pixel, value) of the row's light paths' camera connections.
     splats: Vec<(u32, Vec3)>,
     counts: Counts,
-    /// The batched light pass's paths in flight.
-    batch: LightBatch,
+}
+
+/// One row of a batched light pass (path+light): what its light subpaths splatted, as
+/// (pixel, value), and what they cost. The paths in flight live in a [`LightBatch`] per
+/// worker, not per row: a row's fresh buffers cost the pass a tenth of its time in page
+/// faults.
+#[derive(Default)]
+struct CausticRow {
+    splats: Vec<(u32, Vec3)>,
+    counts: Counts,
     /// Thread-seconds this row's light subpaths took.
     seconds: f64,
 }
@@ -330,17 +349,26 @@ impl<'t, 'a> Bidir<'t, 'a> {
     ) {
         let Some(mut state) = self.start_light_path(pixel, sample) else { return };
         let mut first_delta = false;
+        let mut joins = Vec::new();
         loop {
             st.light_rays += 1;
             let Some(hit) = self.accel.closest_hit(&state.ray, &mut st.trace) else { break };
             let at = At { pixel, sample, hit };
-            if !self.light_vertex(&mut state, &mut first_delta, at, out, splats, st) {
+            let more = self.light_vertex(&mut state, &mut first_delta, at, out, &mut joins);
+            for j in joins.drain(..) {
+                st.shadow += 1;
+                if !self.accel.any_hit(&j.ray, &mut st.trace) {
+                    splats.push((j.pixel, j.value));
+                }
+            }
+            if !more {
                 break;
             }
         }
     }
 
-    /// path+light's light subpaths `paths` of iteration `sample` as a small wavefront: all
+    /// path+light's light subpaths `paths` of iteration `sample` as a small wavefront: their
+    /// starts drawn `lanes` at a time (one by one without), all
     /// their rays of one bounce traced together through the intersector's batch interface,
     /// the paths whose first hit scatters diffusely (most of them: light tracing draws only
     /// the caustics) ended at their hit's material, before any vertex is made. The same paths,
@@ -350,14 +378,20 @@ impl<'t, 'a> Bidir<'t, 'a> {
         &self,
         paths: std::ops::Range<usize>,
         sample: u32,
+        lanes: Option<ShadeWidth>,
         batch: &mut LightBatch,
         splats: &mut Vec<(u32, Vec3)>,
         st: &mut Counts,
     ) {
         batch.clear();
-        for pixel in paths {
-            if let Some(state) = self.start_light_path(pixel as u32, sample) {
-                batch.states.push((state, pixel as u32, false));
+        match lanes {
+            Some(width) => width.dispatch(starts::Starts { b: self, paths, sample, out: &mut batch.states }),
+            None => {
+                for pixel in paths {
+                    if let Some(state) = self.start_light_path(pixel as u32, sample) {
+                        batch.states.push((state, pixel as u32, false));
+                    }
+                }
             }
         }
         let materials = &self.transport.materials;
@@ -377,31 +411,50 @@ impl<'t, 'a> Bidir<'t, 'a> {
                     continue;
                 }
                 let at = At { pixel, sample, hit };
-                if self.light_vertex(&mut state, &mut first_delta, at, &mut Vec::new(), splats, st) {
+                if self.light_vertex(&mut state, &mut first_delta, at, &mut Vec::new(), &mut batch.joins) {
                     batch.states[keep] = (state, pixel, first_delta);
                     keep += 1;
                 }
             }
             batch.states.truncate(keep);
+            // The bounce's camera connections, in the order their vertices came.
+            if !batch.joins.is_empty() {
+                batch.rays.clear();
+                batch.rays.extend(batch.joins.iter().map(|j| j.ray));
+                batch.occluded.resize(batch.rays.len(), false);
+                self.accel.any_hits_packets(&batch.rays, &mut batch.occluded, &mut st.trace);
+                st.shadow += batch.joins.len() as u64;
+                let free = batch.joins.iter().zip(&batch.occluded).filter(|(_, o)| !**o);
+                splats.extend(free.map(|(j, _)| (j.pixel, j.value)));
+                batch.joins.clear();
+            }
         }
     }
 
     /// The start of light subpath `pixel` of iteration `sample`: a light chosen by power, a
     /// point and direction on it; `None` where it emits nothing that way.
     fn start_light_path(&self, pixel: u32, sample: u32) -> Option<PathState> {
+        let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS);
+        let choice = if self.emitters.single() { 0.0 } else { rng.at(0).next_f32() };
+        let (a, b) = rng.at(1).next_2d();
+        let (c, d) = rng.at(2).next_2d();
+        let e = rng.at(3).next_f32();
+        self.start_with(choice, [a, b, c, d, e])
+    }
+
+    /// [`start_light_path`](Self::start_light_path) from its numbers: `choice` chooses the
+    /// light (unread where there is one to choose), `u` the point and direction on it.
+    #[inline]
+    fn start_with(&self, choice: f32, u: [f32; 5]) -> Option<PathState> {
         let lights = &self.transport.lights.set.lights;
         if lights.is_empty() {
             return None;
         }
-        let rng = self.transport.streams.sampler(pixel, sample, LIGHT_STREAMS);
-        let (i, pick) = self.emitters.choose(rng.at(0).next_f32());
+        let (i, pick) = self.emitters.choose(choice);
         if pick <= 0.0 || pick.is_nan() {
             return None;
         }
-        let (a, b) = rng.at(1).next_2d();
-        let (c, d) = rng.at(2).next_2d();
-        let e = rng.at(3).next_f32();
-        let em = lights[i].emit([a, b, c, d, e], &self.sphere)?;
+        let em = lights[i].emit(u, &self.sphere)?;
         let emission_pdf_w = em.pdf_pos * em.pdf_dir * pick;
         let direct_pdf_a = em.pdf_pos * pick;
         let d_vc = if em.delta_pos || em.delta_dir { 0.0 } else { mis(em.cos / emission_pdf_w) };
@@ -425,7 +478,8 @@ impl<'t, 'a> Bidir<'t, 'a> {
     }
 
     /// A light subpath arrives at its hit `at`: the vertex kept (`out`) and joined to the
-    /// camera (`splats`) as the mode asks, then the next direction; `false` ends the subpath.
+    /// camera (`joins`, traced by the caller) as the mode asks, then the next direction;
+    /// `false` ends the subpath.
     /// `first_delta`: its first vertex scattered by a delta lobe (path+light's caustics).
     fn light_vertex(
         &self,
@@ -433,8 +487,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
         first_delta: &mut bool,
         at: At,
         out: &mut Vec<LightVertex>,
-        splats: &mut Vec<(u32, Vec3)>,
-        st: &mut Counts,
+        joins: &mut Vec<Join>,
     ) -> bool {
         let v = self.transport.vertex(&state.ray, &at.hit);
         state.arrive(&v, at.hit.t);
@@ -458,10 +511,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
                 d_pl: state.d_pl,
             };
             if state.len < self.max_len {
-                st.shadow += 1;
-                if let Some((p, c)) = self.connect_to_camera(&lv, &mut st.trace) {
-                    splats.push((p as u32, c));
-                }
+                joins.extend(self.camera_join(&lv));
             }
             if self.mode.connects() {
                 out.push(lv);
@@ -619,6 +669,9 @@ struct LightBatch {
     states: Vec<(PathState, u32, bool)>,
     rays: Vec<Ray>,
     hits: Vec<Option<crate::geometry::Hit>>,
+    /// The bounce's camera connections, and which of them are blocked.
+    joins: Vec<Join>,
+    occluded: Vec<bool>,
 }
 
 impl LightBatch {
@@ -626,6 +679,8 @@ impl LightBatch {
         self.states.clear();
         self.rays.clear();
         self.hits.clear();
+        self.joins.clear();
+        self.occluded.clear();
     }
 }
 
@@ -653,10 +708,12 @@ impl Counts {
 pub struct LightPass<'t, 'a> {
     bidir: Bidir<'t, 'a>,
     /// Rows of every iteration of a run, iteration-major (kept from run to run).
-    rows: Vec<LightRow>,
+    rows: Vec<CausticRow>,
     /// Rows per iteration, and light subpaths per iteration.
     per: usize,
     n_light: usize,
+    /// The width light subpaths start at (one at a time without).
+    lanes: Option<ShadeWidth>,
 }
 
 /// What a light pass traced.
@@ -672,13 +729,19 @@ pub struct LightPassCounts {
 }
 
 impl<'t, 'a> LightPass<'t, 'a> {
-    /// The light side of a path+light render of `settings` (whole image); `None` where the
-    /// camera cannot be inverted ([`unsupported`] says why first).
-    pub fn new(transport: &'t Transport<'a>, accel: &'t dyn Intersector, settings: &Settings) -> Option<Self> {
+    /// The light side of a path+light render of `settings` (whole image), its subpaths
+    /// started `lanes` at a time; `None` where the camera cannot be inverted ([`unsupported`]
+    /// says why first).
+    pub fn new(
+        transport: &'t Transport<'a>,
+        accel: &'t dyn Intersector,
+        settings: &Settings,
+        lanes: Option<ShadeWidth>,
+    ) -> Option<Self> {
         let bidir = Bidir::new(transport, accel, settings, Mode::PathLight)?;
         let n_light = light_path_count(Mode::PathLight, settings);
-        let per = n_light.div_ceil(bidir.width);
-        Some(LightPass { bidir, rows: Vec::new(), per, n_light })
+        let per = n_light.div_ceil(LIGHT_CHUNK);
+        Some(LightPass { bidir, rows: Vec::new(), per, n_light, lanes })
     }
 
     /// Traces the light subpaths of iterations `first..first + count` (rows of each in
@@ -689,24 +752,17 @@ impl<'t, 'a> LightPass<'t, 'a> {
         let (w, h) = (self.bidir.width, self.bidir.height);
         let per = self.per;
         if self.rows.len() < per * count as usize {
-            self.rows.resize_with(per * count as usize, LightRow::default);
+            self.rows.resize_with(per * count as usize, CausticRow::default);
         }
-        let (b, n_light) = (&self.bidir, self.n_light);
+        let (b, n_light, lanes) = (&self.bidir, self.n_light, self.lanes);
         let rows = &mut self.rows[..per * count as usize];
-        rows.par_iter_mut().enumerate().for_each(|(k, row)| {
+        rows.par_iter_mut().enumerate().for_each_init(LightBatch::default, |batch, (k, row)| {
             let (sample, y) = (first + (k / per) as u32, k % per);
-            row.vertices.clear();
-            row.ends.clear();
             row.splats.clear();
             row.counts = Counts::default();
             let clock = Instant::now();
-            b.caustic_paths(
-                y * w..((y + 1) * w).min(n_light),
-                sample,
-                &mut row.batch,
-                &mut row.splats,
-                &mut row.counts,
-            );
+            let paths = y * LIGHT_CHUNK..((y + 1) * LIGHT_CHUNK).min(n_light);
+            b.caustic_paths(paths, sample, lanes, batch, &mut row.splats, &mut row.counts);
             row.seconds = clock.elapsed().as_secs_f64();
         });
         splats.clear();
@@ -824,7 +880,8 @@ pub fn render_bidir_into(
     let mut stats = RenderStats {
         counters: counts.trace,
         camera_rays: counts.camera,
-        extension_rays: counts.extension + counts.light_rays,
+        extension_rays: counts.extension,
+        light_rays: counts.light_rays,
         shadow_rays: counts.shadow,
         ..Default::default()
     };

@@ -92,6 +92,7 @@ struct WaveStats {
     camera: u64,
     extension: u64,
     shadow: u64,
+    light: u64,
     stages: StageTimes,
 }
 
@@ -101,6 +102,7 @@ impl WaveStats {
         self.camera += o.camera;
         self.extension += o.extension;
         self.shadow += o.shadow;
+        self.light += o.light;
         self.stages.add(&o.stages);
         self
     }
@@ -161,7 +163,8 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
     // path+light: each frame's iterations first trace their light subpaths, whose splats
     // join the camera paths' samples (a frame then holds as many iterations as its splat
     // images allow).
-    let mut light = job.transport.caustics.as_ref().and_then(|_| LightPass::new(job.transport, job.accel, s));
+    let mut light =
+        job.transport.caustics.as_ref().and_then(|_| LightPass::new(job.transport, job.accel, s, job.lanes.shade));
     let splat_batch = (SPLAT_BYTES / (w * s.image.height * std::mem::size_of::<Vec3>()).max(1)).clamp(1, 64) as u32;
     let mut splats = Vec::new();
     let mut n = first;
@@ -176,7 +179,7 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
             batch = batch.min(splat_batch);
             let c = light.trace(n, batch, &mut splats);
             total.counters.add(&c.trace);
-            total.extension += c.light_rays;
+            total.light += c.light_rays;
             total.shadow += c.shadow;
             total.stages.light_paths = Some(total.stages.light_paths.unwrap_or(0.0) + c.seconds);
         }
@@ -207,6 +210,7 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
     let mut stats = RenderStats {
         camera_rays: total.camera,
         extension_rays: total.extension,
+        light_rays: total.light,
         shadow_rays: total.shadow,
         counters: total.counters,
         stages: total.stages,

@@ -140,6 +140,35 @@ fn images_do_not_depend_on_the_thread_count() {
     }
 }
 
+/// path+light's light side is counted apart from its camera side: the camera side traces the
+/// path tracer's own camera and extension rays (the same paths, only weighted differently),
+/// the light side at least one ray per light subpath that leaves its light and at most one per
+/// edge a subpath may have, and each side's time per vertex is reported; the path tracer has
+/// no light side to report.
+#[test]
+fn the_light_side_is_counted_apart() {
+    let Some(scene) = common::load_scene("obj/CornellBox/CornellBox-Sphere.obj") else { return };
+    let (spp, depth) = (4, 5);
+    let s = settings(spp, depth);
+    let accel = bvh(&scene, &s);
+    let (_, path) = render::sums_with(IntegratorKind::Wavefront, &scene, accel.as_ref(), &s, &|_| {});
+    let (_, pl) = render::sums_with(IntegratorKind::PathLight, &scene, accel.as_ref(), &s, &|_| {});
+    assert_eq!((path.camera_rays, path.extension_rays), (pl.camera_rays, pl.extension_rays));
+    assert!(pl.shadow_rays > path.shadow_rays, "no camera connection traced");
+    assert_eq!((path.light_rays, path.ns_per_vertex()), (0, None));
+    // A quarter of the pixels' light subpaths per sample (the default share), each from a
+    // one-sided emitter into its hemisphere: all of them leave it.
+    let subpaths = ((W * H) as u64).div_ceil(4) * spp as u64;
+    assert!(
+        (subpaths..=subpaths * depth as u64).contains(&pl.light_rays),
+        "{} light rays for {subpaths} light subpaths",
+        pl.light_rays
+    );
+    assert_eq!(pl.total_rays(), pl.camera_rays + pl.extension_rays + pl.shadow_rays + pl.light_rays);
+    let (camera, light) = pl.ns_per_vertex().expect("path+light reports both sides");
+    assert!(camera > 0.0 && light > 0.0 && camera.is_finite() && light.is_finite(), "{camera} {light}");
+}
+
 /// A cell (`-p`, a tile of a split render, the viewer's band) traces every light subpath and
 /// keeps its own pixels: two cells give, bit for bit, the sums of the whole image.
 #[test]

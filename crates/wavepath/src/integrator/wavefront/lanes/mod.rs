@@ -2,7 +2,8 @@
 //! the compiler vectorises, bit for bit what the one-path code ([`super::one_path`]) gives
 //! each path.
 //!
-//! - [`width`]: the one place a lane kernel's width and instructions are chosen (a portable
+//! - [`width`] (`integrator/lane_width.rs`, shared with the light subpaths' starts): the one
+//!   place a lane kernel's width and instructions are chosen (a portable
 //!   arm on every CPU, AVX2 and AVX-512 on x86-64).
 //! - [`soa`]: the lane groups' data, one array per component.
 //! - [`numbers`]: a group's random numbers, drawn in lanes as the model asks for them.
@@ -17,4 +18,4 @@ pub mod leave;
 pub mod model;
 pub mod numbers;
 pub mod soa;
-pub mod width;
+pub use crate::integrator::lane_width as width;

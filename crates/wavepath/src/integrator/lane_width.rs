@@ -1,8 +1,9 @@
-//! The one place a lane kernel's width and instructions are chosen. Every shading kernel in
-//! lanes (Lambertian hits, the other materials, escaped paths) is written once, generic over
-//! its lane count, as a [`LaneKernel`]; [`ShadeWidth::dispatch`] runs it at the width the
-//! render's [`Lanes`](super::Lanes) chose, compiled for that width's instructions, as the
-//! BVH's `Tokens::dispatch` runs its traversal loops.
+//! The one place a lane kernel's width and instructions are chosen. Every kernel in lanes
+//! (the wavefront's Lambertian hits, other materials, escaped paths and camera rays; the light
+//! subpaths' starts) is written once, generic over its lane count, as a [`LaneKernel`];
+//! [`ShadeWidth::dispatch`] runs it at the width the render chose (the wavefront's `Lanes`),
+//! compiled for that width's instructions, as the BVH's `Tokens::dispatch` runs its traversal
+//! loops. Below both integrators that use it, so neither reaches into the other for it.
 
 #[cfg(target_arch = "x86_64")]
 use crate::cpu::{Avx2, Avx512};
