@@ -164,14 +164,12 @@ struct Current<'a> {
 /// costs stay small.
 const BATCH_TARGET: Duration = Duration::from_millis(80);
 
-/// Bands of a pass expected to take `seconds` in all under `plan`: each about
-/// [`BATCH_TARGET`], but one for path+light, whose every band traces the light subpaths of
-/// the whole image (a change still stops it between waves). Measured on the harness's
-/// spheres-box, 320x240 to 64 spp: 7.2-7.7 s in bands against 2.07 s offline.
-fn band_count(plan: &RenderPlan, seconds: f64, height: usize) -> usize {
-    if plan.settings().execution.integrator == wavepath::IntegratorKind::PathLight {
-        return 1;
-    }
+/// Bands of a pass expected to take `seconds` in all: each about [`BATCH_TARGET`]. Under
+/// path+light the pass's first band traces the light subpaths of the whole image and the
+/// plan keeps what they splatted for the others (`RenderPlan::kept_splats`); each band
+/// tracing them again took the harness's spheres-box, 320x240 to 64 spp, 7.2-7.7 s against
+/// 2.07 s offline.
+fn band_count(seconds: f64, height: usize) -> usize {
     ((seconds / BATCH_TARGET.as_secs_f64()).round() as usize).clamp(1, height)
 }
 
@@ -540,7 +538,7 @@ impl Session {
                     // The first pass's bands from this one-sample image's time (16x fewer
                     // pixels, PASS_SAMPLES x fewer samples).
                     let estimate = quick_s.as_secs_f64() * 16.0 * PASS_SAMPLES.min(s.sampling.spp) as f64;
-                    bands = band_count(p, estimate, height);
+                    bands = band_count(estimate, height);
                     totals.add(&out.stats, quick_s);
                     let info = self.info(&st, p, bvh, &totals, 0, (w, h));
                     let images = |set: AovSet| out.aovs.iter().filter(|i| set.contains(i.aov)).cloned().collect();
@@ -654,7 +652,7 @@ impl Session {
                 // The pass is complete: the next one's bands take about the target time each.
                 taken = end;
                 band = 0;
-                bands = band_count(p, pass_s, height);
+                bands = band_count(pass_s, height);
                 pass_s = 0.0;
             }
             // A refining frame waits for its turn ([`pacing`]; the band's rows stay in `film`

@@ -8,6 +8,7 @@
 //! bands build one plan and render many extents with it.
 
 use super::Transport;
+use super::bidir::KeptSplats;
 use super::wavefront::Lanes;
 use crate::effects::Effects;
 use crate::scene::{Camera, Scene};
@@ -21,6 +22,9 @@ pub struct RenderPlan<'s> {
     effects: Effects,
     transport: Transport<'s>,
     lanes: Lanes,
+    /// path+light: the light passes' splats of recent iterations, for the next cell of the
+    /// same samples (the viewer's bands).
+    splats: KeptSplats,
 }
 
 /// The part of the image one render of a plan covers: a pixel rectangle (`None`: the whole
@@ -54,7 +58,7 @@ impl<'s> RenderPlan<'s> {
         settings.execution.integrator = effects.integrator_kind;
         let transport = Transport::new(scene, &settings, &effects);
         let lanes = Lanes::of(&transport, settings.execution.isa);
-        RenderPlan { settings, effects, transport, lanes }
+        RenderPlan { settings, effects, transport, lanes, splats: KeptSplats::default() }
     }
 
     /// Which stages and kernel parts the plan's renders run, and why.
@@ -83,6 +87,11 @@ impl<'s> RenderPlan<'s> {
 
     pub fn lanes(&self) -> Lanes {
         self.lanes
+    }
+
+    /// What the plan's path+light renders of cells splatted lately, for the next cells.
+    pub fn kept_splats(&self) -> &KeptSplats {
+        &self.splats
     }
 
     /// The same plan tracing every ray from a last vertex, the emitter filter off: what the

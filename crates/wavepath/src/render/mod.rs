@@ -236,7 +236,8 @@ impl Canvas {
                     }
                 }
                 let (transport, effects, lanes) = (plan.transport(), plan.effects(), plan.lanes());
-                let job = RenderJob { transport, effects, lanes, settings, accel, progress, stop };
+                let splats = plan.kept_splats();
+                let job = RenderJob { transport, effects, lanes, splats, settings, accel, progress, stop };
                 render_wavefront_into(&job, &self.workers, &mut self.sums)
             }
             IntegratorKind::Recursive if settings.image.aovs.traced() => anyhow::bail!(

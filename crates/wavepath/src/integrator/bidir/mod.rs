@@ -744,12 +744,27 @@ impl<'t, 'a> LightPass<'t, 'a> {
         Some(LightPass { bidir, rows: Vec::new(), per, n_light, lanes })
     }
 
-    /// Traces the light subpaths of iterations `first..first + count` (rows of each in
+    /// Traces the light subpaths of iterations `first..first + count` (batches of each in
     /// parallel) and writes what they splat into `splats`, one image per iteration: each
-    /// image's sums added in row order, the same bits for any thread count, and the same
-    /// light subpaths as the one-path form's.
-    pub fn trace(&mut self, first: u32, count: u32, splats: &mut Vec<Vec3>) -> LightPassCounts {
+    /// image's sums added in batch order, the same bits for any thread count, and the same
+    /// light subpaths as the one-path form's. With `kept`, iterations it holds are not traced
+    /// again, and those traced are kept there for the next extent of the plan.
+    pub fn trace(
+        &mut self,
+        first: u32,
+        count: u32,
+        splats: &mut Vec<Vec3>,
+        kept: Option<&KeptSplats>,
+    ) -> LightPassCounts {
         let (w, h) = (self.bidir.width, self.bidir.height);
+        splats.clear();
+        splats.resize(count as usize * w * h, Vec3::ZERO);
+        let iterations = first..first + count;
+        if let Some(kept) = kept
+            && kept.add_into(iterations.clone(), splats, w * h)
+        {
+            return LightPassCounts::default();
+        }
         let per = self.per;
         if self.rows.len() < per * count as usize {
             self.rows.resize_with(per * count as usize, CausticRow::default);
@@ -765,8 +780,6 @@ impl<'t, 'a> LightPass<'t, 'a> {
             b.caustic_paths(paths, sample, lanes, batch, &mut row.splats, &mut row.counts);
             row.seconds = clock.elapsed().as_secs_f64();
         });
-        splats.clear();
-        splats.resize(count as usize * w * h, Vec3::ZERO);
         let mut out = LightPassCounts::default();
         for (k, row) in rows.iter().enumerate() {
             let image = &mut splats[(k / per) * w * h..][..w * h];
@@ -778,7 +791,44 @@ impl<'t, 'a> LightPass<'t, 'a> {
             out.shadow += row.counts.shadow;
             out.seconds += row.seconds;
         }
+        if let Some(kept) = kept {
+            let lists = rows.chunks(per).map(|its| its.iter().flat_map(|r| r.splats.iter().copied()).collect());
+            kept.keep(iterations, lists);
+        }
         out
+    }
+}
+
+/// What the light subpaths of recent iterations splatted, (pixel, value) in the order the
+/// images add them, kept by a render plan for its next extents: the viewer's bands of a pass
+/// share one light pass instead of each tracing all the image's light subpaths (a cell needs
+/// every one). Only iterations from the latest run's first on are kept, so a renderer that
+/// moves forward through its samples holds at most one frame's (sparse: only caustics splat).
+#[derive(Debug, Default)]
+pub struct KeptSplats(std::sync::Mutex<std::collections::BTreeMap<u32, Vec<(u32, Vec3)>>>);
+
+impl KeptSplats {
+    /// Adds iterations `its`' splats into their images (`pixels` each, zero before) when every
+    /// one is kept; `false` (nothing added) otherwise.
+    fn add_into(&self, its: std::ops::Range<u32>, images: &mut [Vec3], pixels: usize) -> bool {
+        let kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if !its.clone().all(|i| kept.contains_key(&i)) {
+            return false;
+        }
+        for (k, i) in its.enumerate() {
+            let image = &mut images[k * pixels..][..pixels];
+            for &(p, c) in &kept[&i] {
+                image[p as usize] += c;
+            }
+        }
+        true
+    }
+
+    /// Keeps `lists`, the splats of iterations `its`, dropping those of earlier iterations.
+    fn keep(&self, its: std::ops::Range<u32>, lists: impl Iterator<Item = Vec<(u32, Vec3)>>) {
+        let mut kept = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        kept.retain(|&i, _| i >= its.start);
+        kept.extend(its.zip(lists));
     }
 }
 

@@ -35,7 +35,7 @@ use crate::cpu::Isa;
 use crate::effects::Effects;
 use crate::film::{Accumulator, AovSums, PixelSums};
 use crate::integrator::Transport;
-use crate::integrator::bidir::LightPass;
+use crate::integrator::bidir::{KeptSplats, LightPass};
 use crate::settings::Settings;
 use crate::stats::{RenderStats, StageTimes};
 use generate::Wave;
@@ -116,6 +116,8 @@ pub struct RenderJob<'a, 's> {
     pub transport: &'a Transport<'s>,
     pub effects: &'a Effects,
     pub lanes: Lanes,
+    /// The plan's kept light-pass splats (path+light cells share them).
+    pub splats: &'a KeptSplats,
     pub settings: &'a Settings,
     pub accel: &'a dyn Intersector,
     pub progress: &'a (dyn Fn(u64) + Sync),
@@ -177,7 +179,9 @@ fn render_frames(job: &RenderJob, workers: &Workers<WaveQueues>, acc: &mut Accum
         let mut batch = (check - n).min(WAVE_PATHS as u32);
         if let Some(light) = &mut light {
             batch = batch.min(splat_batch);
-            let c = light.trace(n, batch, &mut splats);
+            // A cell's light pass is kept for the plan's next cells of the same samples.
+            let kept = s.image.cell.is_some().then_some(job.splats);
+            let c = light.trace(n, batch, &mut splats, kept);
             total.counters.add(&c.trace);
             total.light += c.light_rays;
             total.shadow += c.shadow;

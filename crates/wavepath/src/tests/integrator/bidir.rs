@@ -196,6 +196,39 @@ fn cells_give_the_whole_images_sums() {
     }
 }
 
+/// The viewer's bands of a pass (cells of one plan rendering the same samples into one
+/// canvas) share one light pass: the first band traces every light subpath of the image, the
+/// plan keeps what they splatted, the other bands trace none; the next pass traces its own.
+/// The canvas's sums are bit for bit those of the same passes over the whole image.
+#[test]
+fn bands_of_a_pass_share_one_light_pass() {
+    let Some(scene) = common::load_scene("obj/CornellBox/CornellBox-Sphere.obj") else { return };
+    let mut s = settings(8, 5);
+    s.execution.integrator = IntegratorKind::PathLight;
+    let accel = bvh(&scene, &s);
+    let plan = crate::integrator::plan::RenderPlan::new(&scene, &s);
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let passes = [(0, 4), (4, 8)];
+    let mut whole = crate::render::Canvas::new(W, H);
+    for samples in passes {
+        let extent = crate::integrator::plan::Extent { cell: None, samples: Some(samples) };
+        whole.render(&plan, accel.as_ref(), extent, &|_| {}, &stop).unwrap();
+    }
+    let mut canvas = crate::render::Canvas::new(W, H);
+    for samples in passes {
+        for (band, rows) in [(0, 10), (10, 20), (20, H)].into_iter().enumerate() {
+            let cell = crate::settings::Cell { x: 0, y: rows.0, w: W, h: rows.1 - rows.0 };
+            let extent = crate::integrator::plan::Extent { cell: Some(cell), samples: Some(samples) };
+            let st = canvas.render(&plan, accel.as_ref(), extent, &|_| {}, &stop).unwrap();
+            match band {
+                0 => assert!(st.light_rays > 0, "{samples:?}: the first band traced no light subpath"),
+                _ => assert_eq!(st.light_rays, 0, "{samples:?}: band {band} traced the light subpaths again"),
+            }
+        }
+    }
+    assert!(canvas.sums().pixels == whole.sums().pixels, "bands' sums differ from the whole image's");
+}
+
 /// What the bidirectional integrators do not render is refused in one line naming why,
 /// never rendered wrong.
 #[test]
