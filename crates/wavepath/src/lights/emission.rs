@@ -41,6 +41,15 @@ pub struct Emission {
     pub falloff_free: bool,
 }
 
+impl Emission {
+    /// Whether a light path can start here: a finite, non-zero weight and both densities
+    /// positive.
+    #[inline]
+    pub fn usable(&self) -> bool {
+        self.weight.is_finite() && self.weight != Vec3::ZERO && self.pdf_pos > 0.0 && self.pdf_dir > 0.0
+    }
+}
+
 /// A point on a light seen from a shading point (a light-sampled connection), with the
 /// densities of both ways of drawing it.
 #[derive(Clone, Copy, Debug)]
@@ -161,7 +170,7 @@ impl SampledLight {
             }
             SampledLight::Infinite(_) => return None,
         };
-        (e.weight.is_finite() && e.weight != Vec3::ZERO && e.pdf_pos > 0.0 && e.pdf_dir > 0.0).then_some(e)
+        e.usable().then_some(e)
     }
 
     /// A point on the light toward which a shading point at `p` connects: `u` as for

@@ -28,7 +28,7 @@ use crate::accel::{Intersector, TraceCounters};
 use crate::film::Accumulator;
 use crate::geometry::Ray;
 use crate::geometry::offset::offset_origin;
-use crate::lights::emission::SceneSphere;
+use crate::lights::emission::{Emission, SceneSphere};
 use crate::lights::{SampledLight, Seen};
 use crate::settings::Settings;
 use crate::stats::RenderStats;
@@ -455,6 +455,13 @@ impl<'t, 'a> Bidir<'t, 'a> {
             return None;
         }
         let em = lights[i].emit(u, &self.sphere)?;
+        Some(self.start_from(&em, pick))
+    }
+
+    /// A light subpath leaving its light as `em` says, the light chosen with probability
+    /// `pick`: its first ray and its running quantities.
+    #[inline]
+    fn start_from(&self, em: &Emission, pick: f32) -> PathState {
         let emission_pdf_w = em.pdf_pos * em.pdf_dir * pick;
         let direct_pdf_a = em.pdf_pos * pick;
         let d_vc = if em.delta_pos || em.delta_dir { 0.0 } else { mis(em.cos / emission_pdf_w) };
@@ -463,7 +470,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
         } else {
             offset_origin(em.pos, em.pos_error, em.normal, em.dir)
         };
-        Some(PathState {
+        PathState {
             ray: Ray { origin, dir: em.dir, tmin: 0.0, tmax: f32::INFINITY },
             throughput: em.weight / pick,
             len: 0,
@@ -474,7 +481,7 @@ impl<'t, 'a> Bidir<'t, 'a> {
             infinite_start: em.delta_dir,
             falloff_free: em.falloff_free,
             after_delta: false,
-        })
+        }
     }
 
     /// A light subpath arrives at its hit `at`: the vertex kept (`out`) and joined to the

@@ -8,11 +8,10 @@
 
 #![allow(clippy::needless_range_loop)]
 
-use super::walk::{PathState, mis};
+use super::walk::PathState;
 use super::{Bidir, LIGHT_STREAMS};
-use crate::geometry::Ray;
-use crate::geometry::offset::offset_origin;
 use crate::integrator::lane_width::LaneKernel;
+use crate::lights::emission::Emission;
 use crate::lights::{EmissiveTriangles, SampledLight};
 use crate::sampling::rng8::{self, Hasher};
 use crate::sampling::warp::{self, Frame};
@@ -131,25 +130,23 @@ fn emit_lanes<const L: usize>(
             pdf_dir *= 0.5;
             weight *= 2.0;
         }
-        if !(weight.is_finite() && weight != Vec3::ZERO && pdf_pos > 0.0 && pdf_dir > 0.0) {
+        let em = Emission {
+            pos: pos[j],
+            pos_error,
+            normal: nrm[j],
+            dir: dir[j],
+            weight,
+            pdf_pos,
+            pdf_dir,
+            cos: cos[j],
+            delta_pos: false,
+            delta_dir: false,
+            falloff_free: false,
+        };
+        if !em.usable() {
             continue;
         }
-        let emission_pdf_w = pdf_pos * pdf_dir * pick;
-        let direct_pdf_a = pdf_pos * pick;
-        let d_vc = mis(cos[j] / emission_pdf_w);
-        let origin = offset_origin(pos[j], pos_error, nrm[j], dir[j]);
-        let state = PathState {
-            ray: Ray { origin, dir: dir[j], tmin: 0.0, tmax: f32::INFINITY },
-            throughput: weight / pick,
-            len: 0,
-            d_vcm: mis(direct_pdf_a / emission_pdf_w),
-            d_vc,
-            d_vm: d_vc * b.iter.mis_vc,
-            d_pl: d_vc,
-            infinite_start: false,
-            falloff_free: false,
-            after_delta: false,
-        };
+        let state = b.start_from(&em, pick);
         out.push((state, (first + j) as u32, false));
     }
 }
